@@ -1,0 +1,1 @@
+//! nptreemap-formats: the dataset model and the readers that turn input bytes into it.

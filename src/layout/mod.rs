@@ -1,0 +1,88 @@
+//! The pure layout optimiser: a validated [`Dataset`] and [`Params`] in, a finished
+//! [`Layout`] and a [`Report`] out. No files, no clock, no printing.
+//!
+//! A layout is computed top-down: the root gets the outline polygon, then each
+//! internal node's cell is split among its children by a one-level power-diagram
+//! optimisation ([`map`]), run by the recursion in [`treemap`].
+
+/// One-level optimiser: Lloyd steps plus weight adaptation towards target areas.
+pub mod map;
+/// Run parameters and their defaults.
+pub mod params;
+/// Seeded, dependency-free random numbers (SplitMix64).
+pub mod rng;
+/// Start positions and weights for one diagram.
+pub mod seed;
+/// Invariant checks a finished layout must pass.
+pub mod check;
+/// Top-down recursion over the hierarchy.
+pub mod treemap;
+
+use crate::geom::{ConvexPolygon, Point};
+use nptreemap_formats::Dataset;
+
+pub use check::SanityError;
+pub use params::{Canvas, Outline, Params};
+pub use treemap::layout;
+
+/// The finished geometry of one node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LayoutCell {
+    /// The power-diagram site that produced this cell (for the root: the outline centroid).
+    pub site: Point,
+    /// The site's power weight at the end of the optimisation (0 for the root and
+    /// for only children, which take their parent's cell).
+    pub power_weight: f64,
+    /// The cell: convex, inside the parent's cell.
+    pub polygon: ConvexPolygon,
+}
+
+/// A finished layout: one cell per dataset node, indexed like [`Dataset::nodes`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Layout {
+    /// The drawing surface the layout was made for.
+    pub canvas: Canvas,
+    /// One cell per node, in the dataset's node order.
+    pub cells: Vec<LayoutCell>,
+}
+
+/// Figures about how a layout run went. Not converging is reported here, not an error.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Report {
+    /// Diagrams optimised (internal nodes with two or more children).
+    pub diagrams: usize,
+    /// Optimiser ticks summed over all diagrams.
+    pub iterations: usize,
+    /// Mean over diagrams of Σ|A − A*| / A(parent) (d3-voronoi-map's `convergenceRatio`).
+    pub area_error_mean: f64,
+    /// Largest per-diagram area error.
+    pub area_error_max: f64,
+    /// Diagrams that stopped at `max_iterations` above the convergence target.
+    pub unconverged: usize,
+}
+
+impl Layout {
+    /// The cell of node `index`.
+    pub fn cell(&self, index: usize) -> &LayoutCell {
+        &self.cells[index]
+    }
+
+    /// Checks every invariant of a finished layout against its dataset; see [`check`].
+    pub fn sanity_check(&self, dataset: &Dataset) -> Result<(), SanityError> {
+        check::sanity_check(self, dataset)
+    }
+}
+
+/// Errors a layout run can return. Bad data never reaches here (the dataset is
+/// validated when built); these are about parameters.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum LayoutError {
+    /// A parameter is out of its range.
+    #[error("invalid layout parameter `{name}`: {reason}")]
+    InvalidParam {
+        /// The parameter's name as in the config file.
+        name: &'static str,
+        /// What is wrong with it.
+        reason: String,
+    },
+}
