@@ -13,8 +13,11 @@
 
 pub mod geom;
 pub mod layout;
+pub mod metrics;
 pub mod power;
 pub mod render;
+pub mod store;
+pub mod workspace;
 
 pub use layout::{Canvas, Layout, LayoutCell, Outline, Params, Report};
 pub use nptreemap_formats::{Dataset, Node};

@@ -1,0 +1,349 @@
+//! `MapSimulation`: one level of a Voronoi treemap, i.e. sites inside one parent
+//! cell whose power-diagram cells must reach target areas. Driven step by step
+//! with [`MapSimulation::tick`] and inspected with [`MapSimulation::state`]
+//! (the d3-voronoi-map shape: the caller owns the clock).
+//!
+//! One tick is a Lloyd step (sites to their cells' centroids) followed by a
+//! Newton step on the power weights. d3-voronoi-map and the paper's prototype
+//! scale each weight by its area ratio, clamped to ±10% a tick, so n cells need
+//! many ticks and large diagrams stop converging (peers/README.md: from about
+//! 500 siblings). Here the weight step solves the linearised area equations
+//! exactly instead: moving the bisector of sites i and j changes both areas by
+//! `l_ij / (2 d_ij)` per unit of weight difference (edge length `l`, site distance
+//! `d`), so the Jacobian of the areas in the weights is a graph Laplacian, solved
+//! by preconditioned conjugate gradients in near-linear time (Nocaj and Brandes,
+//! "Computing Voronoi treemaps", 2012, motivate the same weight/area coupling).
+
+use super::rng::Rng;
+use crate::geom::{ConvexPolygon, Point};
+use crate::power::{power_diagram, PowerDiagram, Site};
+
+/// Stopping rules of one diagram.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapSettings {
+    /// Converged when Σ|A − A*| / A(clip) is at most this.
+    pub convergence_ratio: f64,
+    /// Hard stop after this many ticks.
+    pub max_iterations: usize,
+    /// Ticks made before convergence may stop the run (shape relaxation).
+    pub min_iterations: usize,
+}
+
+/// What [`MapSimulation::state`] reports.
+#[derive(Clone, Copy, Debug)]
+pub struct MapState<'a> {
+    /// True once converged or out of iterations.
+    pub ended: bool,
+    /// Ticks done.
+    pub iteration_count: usize,
+    /// Current Σ|A − A*| / A(clip).
+    pub convergence_ratio: f64,
+    /// Current sites.
+    pub sites: &'a [Site],
+    /// Current diagram of those sites.
+    pub diagram: &'a PowerDiagram,
+}
+
+/// The optimiser for one diagram.
+#[derive(Clone, Debug)]
+pub struct MapSimulation {
+    clip: ConvexPolygon,
+    clip_area: f64,
+    targets: Vec<f64>,
+    sites: Vec<Site>,
+    diagram: PowerDiagram,
+    iteration: usize,
+    error: f64,
+    ended: bool,
+    settings: MapSettings,
+    rng: Rng,
+}
+
+/// Repair rounds per diagram evaluation. One round fixes every dominated site
+/// seen; chains of domination need a few, and more than a handful means the
+/// input is pathological, where the next tick continues the repair.
+const REPAIR_ROUNDS: usize = 8;
+
+/// A dominated site's weight is raised to leave this share of the squared site
+/// distance as margin, so the repaired site lies strictly inside its cell
+/// (d3-voronoi-map's `handleOverweighted` uses the full distance plus epsilon).
+const REPAIR_MARGIN: f64 = 0.9;
+
+/// Newton steps are shortened so no bisector moves by more than this share of
+/// its site distance: the linearisation is good for moderate moves, and a site
+/// is never overtaken by a neighbour's bisector in one step.
+const MAX_BISECTOR_SHIFT: f64 = 0.25;
+
+/// Conjugate-gradient stop: residual below this share of the right-hand side.
+/// The step is re-linearised next tick anyway, so a rough solve is enough.
+const CG_TOLERANCE: f64 = 1e-3;
+
+/// Conjugate-gradient iteration cap (a 2-D Laplacian of n cells needs about √n).
+const CG_MAX_ITER: usize = 200;
+
+impl MapSimulation {
+    /// A simulation of `positions.len()` sites in `clip` with target areas
+    /// `targets` (same length; they should sum to the clip's area). `weights`
+    /// are the starting power weights, or equal weights when `None`.
+    pub fn new(
+        clip: ConvexPolygon,
+        targets: Vec<f64>,
+        positions: Vec<Point>,
+        weights: Option<Vec<f64>>,
+        settings: MapSettings,
+        rng: Rng,
+    ) -> Self {
+        debug_assert_eq!(targets.len(), positions.len());
+        let weights = weights.unwrap_or_else(|| vec![0.0; positions.len()]);
+        let sites = positions
+            .into_iter()
+            .zip(weights)
+            .map(|(position, weight)| Site { position, weight })
+            .collect::<Vec<_>>();
+        let clip_area = clip.area();
+        let diagram = power_diagram(&sites, &clip);
+        let mut sim = Self {
+            clip,
+            clip_area,
+            targets,
+            sites,
+            diagram,
+            iteration: 0,
+            error: f64::INFINITY,
+            ended: false,
+            settings,
+            rng,
+        };
+        sim.repair();
+        sim.error = sim.area_error();
+        sim
+    }
+
+    /// One step: Lloyd move, diagram, Newton weight step, diagram.
+    pub fn tick(&mut self) {
+        if self.ended {
+            return;
+        }
+        self.move_to_centroids();
+        self.recompute();
+        self.newton_weights();
+        self.recompute();
+        self.iteration += 1;
+        self.error = self.area_error();
+        let converged = self.error <= self.settings.convergence_ratio
+            && self.iteration >= self.settings.min_iterations;
+        if converged || self.iteration >= self.settings.max_iterations {
+            self.ended = true;
+        }
+    }
+
+    /// Ticks until the simulation ends.
+    pub fn run(&mut self) {
+        while !self.ended {
+            self.tick();
+        }
+    }
+
+    /// The current state.
+    pub fn state(&self) -> MapState<'_> {
+        MapState {
+            ended: self.ended,
+            iteration_count: self.iteration,
+            convergence_ratio: self.error,
+            sites: &self.sites,
+            diagram: &self.diagram,
+        }
+    }
+
+    /// True when the last evaluation met the convergence target.
+    pub fn converged(&self) -> bool {
+        self.error <= self.settings.convergence_ratio
+    }
+
+    /// The final sites and diagram.
+    pub fn into_parts(self) -> (Vec<Site>, PowerDiagram) {
+        (self.sites, self.diagram)
+    }
+
+    fn recompute(&mut self) {
+        self.diagram = power_diagram(&self.sites, &self.clip);
+        self.repair();
+    }
+
+    fn area_error(&self) -> f64 {
+        let sum: f64 = self
+            .diagram
+            .cells
+            .iter()
+            .zip(&self.targets)
+            .map(|(c, t)| (c.area - t).abs())
+            .sum();
+        sum / self.clip_area
+    }
+
+    /// Lloyd step. A site whose cell is empty cannot move to a centroid; one that
+    /// is dominated is repaired through its weight, and any other (a site on top
+    /// of another) is put at a fresh random point.
+    fn move_to_centroids(&mut self) {
+        for (site, cell) in self.sites.iter_mut().zip(&self.diagram.cells) {
+            if cell.polygon.is_some() {
+                site.position = cell.centroid;
+            } else if cell.dominated_by.is_none() {
+                site.position = self.clip.sample(self.rng.next_f64(), self.rng.next_f64());
+            }
+        }
+    }
+
+    /// Gives every site a non-empty cell: a dominated site's weight is raised to
+    /// just below the level at which its dominator swallows it; an empty cell
+    /// that is not dominated (coincident sites) gets a fresh random position.
+    fn repair(&mut self) {
+        for _ in 0..REPAIR_ROUNDS {
+            let mut changed = false;
+            for i in 0..self.sites.len() {
+                let cell = &self.diagram.cells[i];
+                if let Some(j) = cell.dominated_by {
+                    let d2 = self.sites[i]
+                        .position
+                        .distance_squared(self.sites[j].position);
+                    self.sites[i].weight = self.sites[j].weight - REPAIR_MARGIN * d2;
+                    changed = true;
+                } else if cell.polygon.is_none() {
+                    self.sites[i].position =
+                        self.clip.sample(self.rng.next_f64(), self.rng.next_f64());
+                    changed = true;
+                }
+            }
+            if !changed {
+                return;
+            }
+            self.diagram = power_diagram(&self.sites, &self.clip);
+        }
+    }
+
+    /// Newton step on the power weights: solve `L Δw = A* − A` where `L` is the
+    /// Laplacian with edge conductances `l_ij / (2 d_ij)`.
+    fn newton_weights(&mut self) {
+        let n = self.sites.len();
+        if n < 2 {
+            return;
+        }
+        // Conductances in compressed rows.
+        let mut start = Vec::with_capacity(n + 1);
+        let mut cols = Vec::new();
+        let mut vals = Vec::new();
+        let mut diag = vec![0.0; n];
+        for (i, cell) in self.diagram.cells.iter().enumerate() {
+            start.push(cols.len());
+            for nb in &cell.neighbours {
+                let d = self.sites[i]
+                    .position
+                    .distance(self.sites[nb.site].position);
+                let l = nb.edge[0].distance(nb.edge[1]);
+                if d > 0.0 && l > 0.0 {
+                    let c = l / (2.0 * d);
+                    cols.push(nb.site);
+                    vals.push(c);
+                    diag[i] += c;
+                }
+            }
+        }
+        start.push(cols.len());
+        let active: Vec<bool> = diag.iter().map(|d| *d > 0.0).collect();
+        let mut b: Vec<f64> = (0..n)
+            .map(|i| {
+                if active[i] {
+                    self.targets[i] - self.diagram.cells[i].area
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        // The Laplacian is singular (adding a constant to every weight changes
+        // nothing); a consistent right-hand side sums to zero.
+        let count = active.iter().filter(|a| **a).count();
+        if count < 2 {
+            return;
+        }
+        let mean = b.iter().sum::<f64>() / count as f64;
+        for (bi, a) in b.iter_mut().zip(&active) {
+            if *a {
+                *bi -= mean;
+            }
+        }
+        let apply = |x: &[f64], out: &mut [f64]| {
+            for i in 0..n {
+                let mut s = diag[i] * x[i];
+                for k in start[i]..start[i + 1] {
+                    s -= vals[k] * x[cols[k]];
+                }
+                out[i] = s;
+            }
+        };
+        let x = conjugate_gradient(&b, &diag, apply);
+        // Shorten the step so no bisector moves too far (see MAX_BISECTOR_SHIFT).
+        let mut alpha: f64 = 1.0;
+        for i in 0..n {
+            for k in start[i]..start[i + 1] {
+                let j = cols[k];
+                let dw = (x[i] - x[j]).abs();
+                if dw > 0.0 {
+                    let d2 = self.sites[i]
+                        .position
+                        .distance_squared(self.sites[j].position);
+                    alpha = alpha.min(2.0 * MAX_BISECTOR_SHIFT * d2 / dw);
+                }
+            }
+        }
+        for (site, dx) in self.sites.iter_mut().zip(&x) {
+            site.weight += alpha * dx;
+        }
+    }
+}
+
+/// Jacobi-preconditioned conjugate gradients for `L x = b` with `L` symmetric
+/// positive semi-definite and `b` in its range. Rows with a zero diagonal are
+/// left at 0.
+fn conjugate_gradient(b: &[f64], diag: &[f64], apply: impl Fn(&[f64], &mut [f64])) -> Vec<f64> {
+    let n = b.len();
+    let inv: Vec<f64> = diag
+        .iter()
+        .map(|d| if *d > 0.0 { 1.0 / d } else { 0.0 })
+        .collect();
+    let dot = |a: &[f64], c: &[f64]| a.iter().zip(c).map(|(x, y)| x * y).sum::<f64>();
+    let mut x = vec![0.0; n];
+    let mut r = b.to_vec();
+    let b_norm = dot(b, b).sqrt();
+    if b_norm == 0.0 {
+        return x;
+    }
+    let mut z: Vec<f64> = r.iter().zip(&inv).map(|(r, m)| r * m).collect();
+    let mut p = z.clone();
+    let mut rz = dot(&r, &z);
+    let mut ap = vec![0.0; n];
+    for _ in 0..CG_MAX_ITER {
+        apply(&p, &mut ap);
+        let pap = dot(&p, &ap);
+        if !(pap > 0.0) {
+            break;
+        }
+        let a = rz / pap;
+        for i in 0..n {
+            x[i] += a * p[i];
+            r[i] -= a * ap[i];
+        }
+        if dot(&r, &r).sqrt() <= CG_TOLERANCE * b_norm {
+            break;
+        }
+        for i in 0..n {
+            z[i] = r[i] * inv[i];
+        }
+        let rz_new = dot(&r, &z);
+        let beta = rz_new / rz;
+        rz = rz_new;
+        for i in 0..n {
+            p[i] = z[i] + beta * p[i];
+        }
+    }
+    x
+}

@@ -1,0 +1,187 @@
+//! The top-down recursion: the root takes the outline, then every internal node's
+//! cell is divided among its children by one [`MapSimulation`], level by level.
+//! Diagrams of one level are independent, so they run in parallel; each draws
+//! its randomness from the run seed and its own node id, so the result does not
+//! depend on scheduling.
+
+use rayon::prelude::*;
+
+use super::map::{MapSettings, MapSimulation};
+use super::rng::Rng;
+use super::{seed, Layout, LayoutCell, LayoutError, Params, Report};
+use crate::geom::ConvexPolygon;
+use nptreemap_formats::Dataset;
+
+/// Outcome of dividing one parent's cell.
+struct Division {
+    parent: usize,
+    cells: Vec<(usize, LayoutCell)>,
+    iterations: usize,
+    error: f64,
+    converged: bool,
+    optimised: bool,
+}
+
+/// Lays out the whole hierarchy.
+///
+/// Zero-weight rule: a child's target area uses `max(value, min_weight_ratio ×
+/// heaviest sibling's value)`, so zero-weight children get a small visible cell;
+/// when every child of a node weighs zero they share its cell equally. A node
+/// with one child hands it its own cell unchanged.
+pub fn layout(dataset: &Dataset, params: &Params) -> Result<(Layout, Report), LayoutError> {
+    params.validate()?;
+    let root_polygon = params.outline.polygon(params.canvas)?;
+    let settings = MapSettings {
+        convergence_ratio: params.convergence_ratio,
+        max_iterations: params.max_iterations,
+        min_iterations: params.min_iterations.min(params.max_iterations),
+    };
+    let n = dataset.len();
+    let mut cells: Vec<Option<LayoutCell>> = vec![None; n];
+    let root = dataset.root();
+    cells[root] = Some(LayoutCell {
+        site: root_polygon.centroid(),
+        power_weight: 0.0,
+        polygon: root_polygon,
+    });
+
+    let mut report = Report::default();
+    let mut error_sum = 0.0;
+    let mut frontier = vec![root];
+    while !frontier.is_empty() {
+        let divisions: Vec<Division> = frontier
+            .par_iter()
+            .filter(|p| !dataset.node(**p).children.is_empty())
+            .map(|&parent| {
+                // Invariant: a parent's cell is set before its children are laid out.
+                let polygon = cells[parent]
+                    .as_ref()
+                    .map(|c| c.polygon.clone())
+                    .unwrap_or_else(|| unreachable_parent(parent));
+                divide(dataset, params, settings, parent, polygon)
+            })
+            .collect();
+        let mut next = Vec::new();
+        for d in divisions {
+            if d.optimised {
+                report.diagrams += 1;
+                report.iterations += d.iterations;
+                error_sum += d.error;
+                report.area_error_max = report.area_error_max.max(d.error);
+                if !d.converged {
+                    report.unconverged += 1;
+                }
+            }
+            for (child, cell) in d.cells {
+                cells[child] = Some(cell);
+                next.push(child);
+            }
+            let _ = d.parent;
+        }
+        frontier = next;
+    }
+    if report.diagrams > 0 {
+        report.area_error_mean = error_sum / report.diagrams as f64;
+    }
+    let cells = cells
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| c.unwrap_or_else(|| unreachable_parent(i)))
+        .collect();
+    Ok((
+        Layout {
+            canvas: params.canvas,
+            cells,
+        },
+        report,
+    ))
+}
+
+#[cold]
+fn unreachable_parent(index: usize) -> ! {
+    // Every node is reached from the root in BFS order, which Dataset guarantees.
+    panic!("node {index} was not reached by the layout recursion")
+}
+
+/// Target areas for the children of a cell of area `area` (see [`layout`] for
+/// the zero-weight rule).
+pub fn target_areas(values: &[f64], area: f64, min_weight_ratio: f64) -> Vec<f64> {
+    let max = values.iter().copied().fold(0.0, f64::max);
+    if max <= 0.0 {
+        return vec![area / values.len() as f64; values.len()];
+    }
+    // A floor of 1e-9 of the heaviest keeps every cell positive even with
+    // min_weight_ratio = 0 (areas below that are invisible at any size).
+    let floor = max * min_weight_ratio.max(1e-9);
+    let eff: Vec<f64> = values.iter().map(|v| v.max(floor)).collect();
+    let total: f64 = eff.iter().sum();
+    eff.iter().map(|v| area * v / total).collect()
+}
+
+fn divide(
+    dataset: &Dataset,
+    params: &Params,
+    settings: MapSettings,
+    parent: usize,
+    polygon: ConvexPolygon,
+) -> Division {
+    let children = &dataset.node(parent).children;
+    if children.len() == 1 {
+        let cell = LayoutCell {
+            site: polygon.centroid(),
+            power_weight: 0.0,
+            polygon,
+        };
+        return Division {
+            parent,
+            cells: vec![(children[0], cell)],
+            iterations: 0,
+            error: 0.0,
+            converged: true,
+            optimised: false,
+        };
+    }
+    let values: Vec<f64> = children.iter().map(|c| dataset.node(*c).value).collect();
+    let targets = target_areas(&values, polygon.area(), params.min_weight_ratio);
+    let mut rng = Rng::for_key(params.seed, &dataset.node(parent).id);
+    let positions = seed::random_positions(&polygon, children.len(), &mut rng);
+    let mut sim = MapSimulation::new(polygon, targets, positions, None, settings, rng);
+    sim.run();
+    let iterations = sim.state().iteration_count;
+    let error = sim.state().convergence_ratio;
+    let converged = sim.converged();
+    let (sites, diagram) = sim.into_parts();
+    let cells = children
+        .iter()
+        .zip(sites.iter().zip(diagram.cells))
+        .map(|(&child, (site, cell))| {
+            let polygon = cell.polygon.unwrap_or_else(|| sliver(site.position));
+            (
+                child,
+                LayoutCell {
+                    site: site.position,
+                    power_weight: site.weight,
+                    polygon,
+                },
+            )
+        })
+        .collect();
+    Division {
+        parent,
+        cells,
+        iterations,
+        error,
+        converged,
+        optimised: true,
+    }
+}
+
+/// Last resort for a cell the optimiser could not keep non-empty: a tiny
+/// triangle at its site. Unreachable in practice (the repair step keeps cells
+/// non-empty); the sanity check would flag the overlap.
+fn sliver(at: crate::geom::Point) -> ConvexPolygon {
+    use crate::geom::Point;
+    let e = 1e-6;
+    ConvexPolygon::from_convex(vec![at, at + Point::new(e, 0.0), at + Point::new(0.0, e)])
+        .unwrap_or_else(|| unreachable_parent(usize::MAX))
+}

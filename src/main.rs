@@ -1,0 +1,43 @@
+//! The `nptreemap` command line: parses arguments, runs one subcommand, and maps
+//! errors to exit codes (2 for bad input or usage, 1 for anything else).
+
+mod cmd;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Neighborhood-preserving Voronoi treemaps.
+#[derive(Debug, Parser)]
+#[command(name = "nptreemap", version, about, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Lay out one hierarchy file and write JSON and/or SVG.
+    Layout(cmd::layout::LayoutArgs),
+    /// Time the layout of one file (parsing excluded) and print one JSON line.
+    Bench(cmd::bench::BenchArgs),
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_writer(std::io::stderr)
+        .init();
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Layout(args) => cmd::layout::run(&args),
+        Command::Bench(args) => cmd::bench::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            ExitCode::from(cmd::exit_code(&err))
+        }
+    }
+}

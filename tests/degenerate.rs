@@ -1,0 +1,160 @@
+//! Degenerate input never panics and still yields a sound layout (issue 2 §5):
+//! one child, zero-weight leaves, 10,000 children in one parent, weight ratios of
+//! 1:10^6, coincident initial sites, a single leaf. Every test ends with
+//! `sanity_check`.
+
+use nptreemap::geom::{ConvexPolygon, Point};
+use nptreemap::layout::map::{MapSettings, MapSimulation};
+use nptreemap::layout::rng::Rng;
+use nptreemap::layout::{layout, Outline, Params};
+use nptreemap::metrics;
+use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
+
+fn flat(weights: &[f64]) -> Dataset {
+    let mut b = DatasetBuilder::new();
+    b.add(NodeSpec::new("root"));
+    for (i, w) in weights.iter().enumerate() {
+        b.add(NodeSpec::new(format!("n{i}")).parent("root").weight(*w));
+    }
+    b.build().expect("valid dataset")
+}
+
+fn share(ds: &Dataset, l: &nptreemap::Layout, id: &str) -> f64 {
+    let i = ds.find(id).expect("node exists");
+    l.cells[i].polygon.area() / l.cells[0].polygon.area()
+}
+
+#[test]
+fn single_leaf_takes_the_whole_canvas() {
+    let mut b = DatasetBuilder::new();
+    b.add(NodeSpec::new("only").weight(3.0));
+    let ds = b.build().expect("valid");
+    let (l, report) = layout(&ds, &Params::default()).expect("layout");
+    l.sanity_check(&ds).expect("sane");
+    assert_eq!(report.diagrams, 0);
+    assert!((l.cells[0].polygon.area() - 1_000_000.0).abs() < 1e-6);
+}
+
+#[test]
+fn one_child_gets_its_parents_cell() {
+    let mut b = DatasetBuilder::new();
+    b.add(NodeSpec::new("root"));
+    b.add(NodeSpec::new("a").parent("root"));
+    b.add(NodeSpec::new("a1").parent("a").weight(1.0));
+    b.add(NodeSpec::new("b").parent("root").weight(1.0));
+    let ds = b.build().expect("valid");
+    let (l, _) = layout(&ds, &Params::default()).expect("layout");
+    l.sanity_check(&ds).expect("sane");
+    let a = ds.find("a").expect("a");
+    let a1 = ds.find("a1").expect("a1");
+    assert_eq!(l.cells[a].polygon, l.cells[a1].polygon);
+}
+
+#[test]
+fn zero_weight_leaves_get_small_cells() {
+    let ds = flat(&[0.0, 5.0, 5.0, 0.0, 10.0]);
+    let params = Params::default();
+    let (l, _) = layout(&ds, &params).expect("layout");
+    l.sanity_check(&ds).expect("sane");
+    // Rule: max(value, min_weight_ratio × heaviest sibling) = 0.01 of 20.02.
+    let expected = params.min_weight_ratio * 10.0 / (20.0 + 2.0 * params.min_weight_ratio * 10.0);
+    for id in ["n0", "n3"] {
+        let s = share(&ds, &l, id);
+        assert!(s > 0.0 && (s - expected).abs() < 0.01, "{id}: share {s}, expected {expected}");
+    }
+}
+
+#[test]
+fn all_zero_weights_share_equally() {
+    let ds = flat(&[0.0; 4]);
+    let (l, _) = layout(&ds, &Params::default()).expect("layout");
+    l.sanity_check(&ds).expect("sane");
+    for i in 0..4 {
+        let s = share(&ds, &l, &format!("n{i}"));
+        assert!((s - 0.25).abs() < 0.01, "share {s}");
+    }
+}
+
+#[test]
+fn ten_thousand_children_in_one_parent() {
+    let weights: Vec<f64> = (0..10_000).map(|i| 1.0 + (i % 17) as f64).collect();
+    let ds = flat(&weights);
+    let (l, report) = layout(&ds, &Params::default()).expect("layout");
+    l.sanity_check(&ds).expect("sane");
+    let q = metrics::quality(&ds, &l);
+    assert!(q.area_error_diagram_mean <= 0.01, "{q:?} {report:?}");
+}
+
+#[test]
+fn weight_ratio_of_a_million() {
+    let ds = flat(&[1.0, 1e6, 3.0, 2e5, 7.0, 1e6]);
+    let params = Params {
+        min_weight_ratio: 0.0,
+        ..Params::default()
+    };
+    let (l, _) = layout(&ds, &params).expect("layout");
+    l.sanity_check(&ds).expect("sane");
+    assert!(share(&ds, &l, "n0") > 0.0);
+    let q = metrics::quality(&ds, &l);
+    assert!(q.area_error_diagram_mean <= 0.01, "{q:?}");
+}
+
+#[test]
+fn coincident_initial_sites_separate() {
+    let clip = ConvexPolygon::rectangle(0.0, 0.0, 100.0, 100.0).expect("rect");
+    let n = 12;
+    let targets = vec![10_000.0 / n as f64; n];
+    let positions = vec![Point::new(50.0, 50.0); n];
+    let settings = MapSettings {
+        convergence_ratio: 0.01,
+        max_iterations: 200,
+        min_iterations: 5,
+    };
+    let mut sim = MapSimulation::new(clip.clone(), targets, positions, None, settings, Rng::new(1));
+    sim.run();
+    let state = sim.state();
+    assert!(state.convergence_ratio <= 0.01, "error {}", state.convergence_ratio);
+    assert!(state.diagram.cells.iter().all(|c| c.polygon.is_some()));
+    state
+        .diagram
+        .sanity_check(state.sites, &clip)
+        .expect("diagram sane");
+}
+
+#[test]
+fn outlines_hold_their_children() {
+    let ds = flat(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+    for outline in [Outline::Circle, Outline::Regular(5), Outline::Regular(32)] {
+        let params = Params {
+            outline: outline.clone(),
+            ..Params::default()
+        };
+        let (l, _) = layout(&ds, &params).expect("layout");
+        l.sanity_check(&ds).expect("sane");
+        assert!(metrics::quality(&ds, &l).area_error_diagram_mean <= 0.01);
+    }
+}
+
+#[test]
+fn bad_parameters_are_errors_not_panics() {
+    let ds = flat(&[1.0, 2.0]);
+    for params in [
+        Params {
+            canvas: nptreemap::Canvas {
+                width: 0.0,
+                height: 10.0,
+            },
+            ..Params::default()
+        },
+        Params {
+            convergence_ratio: f64::NAN,
+            ..Params::default()
+        },
+        Params {
+            max_iterations: 0,
+            ..Params::default()
+        },
+    ] {
+        assert!(layout(&ds, &params).is_err());
+    }
+}

@@ -1,0 +1,11 @@
+//! The single integration-test binary (one module per feature, as mdBook and
+//! ripgrep do). `support` holds the shared fixtures and helpers.
+
+mod support;
+
+mod cli_errors;
+mod config_defaults;
+mod degenerate;
+mod determinism;
+mod paper_data;
+mod random_hierarchies;

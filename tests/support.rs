@@ -1,0 +1,82 @@
+//! Shared helpers: paths to the binary and to `shared/`, running the independent
+//! checker, generating random hierarchies with the peers' generator.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The repository's sibling `shared/` folder (the paper data, the checker, the peers).
+pub fn shared() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared")
+}
+
+/// The `nptreemap` binary built for this test run.
+pub fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_nptreemap"))
+}
+
+/// A fresh temporary directory under the target dir, unique per test name.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create temp dir");
+    dir
+}
+
+/// Runs `nptreemap layout INPUT --out ...` and asserts success.
+pub fn layout(input: &Path, outs: &[&Path], extra: &[&str]) -> Output {
+    let mut cmd = bin();
+    cmd.arg("layout").arg(input);
+    for o in outs {
+        cmd.arg("--out").arg(o);
+    }
+    cmd.args(extra);
+    let out = cmd.output().expect("run nptreemap");
+    assert!(
+        out.status.success(),
+        "nptreemap layout {} failed: {}",
+        input.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Runs `shared/tools/check-layout` on a layout file and returns its report.
+pub fn check_layout(json: &Path) -> serde_json::Value {
+    let out = Command::new("python3")
+        .arg(shared().join("tools/check-layout"))
+        .arg(json)
+        .output()
+        .expect("run check-layout (needs python3)");
+    let report: serde_json::Value =
+        serde_json::from_slice(&out.stdout).expect("check-layout prints JSON");
+    assert!(
+        out.status.success() && report["ok"] == true,
+        "check-layout failed on {}: {report}",
+        json.display()
+    );
+    report
+}
+
+/// Asserts the checker's per-diagram area error is within d3's default target.
+pub fn assert_area_error(report: &serde_json::Value, limit: f64) {
+    let err = report["area_error_diagram_mean"]
+        .as_f64()
+        .expect("area_error_diagram_mean is a number");
+    assert!(err <= limit, "area_error_diagram_mean {err} > {limit}");
+}
+
+/// Writes a random hierarchy with `shared/peers/gen.py` and returns its path.
+pub fn generate(dir: &Path, leaves: usize, depth: usize, seed: u64) -> PathBuf {
+    let path = dir.join(format!("h{leaves}_d{depth}_s{seed}.json"));
+    let status = Command::new("python3")
+        .arg(shared().join("peers/gen.py"))
+        .args(["--n", &leaves.to_string()])
+        .args(["--depth", &depth.to_string()])
+        .args(["--seed", &seed.to_string()])
+        .arg("--out")
+        .arg(&path)
+        .output()
+        .expect("run gen.py (needs python3)");
+    assert!(status.status.success(), "gen.py failed");
+    path
+}
