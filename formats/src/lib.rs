@@ -1,1 +1,31 @@
 //! nptreemap-formats: the dataset model and the readers that turn input bytes into it.
+//!
+//! [`Dataset`] is the model every later step (layout, rendering, evaluation) works
+//! on: a tree in breadth-first order with weights, values, feature vectors and
+//! relations, valid by construction because only [`DatasetBuilder::build`] makes one.
+//! Readers take bytes, never paths, and report problems as [`FormatError`]s with the
+//! line and column of the offending value; the caller adds the file name.
+//!
+//! ```
+//! use nptreemap_formats::{parse_hierarchy_json, HierarchyJsonOptions};
+//!
+//! let json = br#"{"name": "root", "children": [
+//!     {"name": "a", "weight": 2},
+//!     {"name": "b", "weight": 3}
+//! ]}"#;
+//! let dataset = parse_hierarchy_json(json, &HierarchyJsonOptions::default())?;
+//! assert_eq!(dataset.len(), 3);
+//! assert_eq!(dataset.node(dataset.root()).value, 5.0);
+//! # Ok::<(), nptreemap_formats::FormatError>(())
+//! ```
+
+/// The model: [`Dataset`], [`Node`], and [`DatasetBuilder`] with its checks.
+pub mod dataset;
+/// [`FormatError`]: reader errors with line and column.
+pub mod error;
+/// The paper's hierarchy JSON and d3-hierarchy style JSON.
+pub mod hierarchy_json;
+
+pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, SimilarityHint};
+pub use error::FormatError;
+pub use hierarchy_json::{parse_hierarchy_json, HierarchyJsonOptions};

@@ -1,0 +1,804 @@
+//! Reader for hierarchy JSON: the paper prototype's dataset files and d3-hierarchy
+//! style trees (`{"name": .., "children": [..]}`). Owns bytes → [`Dataset`] for this
+//! format; it never touches paths and never guesses similarity values.
+//!
+//! # The format
+//!
+//! The top level is the root node: an object whose `children` arrays nest the tree.
+//! Per node:
+//!
+//! - **id**: `id` (a string, or a number written as text); else `name`; else `Name`;
+//!   else the parent's id + `/` + the child's index. The root defaults to `root`.
+//! - **label**: `name`, else `Name`, else the id.
+//! - **weight**: the field named by [`HierarchyJsonOptions::weight_field`], else by the
+//!   root's `weightAttribute` flag, else the first of `value`, `weight`, `size` that
+//!   any leaf has. The name `none` means every node, internal nodes included, weighs
+//!   1 (the prototype's quirk, method-reference §2.3). Every leaf must have the field;
+//!   an internal node that has it keeps it as its own weight (d3's `hierarchy.sum`
+//!   adds it too). With no weight field anywhere, every leaf weighs 1 (d3's `count`).
+//! - **features**: the field named by the root's `simAttribute` (default `embeddings`),
+//!   an array of numbers, possibly wrapped once as `[[..]]`.
+//! - **relations**: `neighbors`, an array of ids. Ids that name no node in the file are
+//!   dropped: the prototype's country file lists every real border (117 of the 153
+//!   entries in `country_pop_50M_AUS.json` name countries that are not in the dataset,
+//!   e.g. China's neighbour "AF"), and the prototype just never matches them.
+//! - **color**: `#rgb` or `#rrggbb`.
+//!
+//! The similarity hint comes from root flags: `useNeighborLeafs: true` gives
+//! [`SimilarityHint::NeighborList`]; else `similarityMeasure` (`cosine`, `jaccard`,
+//! `binary`); else cosine when any node has features. Other fields are ignored.
+//!
+//! # Error positions
+//!
+//! The bytes are parsed once with `serde_json` into a `Value`, which has no positions.
+//! Syntax errors take serde_json's line and column. For any later error the reader
+//! knows the JSON path of the offending value (`children[2].children[0].Population`)
+//! and `locate` walks the raw bytes along that path to find its offset. The walk
+//! runs only when an error is reported and only on text serde_json has accepted, so it
+//! can stay a small skip-scanner; if it ever gets lost it returns no position rather
+//! than a wrong one.
+
+use std::borrow::Cow;
+use std::collections::HashSet;
+
+use serde_json::{Map, Value};
+
+use crate::dataset::{
+    is_hex_color, is_valid_weight, Dataset, DatasetBuilder, ModelError, NodeSpec, SimilarityHint,
+};
+use crate::error::FormatError;
+
+/// Options for [`parse_hierarchy_json`]. The defaults honour the file's own flags.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct HierarchyJsonOptions {
+    /// The field holding each leaf's weight, overriding the root's `weightAttribute`
+    /// flag; `"none"` means every node weighs 1, as for the flag. Default: `None`
+    /// (use the flag, else the first of `value`, `weight`, `size` found on leaves).
+    pub weight_field: Option<String>,
+}
+
+/// Reads a hierarchy JSON document (see the module docs for the format).
+///
+/// A UTF-8 byte order mark is accepted. Every error carries the line and column of
+/// the offending value when it can be found.
+pub fn parse_hierarchy_json(
+    bytes: &[u8],
+    options: &HierarchyJsonOptions,
+) -> Result<Dataset, FormatError> {
+    let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let root: Value = serde_json::from_slice(text).map_err(|error| syntax_error(text, &error))?;
+    let reader = Reader { text };
+    let Some(root_object) = root.as_object() else {
+        let (line, column) = line_column(text, skip_whitespace(text, 0));
+        return Err(FormatError::Structure {
+            line: Some(line),
+            column: Some(column),
+            message: format!(
+                "expected the root node, an object with \"children\", found {}",
+                kind(&root)
+            ),
+        });
+    };
+
+    let flags = reader.read_flags(root_object, options)?;
+    let mut walk = Walk {
+        reader: &reader,
+        flags: &flags,
+        specs: Vec::new(),
+        origins: Vec::new(),
+    };
+    walk.visit(&root, None)?;
+    let Walk { specs, origins, .. } = walk;
+
+    // Drop relations to ids that are not in the file (see the module docs).
+    let ids: HashSet<&str> = specs.iter().map(|spec| spec.id.as_str()).collect();
+    let relations: Vec<Vec<String>> = specs
+        .iter()
+        .map(|spec| {
+            spec.relations
+                .iter()
+                .filter(|target| ids.contains(target.as_str()))
+                .cloned()
+                .collect()
+        })
+        .collect();
+
+    let hint = match flags.hint {
+        Some(hint) => Some(hint),
+        None if specs.iter().any(|spec| spec.features.is_some()) => Some(SimilarityHint::Cosine),
+        None => None,
+    };
+
+    let node_ids: Vec<String> = specs.iter().map(|spec| spec.id.clone()).collect();
+    let mut builder = DatasetBuilder::new();
+    for (mut spec, relations) in specs.into_iter().zip(relations) {
+        spec.relations = relations;
+        builder.add(spec);
+    }
+    if let Some(hint) = hint {
+        builder.similarity_hint(hint);
+    }
+    builder
+        .build()
+        .map_err(|source| reader.model_error(source, &node_ids, &origins))
+}
+
+/// How weights are read, decided once from the options and the root's flags.
+#[derive(Debug)]
+enum WeightRule {
+    /// `weightAttribute: "none"`: every node, internal ones too, weighs 1.
+    EveryNodeOne,
+    /// Leaves must have this numeric field; internal nodes may.
+    Field(String),
+    /// No weight field anywhere: every leaf weighs 1.
+    LeafOne,
+}
+
+/// The root's flags, resolved.
+#[derive(Debug)]
+struct Flags {
+    weight: WeightRule,
+    feature_field: String,
+    hint: Option<SimilarityHint>,
+}
+
+/// Where a node sits: its parent's spec index and its index in the parent's
+/// `children` array. Enough to rebuild its JSON path for error positions.
+#[derive(Clone, Copy, Debug)]
+struct Origin {
+    parent: Option<(usize, usize)>,
+}
+
+/// One step of a JSON path.
+#[derive(Clone, Debug)]
+enum Step<'a> {
+    Key(&'a str),
+    Index(usize),
+}
+
+/// The raw text, kept to turn JSON paths into positions.
+struct Reader<'t> {
+    text: &'t [u8],
+}
+
+/// State of the depth-first walk that turns node objects into [`NodeSpec`]s.
+struct Walk<'r, 't> {
+    reader: &'r Reader<'t>,
+    flags: &'r Flags,
+    specs: Vec<NodeSpec>,
+    origins: Vec<Origin>,
+}
+
+/// The weight-field names tried on leaves when neither the options nor the file say.
+const WEIGHT_FIELD_GUESSES: [&str; 3] = ["value", "weight", "size"];
+
+impl Reader<'_> {
+    /// Resolves the root flags that steer the whole read.
+    fn read_flags(
+        &self,
+        root: &Map<String, Value>,
+        options: &HierarchyJsonOptions,
+    ) -> Result<Flags, FormatError> {
+        let flag_error = |field: &str, message: String| {
+            self.field_error(None, &[Step::Key(field)], field, message)
+        };
+        let string_flag = |field: &str| -> Result<Option<&str>, FormatError> {
+            match root.get(field) {
+                None | Some(Value::Null) => Ok(None),
+                Some(Value::String(s)) => Ok(Some(s.as_str())),
+                Some(other) => Err(flag_error(
+                    field,
+                    format!("expected a string, found {}", kind(other)),
+                )),
+            }
+        };
+
+        let weight_field = match &options.weight_field {
+            Some(field) => Some(field.clone()),
+            None => string_flag("weightAttribute")?.map(str::to_owned),
+        };
+        let weight = match weight_field {
+            Some(field) if field == "none" => WeightRule::EveryNodeOne,
+            Some(field) => WeightRule::Field(field),
+            None => WEIGHT_FIELD_GUESSES
+                .iter()
+                .find(|field| any_leaf_has(root, field))
+                .map_or(WeightRule::LeafOne, |field| {
+                    WeightRule::Field((*field).to_owned())
+                }),
+        };
+
+        let feature_field = string_flag("simAttribute")?
+            .unwrap_or("embeddings")
+            .to_owned();
+
+        let neighbor_list = match root.get("useNeighborLeafs") {
+            None | Some(Value::Null) => false,
+            Some(Value::Bool(b)) => *b,
+            Some(other) => {
+                return Err(flag_error(
+                    "useNeighborLeafs",
+                    format!("expected true or false, found {}", kind(other)),
+                ))
+            }
+        };
+        // Checked even when `useNeighborLeafs` wins, so a typo never goes unnoticed.
+        let measure = match string_flag("similarityMeasure")? {
+            None => None,
+            Some("cosine") => Some(SimilarityHint::Cosine),
+            Some("jaccard") => Some(SimilarityHint::Jaccard),
+            Some("binary") => Some(SimilarityHint::Binary),
+            Some(other) => {
+                return Err(flag_error(
+                    "similarityMeasure",
+                    format!("unknown similarity measure {other:?}; expected \"cosine\", \"jaccard\" or \"binary\""),
+                ))
+            }
+        };
+        let hint = if neighbor_list {
+            Some(SimilarityHint::NeighborList)
+        } else {
+            measure
+        };
+
+        Ok(Flags {
+            weight,
+            feature_field,
+            hint,
+        })
+    }
+
+    /// A field error at the value `path` leads to.
+    fn field_error(
+        &self,
+        node: Option<&str>,
+        path: &[Step<'_>],
+        field: &str,
+        message: String,
+    ) -> FormatError {
+        let (line, column) = self.position(path);
+        FormatError::Field {
+            line,
+            column,
+            node: node.map(str::to_owned),
+            field: field.to_owned(),
+            message,
+        }
+    }
+
+    /// A structure error (a node that is not an object) at the value `path` leads to.
+    fn structure_error(&self, path: &[Step<'_>], message: String) -> FormatError {
+        let (line, column) = self.position(path);
+        FormatError::Structure {
+            line,
+            column,
+            message,
+        }
+    }
+
+    /// Line and column of the value at `path`, if the scanner finds it.
+    fn position(&self, path: &[Step<'_>]) -> (Option<usize>, Option<usize>) {
+        match locate(self.text, path) {
+            Some(offset) => {
+                let (line, column) = line_column(self.text, offset);
+                (Some(line), Some(column))
+            }
+            None => (None, None),
+        }
+    }
+
+    /// Wraps a model error with the position of the node it names. For a duplicate
+    /// id that is the second node with the id (the first one is not the problem).
+    fn model_error(&self, source: ModelError, ids: &[String], origins: &[Origin]) -> FormatError {
+        let skip = usize::from(matches!(source, ModelError::DuplicateId { .. }));
+        let node = source
+            .node_id()
+            .and_then(|id| ids.iter().enumerate().filter(|(_, x)| *x == id).nth(skip))
+            .map(|(index, _)| index);
+        let (line, column) = match node {
+            Some(index) => self.position(&node_path(index, origins)),
+            None => (None, None),
+        };
+        FormatError::Model {
+            line,
+            column,
+            source,
+        }
+    }
+}
+
+impl Walk<'_, '_> {
+    /// Turns the node object `value` (and, depth-first, its subtree) into specs.
+    /// `parent` is the parent's spec index and this node's index among its children.
+    fn visit(&mut self, value: &Value, parent: Option<(usize, usize)>) -> Result<(), FormatError> {
+        let index = self.specs.len();
+        self.origins.push(Origin { parent });
+        let path = node_path(index, &self.origins);
+        let reader = self.reader;
+
+        let Some(object) = value.as_object() else {
+            return Err(reader.structure_error(
+                &path,
+                format!("expected a node object, found {}", kind(value)),
+            ));
+        };
+
+        let parent_id = parent.map(|(p, _)| self.specs[p].id.clone());
+        let field_at = |field| extend(&path, Step::Key(field));
+
+        // Identity first, so later errors can name the node.
+        let mut id = None;
+        for field in ["id", "name", "Name"] {
+            if let Some(text) = text_field(object, field)
+                .map_err(|found| reader.field_error(None, &field_at(field), field, found))?
+            {
+                id = Some(text);
+                break;
+            }
+        }
+        let id = match (id, &parent) {
+            (Some(id), _) => id,
+            (None, Some((_, child_index))) => {
+                format!("{}/{child_index}", parent_id.as_deref().unwrap_or(""))
+            }
+            (None, None) => "root".to_owned(),
+        };
+        let error = |field: &str, steps: &[Step<'_>], message: String| {
+            reader.field_error(Some(&id), steps, field, message)
+        };
+
+        let mut label = None;
+        for field in ["name", "Name"] {
+            if let Some(text) =
+                text_field(object, field).map_err(|found| error(field, &field_at(field), found))?
+            {
+                label = Some(text);
+                break;
+            }
+        }
+
+        let children = match object.get("children") {
+            None | Some(Value::Null) => &[][..],
+            Some(Value::Array(children)) => children.as_slice(),
+            Some(other) => {
+                return Err(error(
+                    "children",
+                    &field_at("children"),
+                    format!("expected an array of nodes, found {}", kind(other)),
+                ))
+            }
+        };
+        let is_leaf = children.is_empty();
+
+        let weight = match &self.flags.weight {
+            WeightRule::EveryNodeOne => Some(1.0),
+            WeightRule::LeafOne => is_leaf.then_some(1.0),
+            WeightRule::Field(field) => match object.get(field.as_str()) {
+                None | Some(Value::Null) if is_leaf => {
+                    return Err(error(
+                        field,
+                        &path,
+                        "missing; every leaf needs a weight".to_owned(),
+                    ))
+                }
+                None | Some(Value::Null) => None,
+                Some(Value::Number(number)) => {
+                    let weight = number.as_f64().unwrap_or(f64::NAN);
+                    if !is_valid_weight(weight) {
+                        let problem = if weight < 0.0 {
+                            "is negative"
+                        } else {
+                            "is not a finite number"
+                        };
+                        return Err(error(
+                            field,
+                            &field_at(field),
+                            format!("weight {number} {problem}"),
+                        ));
+                    }
+                    Some(weight)
+                }
+                Some(other) => {
+                    return Err(error(
+                        field,
+                        &field_at(field),
+                        format!("expected a number, found {}", kind(other)),
+                    ))
+                }
+            },
+        };
+
+        let feature_field = self.flags.feature_field.as_str();
+        let features = match object.get(feature_field) {
+            None | Some(Value::Null) => None,
+            Some(Value::Array(outer)) => {
+                let mut steps = field_at(feature_field);
+                // The prototype unwraps a one-element list holding a list (`[[..]]`).
+                let entries = match outer.as_slice() {
+                    [Value::Array(inner)] => {
+                        steps.push(Step::Index(0));
+                        inner
+                    }
+                    _ => outer,
+                };
+                let mut features = Vec::with_capacity(entries.len());
+                for (k, entry) in entries.iter().enumerate() {
+                    match entry.as_f64() {
+                        Some(x) => features.push(x),
+                        None => {
+                            let at = extend(&steps, Step::Index(k));
+                            return Err(error(
+                                feature_field,
+                                &at,
+                                format!("entry {k}: expected a number, found {}", kind(entry)),
+                            ));
+                        }
+                    }
+                }
+                Some(features)
+            }
+            Some(other) => {
+                return Err(error(
+                    feature_field,
+                    &field_at(feature_field),
+                    format!("expected an array of numbers, found {}", kind(other)),
+                ))
+            }
+        };
+
+        let relations = match object.get("neighbors") {
+            None | Some(Value::Null) => Vec::new(),
+            Some(Value::Array(entries)) => {
+                let mut relations = Vec::with_capacity(entries.len());
+                for (k, entry) in entries.iter().enumerate() {
+                    match id_text(entry) {
+                        Some(target) => relations.push(target),
+                        None => {
+                            let at = extend(&field_at("neighbors"), Step::Index(k));
+                            return Err(error(
+                                "neighbors",
+                                &at,
+                                format!("entry {k}: expected an id, found {}", kind(entry)),
+                            ));
+                        }
+                    }
+                }
+                relations
+            }
+            Some(other) => {
+                return Err(error(
+                    "neighbors",
+                    &field_at("neighbors"),
+                    format!("expected an array of ids, found {}", kind(other)),
+                ))
+            }
+        };
+
+        let color = match object.get("color") {
+            None | Some(Value::Null) => None,
+            Some(Value::String(color)) if is_hex_color(color) => Some(color.clone()),
+            Some(Value::String(color)) => {
+                return Err(error(
+                    "color",
+                    &field_at("color"),
+                    format!("{color:?} is not a hex color like #rgb or #rrggbb"),
+                ))
+            }
+            Some(other) => {
+                return Err(error(
+                    "color",
+                    &field_at("color"),
+                    format!("expected a hex color string, found {}", kind(other)),
+                ))
+            }
+        };
+
+        self.specs.push(NodeSpec {
+            id,
+            label,
+            parent: parent_id,
+            weight,
+            color,
+            features,
+            relations,
+        });
+        for (child_index, child) in children.iter().enumerate() {
+            self.visit(child, Some((index, child_index)))?;
+        }
+        Ok(())
+    }
+}
+
+/// The JSON path of node `index`: `children`, i, `children`, j, ... from the root.
+fn node_path(index: usize, origins: &[Origin]) -> Vec<Step<'static>> {
+    let mut steps = Vec::new();
+    let mut current = origins.get(index).and_then(|origin| origin.parent);
+    // Parents always have smaller indices than their children, so this ends.
+    while let Some((parent, child_index)) = current {
+        steps.push(Step::Index(child_index));
+        steps.push(Step::Key("children"));
+        current = origins.get(parent).and_then(|origin| origin.parent);
+    }
+    steps.reverse();
+    steps
+}
+
+/// `path` followed by one more step.
+fn extend<'a>(path: &[Step<'a>], step: Step<'a>) -> Vec<Step<'a>> {
+    let mut steps = Vec::with_capacity(path.len() + 1);
+    steps.extend_from_slice(path);
+    steps.push(step);
+    steps
+}
+
+/// A string or a number as text (ids may be written either way); `Err` describes
+/// any other value, `Ok(None)` means absent or null.
+fn text_field(object: &Map<String, Value>, field: &str) -> Result<Option<String>, String> {
+    match object.get(field) {
+        None | Some(Value::Null) => Ok(None),
+        Some(value) => id_text(value)
+            .map(Some)
+            .ok_or_else(|| format!("expected a string or a number, found {}", kind(value))),
+    }
+}
+
+/// A string as is, a number as its JSON text; `None` for other values.
+fn id_text(value: &Value) -> Option<String> {
+    match value {
+        Value::String(s) => Some(s.clone()),
+        Value::Number(n) => Some(n.to_string()),
+        _ => None,
+    }
+}
+
+/// True when any leaf below (or at) `node` has a non-null `field`. Malformed
+/// `children` are ignored here; the walk reports them with a position.
+fn any_leaf_has(node: &Map<String, Value>, field: &str) -> bool {
+    match node.get("children") {
+        Some(Value::Array(children)) if !children.is_empty() => children
+            .iter()
+            .filter_map(Value::as_object)
+            .any(|child| any_leaf_has(child, field)),
+        _ => node.get(field).is_some_and(|value| !value.is_null()),
+    }
+}
+
+/// "a string", "an array", ... for error messages.
+fn kind(value: &Value) -> &'static str {
+    match value {
+        Value::Null => "null",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "an array",
+        Value::Object(_) => "an object",
+    }
+}
+
+/// Turns a serde_json error into [`FormatError::Syntax`], converting its byte column
+/// into a character column.
+fn syntax_error(text: &[u8], error: &serde_json::Error) -> FormatError {
+    let line = error.line();
+    let byte_column = error.column();
+    // serde_json's Display appends " at line L column C"; the position has its own fields.
+    let full = error.to_string();
+    let suffix = format!(" at line {line} column {byte_column}");
+    let message = full.strip_suffix(&suffix).unwrap_or(&full).to_owned();
+    let line_start = text
+        .split_inclusive(|&b| b == b'\n')
+        .take(line.saturating_sub(1))
+        .map(<[u8]>::len)
+        .sum::<usize>();
+    let line_end = line_start.saturating_add(byte_column).min(text.len());
+    let column = text
+        .get(line_start..line_end)
+        .map_or(byte_column, count_chars);
+    FormatError::Syntax {
+        line,
+        column,
+        message,
+    }
+}
+
+/// Number of UTF-8 characters in `bytes` (continuation bytes are not counted).
+fn count_chars(bytes: &[u8]) -> usize {
+    bytes.iter().filter(|&&b| b & 0xC0 != 0x80).count()
+}
+
+/// 1-based line and character column of byte `offset`.
+fn line_column(text: &[u8], offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+    let line_start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    (line, 1 + count_chars(&before[line_start..]))
+}
+
+/// Byte offset of the value reached by following `path` from the top-level value.
+/// Expects text that serde_json has accepted; returns `None` instead of guessing if
+/// the path is absent. When an object repeats a key, the last one counts, as in
+/// serde_json's `Value`.
+fn locate(text: &[u8], path: &[Step<'_>]) -> Option<usize> {
+    let mut pos = skip_whitespace(text, 0);
+    for step in path {
+        match step {
+            Step::Key(key) => {
+                if text.get(pos) != Some(&b'{') {
+                    return None;
+                }
+                pos = skip_whitespace(text, pos + 1);
+                let mut found = None;
+                while text.get(pos) == Some(&b'"') {
+                    let key_end = skip_string(text, pos)?;
+                    let name = key_text(text.get(pos..key_end)?)?;
+                    pos = skip_whitespace(text, key_end);
+                    if text.get(pos) != Some(&b':') {
+                        return None;
+                    }
+                    pos = skip_whitespace(text, pos + 1);
+                    if name == *key {
+                        found = Some(pos);
+                    }
+                    pos = skip_whitespace(text, skip_value(text, pos)?);
+                    if text.get(pos) == Some(&b',') {
+                        pos = skip_whitespace(text, pos + 1);
+                    }
+                }
+                pos = found?;
+            }
+            Step::Index(index) => {
+                if text.get(pos) != Some(&b'[') {
+                    return None;
+                }
+                pos = skip_whitespace(text, pos + 1);
+                for _ in 0..*index {
+                    if text.get(pos) == Some(&b']') {
+                        return None;
+                    }
+                    pos = skip_whitespace(text, skip_value(text, pos)?);
+                    if text.get(pos) != Some(&b',') {
+                        return None;
+                    }
+                    pos = skip_whitespace(text, pos + 1);
+                }
+                if matches!(text.get(pos), None | Some(&b']')) {
+                    return None;
+                }
+            }
+        }
+    }
+    Some(pos)
+}
+
+/// The first non-whitespace offset at or after `pos`.
+fn skip_whitespace(text: &[u8], mut pos: usize) -> usize {
+    while matches!(text.get(pos), Some(b' ' | b'\t' | b'\n' | b'\r')) {
+        pos += 1;
+    }
+    pos
+}
+
+/// The offset just past the string starting at `pos` (which holds its opening quote).
+fn skip_string(text: &[u8], pos: usize) -> Option<usize> {
+    let mut i = pos + 1;
+    loop {
+        match text.get(i)? {
+            b'\\' => i += 2,
+            b'"' => return Some(i + 1),
+            _ => i += 1,
+        }
+    }
+}
+
+/// The offset just past the value starting at `pos`.
+fn skip_value(text: &[u8], pos: usize) -> Option<usize> {
+    match text.get(pos)? {
+        b'"' => skip_string(text, pos),
+        b'{' | b'[' => {
+            let mut depth = 0usize;
+            let mut i = pos;
+            loop {
+                match text.get(i)? {
+                    b'"' => {
+                        i = skip_string(text, i)?;
+                        continue;
+                    }
+                    b'{' | b'[' => depth += 1,
+                    b'}' | b']' => {
+                        depth = depth.checked_sub(1)?;
+                        if depth == 0 {
+                            return Some(i + 1);
+                        }
+                    }
+                    _ => {}
+                }
+                i += 1;
+            }
+        }
+        // Numbers, true, false, null: run to the next delimiter.
+        _ => {
+            let mut i = pos;
+            while !matches!(
+                text.get(i),
+                None | Some(b',' | b']' | b'}' | b' ' | b'\t' | b'\n' | b'\r')
+            ) {
+                i += 1;
+            }
+            Some(i)
+        }
+    }
+}
+
+/// The text of a quoted key, unescaping only when it holds escapes.
+fn key_text(quoted: &[u8]) -> Option<Cow<'_, str>> {
+    if quoted.contains(&b'\\') {
+        serde_json::from_slice::<String>(quoted)
+            .ok()
+            .map(Cow::Owned)
+    } else {
+        let inner = quoted.get(1..quoted.len().checked_sub(1)?)?;
+        std::str::from_utf8(inner).ok().map(Cow::Borrowed)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn position_of(text: &str, path: &[Step<'_>]) -> Option<(usize, usize)> {
+        locate(text.as_bytes(), path).map(|offset| line_column(text.as_bytes(), offset))
+    }
+
+    #[test]
+    fn locate_follows_keys_and_indices() {
+        let text = "{\"a\": 1,\n \"k\\\"ey\": {\"x\": [10, {\"y\": \"]}\"}, 30]},\n \"children\": [ {\"id\": \"é\"}, {\"id\": 2} ]}";
+        assert_eq!(position_of(text, &[]), Some((1, 1)));
+        assert_eq!(position_of(text, &[Step::Key("a")]), Some((1, 7)));
+        assert_eq!(
+            position_of(text, &[Step::Key("k\"ey"), Step::Key("x"), Step::Index(2)]),
+            Some((2, 35))
+        );
+        assert_eq!(
+            position_of(
+                text,
+                &[Step::Key("children"), Step::Index(1), Step::Key("id")]
+            ),
+            Some((3, 36))
+        );
+        assert_eq!(position_of(text, &[Step::Key("missing")]), None);
+        assert_eq!(
+            position_of(text, &[Step::Key("children"), Step::Index(2)]),
+            None
+        );
+    }
+
+    #[test]
+    fn locate_takes_the_last_of_repeated_keys() {
+        let text = r#"{"w": 1, "w": 2}"#;
+        assert_eq!(position_of(text, &[Step::Key("w")]), Some((1, 15)));
+    }
+
+    #[test]
+    fn node_paths_are_rebuilt_from_origins() {
+        let origins = [
+            Origin { parent: None },
+            Origin {
+                parent: Some((0, 0)),
+            },
+            Origin {
+                parent: Some((1, 3)),
+            },
+        ];
+        let path = node_path(2, &origins);
+        let rendered: Vec<String> = path
+            .iter()
+            .map(|step| match step {
+                Step::Key(key) => (*key).to_owned(),
+                Step::Index(i) => i.to_string(),
+            })
+            .collect();
+        assert_eq!(rendered, ["children", "0", "children", "3"]);
+    }
+}
