@@ -1,0 +1,462 @@
+//! The SVG picture of a finished layout: filled leaf cells coloured by top-level
+//! group, white outlines thicker for higher levels, and labels fitted into leaf
+//! cells. Owns the picture's structure, colours per node and label placement; may
+//! not compute or alter geometry, fail, or do I/O. Output is deterministic: fixed
+//! two-decimal coordinates, nodes in dataset order.
+
+use nptreemap_formats::Dataset;
+
+use super::palette::{self, Rgb, WHITE};
+use crate::geom::{cross, ConvexPolygon, Point};
+use crate::layout::Layout;
+
+/// Text width per character, in font sizes: a generic sans-serif estimate (the
+/// mean advance of Latin text in Helvetica/Arial/DejaVu Sans is 0.5–0.6 em).
+/// Erring wide keeps labels inside their cells.
+const CHAR_WIDTH_EM: f64 = 0.6;
+/// Height of the box a label must fit in, in font sizes (ascenders to descenders
+/// plus a little air).
+const LINE_HEIGHT_EM: f64 = 1.2;
+/// Free space left and right of a label, in font sizes.
+const SIDE_PAD_EM: f64 = 0.3;
+/// Baseline offset below the box centre, in font sizes: half the cap height of
+/// common sans-serif fonts, so capitals and lower case look centred. Explicit
+/// rather than `dominant-baseline`, which renderers support unevenly.
+const BASELINE_SHIFT_EM: f64 = 0.35;
+/// Halo stroke width around label glyphs, in font sizes (half of it shows).
+const HALO_EM: f64 = 0.2;
+/// Each hierarchy level down draws its outlines this much thinner.
+const STROKE_DECAY: f64 = 0.5;
+/// Thinnest outline, canvas units: thinner lines vanish in anti-aliasing.
+const MIN_STROKE_WIDTH: f64 = 0.5;
+
+/// How the picture looks. Geometry comes from the layout; this only styles it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SvgStyle {
+    /// The `width` attribute (display size). The `viewBox` is always the layout's
+    /// canvas, so a different size scales the whole picture.
+    /// Default: `None`, the layout canvas width.
+    pub width: Option<f64>,
+    /// The `height` attribute. Default: `None`, the layout canvas height.
+    pub height: Option<f64>,
+    /// Background fill of the canvas; `None` leaves it transparent.
+    /// Default: `Some(#ffffff)`.
+    pub background: Option<Rgb>,
+    /// Colour of cell outlines. Default: `#ffffff`.
+    pub stroke: Rgb,
+    /// Outline width, canvas units, between top-level groups; every level down
+    /// halves it, never below 0.5 (or this value, if smaller). Default: `3.0`.
+    pub stroke_width: f64,
+    /// Whether leaves get text labels. Default: `true`.
+    pub labels: bool,
+    /// Labels that would need a smaller font size (canvas units) are left out.
+    /// Default: `6.0`.
+    pub min_font_size: f64,
+    /// Largest label font size, canvas units. Default: `24.0`.
+    pub max_font_size: f64,
+    /// CSS font-family list for labels (kept free of quotes). Default:
+    /// `Helvetica, Arial, DejaVu Sans, sans-serif`, a generic stack; PNG output
+    /// pins its own font.
+    pub font_family: String,
+    /// Label text colour; labels get a halo in the `stroke` colour.
+    /// Default: `#1a1a1a`.
+    pub text_color: Rgb,
+}
+
+impl Default for SvgStyle {
+    fn default() -> Self {
+        Self {
+            width: None,
+            height: None,
+            background: Some(WHITE),
+            stroke: WHITE,
+            stroke_width: 3.0,
+            labels: true,
+            min_font_size: 6.0,
+            max_font_size: 24.0,
+            font_family: "Helvetica, Arial, DejaVu Sans, sans-serif".to_owned(),
+            text_color: Rgb::new(0x1a, 0x1a, 0x1a),
+        }
+    }
+}
+
+/// Draws `layout` (cells indexed like `dataset`'s nodes) as an SVG document.
+///
+/// Every non-root cell is one `<path>`: leaves filled, internal nodes as
+/// `fill="none"` outlines. Levels are drawn deepest first, so the thick outlines
+/// between top-level groups lie on top. The root is drawn only when it is the
+/// only cell. Identical input gives identical bytes.
+pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
+    debug_assert_eq!(dataset.len(), layout.cells.len(), "one cell per node");
+    let count = dataset.len().min(layout.cells.len());
+    let colors = cell_colors(dataset);
+    let (cw, ch) = (layout.canvas.width, layout.canvas.height);
+
+    let mut out = String::with_capacity(512 + 160 * count);
+    out.push_str(&format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" viewBox=\"0 0 {} {}\">\n",
+        num(style.width.unwrap_or(cw)),
+        num(style.height.unwrap_or(ch)),
+        num(cw),
+        num(ch),
+    ));
+    if let Some(bg) = style.background {
+        out.push_str(&format!(
+            "<rect width=\"{}\" height=\"{}\" fill=\"{bg}\"/>\n",
+            num(cw),
+            num(ch)
+        ));
+    }
+
+    // Node indices per depth, each list in dataset order.
+    let mut by_depth: Vec<Vec<usize>> = vec![Vec::new(); dataset.max_depth() + 1];
+    for i in (0..count).filter(|&i| is_drawn(dataset, i)) {
+        let d = dataset.node(i).depth;
+        if d >= by_depth.len() {
+            by_depth.resize_with(d + 1, Vec::new);
+        }
+        by_depth[d].push(i);
+    }
+
+    out.push_str(&format!(
+        "<g stroke=\"{}\" stroke-linejoin=\"round\">\n",
+        style.stroke
+    ));
+    for (depth, nodes) in by_depth.iter().enumerate().rev() {
+        if nodes.is_empty() {
+            continue;
+        }
+        out.push_str(&format!(
+            "<g stroke-width=\"{}\">\n",
+            num(stroke_width(style.stroke_width, depth))
+        ));
+        for &i in nodes {
+            let node = dataset.node(i);
+            let fill = if dataset.is_leaf(i) {
+                colors[i].unwrap_or(palette::TABLEAU10[0]).to_string()
+            } else {
+                "none".to_owned()
+            };
+            out.push_str("<path d=\"");
+            path_data(&mut out, &layout.cells[i].polygon);
+            out.push_str(&format!("\" fill=\"{fill}\"><title>"));
+            out.push_str(&escape(&node.label));
+            if node.id != node.label {
+                out.push_str(" (");
+                out.push_str(&escape(&node.id));
+                out.push(')');
+            }
+            out.push_str("</title></path>\n");
+        }
+        out.push_str("</g>\n");
+    }
+    out.push_str("</g>\n");
+
+    if style.labels {
+        push_labels(&mut out, dataset, layout, style, count);
+    }
+    out.push_str("</svg>\n");
+    out
+}
+
+/// Every non-root node is drawn; the root only when it is the whole dataset.
+fn is_drawn(dataset: &Dataset, i: usize) -> bool {
+    dataset.node(i).parent.is_some() || dataset.is_leaf(i)
+}
+
+/// Outline width at `depth`: `top` for depth 0 and 1, then decaying per level.
+fn stroke_width(top: f64, depth: usize) -> f64 {
+    let steps = depth.saturating_sub(1).min(64) as i32;
+    (top * STROKE_DECAY.powi(steps)).max(top.min(MIN_STROKE_WIDTH))
+}
+
+/// Fill colour of every node, indexed like the dataset. A node's own valid
+/// `color` always wins; otherwise top-level groups take the categorical palette
+/// by sibling index and deeper nodes a lightness variation of their parent's
+/// colour ([`palette::child_shade`]). The root has none unless it is a leaf.
+fn cell_colors(dataset: &Dataset) -> Vec<Option<Rgb>> {
+    let own = |i: usize| dataset.node(i).color.as_deref().and_then(Rgb::from_hex);
+    let mut colors: Vec<Option<Rgb>> = vec![None; dataset.len()];
+    let root = dataset.root();
+    if root < dataset.len() && dataset.is_leaf(root) {
+        colors[root] = Some(own(root).unwrap_or(palette::TABLEAU10[0]));
+    }
+    // Breadth-first order puts every parent before its children, so one pass
+    // sees each parent's colour settled before it is varied.
+    for (p, parent) in dataset.nodes().iter().enumerate() {
+        let n = parent.children.len();
+        let groups = palette::categorical(n);
+        let base = colors[p].unwrap_or(palette::TABLEAU10[0]);
+        for (k, &c) in parent.children.iter().enumerate() {
+            if c >= colors.len() {
+                continue;
+            }
+            let derived = if parent.parent.is_none() {
+                groups[k % groups.len()]
+            } else {
+                palette::child_shade(base, k, n)
+            };
+            colors[c] = Some(own(c).unwrap_or(derived));
+        }
+    }
+    colors
+}
+
+/// Appends `M x,y L x,y … Z` with two-decimal coordinates.
+fn path_data(out: &mut String, polygon: &ConvexPolygon) {
+    for (k, p) in polygon.points().iter().enumerate() {
+        out.push(if k == 0 { 'M' } else { 'L' });
+        out.push_str(&num(p.x));
+        out.push(',');
+        out.push_str(&num(p.y));
+    }
+    out.push('Z');
+}
+
+/// Appends the label group: one `<text>` per leaf whose label fits.
+fn push_labels(
+    out: &mut String,
+    dataset: &Dataset,
+    layout: &Layout,
+    style: &SvgStyle,
+    count: usize,
+) {
+    let mut group_open = false;
+    for i in (0..count).filter(|&i| dataset.is_leaf(i) && is_drawn(dataset, i)) {
+        let label = &dataset.node(i).label;
+        let chars = label.chars().filter(|c| !c.is_control()).count();
+        if chars == 0 || label.trim().is_empty() {
+            continue;
+        }
+        let polygon = &layout.cells[i].polygon;
+        let center = polygon.centroid();
+        let size = fit_font_size(polygon, center, chars).min(style.max_font_size);
+        if size < style.min_font_size {
+            continue;
+        }
+        if !group_open {
+            // pointer-events="none" lets hovering reach the cells' <title>s.
+            out.push_str(&format!(
+                "<g font-family=\"{}\" text-anchor=\"middle\" fill=\"{}\" stroke=\"{}\" \
+                 stroke-linejoin=\"round\" paint-order=\"stroke\" pointer-events=\"none\">\n",
+                escape(&style.font_family),
+                style.text_color,
+                style.stroke,
+            ));
+            group_open = true;
+        }
+        out.push_str(&format!(
+            "<text x=\"{}\" y=\"{}\" font-size=\"{}\" stroke-width=\"{}\">{}</text>\n",
+            num(center.x),
+            num(center.y + BASELINE_SHIFT_EM * size),
+            num(size),
+            num(HALO_EM * size),
+            escape(label),
+        ));
+    }
+    if group_open {
+        out.push_str("</g>\n");
+    }
+}
+
+/// The largest font size at which a label of `chars` characters, estimated as a
+/// box of `(CHAR_WIDTH_EM·chars + 2·SIDE_PAD_EM) × LINE_HEIGHT_EM` font sizes
+/// centred at `center`, lies inside `polygon`.
+///
+/// The box scales about `center` with the font size, and the polygon is convex
+/// and contains `center`, so the box fits exactly when its four corners do; each
+/// corner moves along a ray from `center`, and where that ray leaves the polygon
+/// is a closed-form minimum over the edges. This is the value a bisection on
+/// `contains` would converge to, computed in one pass.
+fn fit_font_size(polygon: &ConvexPolygon, center: Point, chars: usize) -> f64 {
+    let half = Point::new(
+        0.5 * (CHAR_WIDTH_EM * chars as f64 + 2.0 * SIDE_PAD_EM),
+        0.5 * LINE_HEIGHT_EM,
+    );
+    let corners = [
+        Point::new(half.x, half.y),
+        Point::new(-half.x, half.y),
+        Point::new(half.x, -half.y),
+        Point::new(-half.x, -half.y),
+    ];
+    let pts = polygon.points();
+    let mut best = f64::INFINITY;
+    for (k, &a) in pts.iter().enumerate() {
+        let e = pts[(k + 1) % pts.len()] - a;
+        // Positive orientation: the inside is where cross(e, p - a) >= 0.
+        let slack = cross(e, center - a);
+        for u in corners {
+            let towards = cross(e, u);
+            if towards < 0.0 {
+                best = best.min(slack / -towards);
+            }
+        }
+    }
+    if best.is_finite() {
+        best.max(0.0)
+    } else {
+        0.0
+    }
+}
+
+/// A number with exactly two decimals; never `-0.00`, never non-finite.
+fn num(v: f64) -> String {
+    debug_assert!(v.is_finite(), "non-finite number reached the SVG: {v}");
+    let v = if v.is_finite() { v } else { 0.0 };
+    let s = format!("{v:.2}");
+    if s == "-0.00" {
+        "0.00".to_owned()
+    } else {
+        s
+    }
+}
+
+/// XML-escapes user text for both element content and quoted attributes, and
+/// drops characters XML 1.0 forbids (C0 controls other than tab, LF and CR;
+/// U+FFFE, U+FFFF), which would otherwise make the whole document unparseable.
+fn escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            '\t' | '\n' | '\r' => out.push(c),
+            c if (c as u32) < 0x20 || c == '\u{FFFE}' || c == '\u{FFFF}' => {}
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::test_support::sample;
+
+    fn count(hay: &str, needle: &str) -> usize {
+        hay.matches(needle).count()
+    }
+
+    #[test]
+    fn one_path_per_drawn_cell() {
+        let (dataset, layout) = sample();
+        let text = svg(&dataset, &layout, &SvgStyle::default());
+        let drawn = (0..dataset.len())
+            .filter(|&i| is_drawn(&dataset, i))
+            .count();
+        assert_eq!(drawn, dataset.len() - 1, "every node but the root");
+        assert_eq!(count(&text, "<path") + count(&text, "<polygon"), drawn);
+        let leaves = (0..dataset.len()).filter(|&i| dataset.is_leaf(i)).count();
+        let internal_drawn = drawn - leaves;
+        assert_eq!(count(&text, "fill=\"none\""), internal_drawn);
+        assert!(text.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"400.00\""));
+        assert!(text.contains("viewBox=\"0 0 400.00 200.00\""));
+        assert!(text.contains("<rect width=\"400.00\" height=\"200.00\" fill=\"#ffffff\"/>"));
+        assert!(text.ends_with("</svg>\n"));
+    }
+
+    #[test]
+    fn deeper_levels_first_and_thinner() {
+        let (dataset, layout) = sample();
+        let text = svg(&dataset, &layout, &SvgStyle::default());
+        let depth2 = text.find("<g stroke-width=\"1.50\">").unwrap();
+        let depth1 = text.find("<g stroke-width=\"3.00\">").unwrap();
+        assert!(depth2 < depth1, "top-level outlines drawn last, on top");
+        assert_eq!(stroke_width(3.0, 1), 3.0);
+        assert_eq!(stroke_width(3.0, 3), 0.75);
+        assert_eq!(stroke_width(3.0, 9), MIN_STROKE_WIDTH);
+        assert_eq!(stroke_width(0.2, 5), 0.2);
+    }
+
+    #[test]
+    fn labels_are_escaped_never_raw() {
+        let (dataset, layout) = sample();
+        let text = svg(&dataset, &layout, &SvgStyle::default());
+        assert!(!text.contains("<script>"));
+        assert!(!text.contains("\"q\""));
+        let escaped = "&lt;script&gt;alert(1)&lt;/script&gt; &quot;q&quot;";
+        assert!(text.contains(&format!("<title>{escaped} (B)</title>")));
+        assert!(
+            text.contains(&format!("{escaped}</text>")),
+            "B's label is drawn"
+        );
+        assert_eq!(escape("a&b<'>\u{1}\t"), "a&amp;b&lt;&apos;&gt;\t");
+    }
+
+    #[test]
+    fn byte_identical_across_calls() {
+        let (dataset, layout) = sample();
+        let style = SvgStyle::default();
+        assert_eq!(
+            svg(&dataset, &layout, &style),
+            svg(&dataset, &layout, &style)
+        );
+    }
+
+    #[test]
+    fn tiny_cells_lose_their_labels() {
+        let (dataset, layout) = sample();
+        let text = svg(&dataset, &layout, &SvgStyle::default());
+        assert!(text.contains(">A1</text>"));
+        assert!(text.contains(">A2</text>"));
+        assert!(!text.contains(">A3</text>"), "A3 is 2 units tall");
+        assert!(text.contains("<title>A3</title>"), "but its cell is drawn");
+        let off = SvgStyle {
+            labels: false,
+            ..SvgStyle::default()
+        };
+        assert_eq!(count(&svg(&dataset, &layout, &off), "<text"), 0);
+    }
+
+    #[test]
+    fn font_size_fits_the_cell() {
+        // 240 × 100 rectangle, 2 characters: the height limits (100 / 1.2).
+        let rect = ConvexPolygon::rectangle(0.0, 0.0, 240.0, 100.0).unwrap();
+        let c = rect.centroid();
+        assert!((fit_font_size(&rect, c, 2) - 100.0 / LINE_HEIGHT_EM).abs() < 1e-9);
+        // 40 characters: the width limits.
+        let w = CHAR_WIDTH_EM * 40.0 + 2.0 * SIDE_PAD_EM;
+        assert!((fit_font_size(&rect, c, 40) - 240.0 / w).abs() < 1e-9);
+        // Agrees with containment on a non-rectangular cell.
+        let hex = ConvexPolygon::regular(Point::new(50.0, 50.0), 40.0, 6).unwrap();
+        let c = hex.centroid();
+        let s = fit_font_size(&hex, c, 5);
+        let half = Point::new(
+            0.5 * (CHAR_WIDTH_EM * 5.0 + 2.0 * SIDE_PAD_EM),
+            0.5 * LINE_HEIGHT_EM,
+        );
+        let inside = |s: f64| {
+            [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)]
+                .iter()
+                .all(|&(x, y)| hex.contains(c + Point::new(x * half.x, y * half.y) * s))
+        };
+        assert!(inside(s * 0.999) && !inside(s * 1.01));
+    }
+
+    #[test]
+    fn colours_follow_the_hierarchy() {
+        let (dataset, layout) = sample();
+        let colors = cell_colors(&dataset);
+        let idx = |id: &str| dataset.nodes().iter().position(|n| n.id == id).unwrap();
+        assert_eq!(colors[idx("root")], None);
+        assert_eq!(colors[idx("A")], Some(palette::TABLEAU10[0]));
+        // B has its own colour in the sample.
+        assert_eq!(colors[idx("B")], Rgb::from_hex("#ff0000"));
+        let a = palette::TABLEAU10[0];
+        assert_eq!(colors[idx("A1")], Some(palette::child_shade(a, 0, 3)));
+        assert_eq!(colors[idx("A2")], Some(palette::child_shade(a, 1, 3)));
+        let text = svg(&dataset, &layout, &SvgStyle::default());
+        assert!(text.contains("fill=\"#ff0000\""));
+    }
+
+    #[test]
+    fn numbers_have_two_decimals() {
+        assert_eq!(num(1.0 / 3.0), "0.33");
+        assert_eq!(num(-0.001), "0.00");
+        assert_eq!(num(-1.005), "-1.00");
+        assert_eq!(num(12.0), "12.00");
+    }
+}

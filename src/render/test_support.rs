@@ -1,0 +1,70 @@
+//! Test fixture shared by the render tests: one small dataset with its hand-made
+//! layout. Test-only; may not be used outside `#[cfg(test)]`.
+//!
+//! The dataset comes from `nptreemap_formats::DatasetBuilder`; adapt `sample()`
+//! here (and only here) if that builder's API differs.
+
+use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
+
+use crate::geom::ConvexPolygon;
+use crate::layout::{Canvas, Layout, LayoutCell};
+
+/// A 400 × 200 canvas: `A` (left 240 wide, three stacked children, the last only 2
+/// units tall) and `B` (right 160 wide, a hostile label and its own colour).
+///
+/// ```text
+/// +--------------+--------+
+/// | A1           |        |
+/// +--------------+   B    |
+/// | A2           |        |
+/// +--------------+        |
+/// | A3 (2 tall)  |        |
+/// +--------------+--------+
+/// ```
+pub(crate) fn sample() -> (Dataset, Layout) {
+    let dataset = DatasetBuilder::new()
+        .add(NodeSpec::new("root"))
+        .add(NodeSpec::new("A").parent("root"))
+        .add(
+            NodeSpec::new("B")
+                .parent("root")
+                .weight(32000.0)
+                .color("#ff0000")
+                .label("<script>alert(1)</script> \"q\""),
+        )
+        .add(NodeSpec::new("A1").parent("A").weight(24000.0))
+        .add(NodeSpec::new("A2").parent("A").weight(23520.0))
+        .add(NodeSpec::new("A3").parent("A").weight(480.0))
+        .build()
+        .expect("sample dataset is valid");
+    let rect = |id: &str| match id {
+        "root" => (0.0, 0.0, 400.0, 200.0),
+        "A" => (0.0, 0.0, 240.0, 200.0),
+        "B" => (240.0, 0.0, 160.0, 200.0),
+        "A1" => (0.0, 0.0, 240.0, 100.0),
+        "A2" => (0.0, 100.0, 240.0, 98.0),
+        "A3" => (0.0, 198.0, 240.0, 2.0),
+        other => panic!("no rectangle for {other}"),
+    };
+    let cells = dataset
+        .nodes()
+        .iter()
+        .map(|node| {
+            let (x, y, w, h) = rect(&node.id);
+            let polygon = ConvexPolygon::rectangle(x, y, w, h).expect("positive rectangle");
+            LayoutCell {
+                site: polygon.centroid(),
+                power_weight: 0.0,
+                polygon,
+            }
+        })
+        .collect();
+    let layout = Layout {
+        canvas: Canvas {
+            width: 400.0,
+            height: 200.0,
+        },
+        cells,
+    };
+    (dataset, layout)
+}
