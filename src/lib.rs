@@ -1,20 +1,7 @@
 //! nptreemap: neighborhood-preserving Voronoi treemaps.
 //!
-//! The pipeline, in five steps:
-//! 1. **Parse** input bytes into a validated [`Dataset`] (crate `nptreemap-formats`).
-//! 2. **Geometry** ([`geom`]): convex polygons, the only shape a cell can have.
-//! 3. **Power diagrams** ([`power`]): weighted sites clipped to a convex polygon,
-//!    with each cell's neighbours and shared edges.
-//! 4. **Layout** ([`layout`]): a one-level optimiser (Lloyd steps plus weight
-//!    adaptation towards target areas) run top-down over the hierarchy.
-//! 5. **Render** ([`render`]): a finished [`Layout`] becomes layout JSON or SVG.
-//!
-//! Steps 2 to 5 are pure: no files, no clock, no printing.
+//! Reduced on branch `wt-power` to the modules this worktree builds: the full
+//! module list is restored when the branches are merged.
 
 pub mod geom;
-pub mod layout;
 pub mod power;
-pub mod render;
-
-pub use layout::{Canvas, Layout, LayoutCell, Outline, Params, Report};
-pub use nptreemap_formats::{Dataset, Node};
