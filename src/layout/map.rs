@@ -72,7 +72,7 @@ const REPAIR_MARGIN: f64 = 0.9;
 /// Newton steps are shortened so no bisector moves by more than this share of
 /// its site distance: the linearisation is good for moderate moves, and a site
 /// is never overtaken by a neighbour's bisector in one step.
-const MAX_BISECTOR_SHIFT: f64 = 0.25;
+const MAX_BISECTOR_SHIFT: f64 = 1.0;
 
 /// Conjugate-gradient stop: residual below this share of the right-hand side.
 /// The step is re-linearised next tick anyway, so a rough solve is enough.
@@ -202,16 +202,20 @@ impl MapSimulation {
             let mut changed = false;
             for i in 0..self.sites.len() {
                 let cell = &self.diagram.cells[i];
-                if let Some(j) = cell.dominated_by {
-                    let d2 = self.sites[i]
-                        .position
-                        .distance_squared(self.sites[j].position);
-                    self.sites[i].weight = self.sites[j].weight - REPAIR_MARGIN * d2;
-                    changed = true;
-                } else if cell.polygon.is_none() {
-                    self.sites[i].position =
-                        self.clip.sample(self.rng.next_f64(), self.rng.next_f64());
-                    changed = true;
+                match (cell.dominated_by, cell.polygon.is_some()) {
+                    (Some(j), _) => {
+                        let d2 = self.sites[i]
+                            .position
+                            .distance_squared(self.sites[j].position);
+                        self.sites[i].weight = self.sites[j].weight - REPAIR_MARGIN * d2;
+                        changed = true;
+                    }
+                    (None, false) => {
+                        self.sites[i].position =
+                            self.clip.sample(self.rng.next_f64(), self.rng.next_f64());
+                        changed = true;
+                    }
+                    (None, true) => {}
                 }
             }
             if !changed {

@@ -144,7 +144,7 @@ fn divide(
     let values: Vec<f64> = children.iter().map(|c| dataset.node(*c).value).collect();
     let targets = target_areas(&values, polygon.area(), params.min_weight_ratio);
     let mut rng = Rng::for_key(params.seed, &dataset.node(parent).id);
-    let positions = seed::random_positions(&polygon, children.len(), &mut rng);
+    let positions = seed::halton_positions(&polygon, children.len(), &mut rng);
     let mut sim = MapSimulation::new(polygon, targets, positions, None, settings, rng);
     sim.run();
     let iterations = sim.state().iteration_count;
