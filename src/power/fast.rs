@@ -5,11 +5,11 @@
 
 use rayon::prelude::*;
 
-use super::assemble::{cannot_cut, symmetrize, CellBuilder, Prepared};
+use super::assemble::{cannot_cut, empty_cell, symmetrize, CellBuilder, Prepared};
 use super::clip::LabelledPolygon;
 use super::grid::Grid;
 use super::{Cell, PowerDiagram, Site};
-use crate::geom::ConvexPolygon;
+use crate::geom::{ConvexPolygon, Point};
 
 /// From this many sites on, cells are built in parallel. Below it the thread
 /// hand-off costs more than it saves.
@@ -20,6 +20,22 @@ const PARALLEL_FROM: usize = 512;
 /// sites (heavily clustered or coincident input) is taken in index order
 /// instead, which is just as correct and avoids a quadratic sort cost.
 const SORT_AT_MOST: usize = 64;
+
+/// Rings of buckets (Chebyshev radius) searched around the site before falling
+/// back to the pyramid. Two rings settle nearly every cell of evenly spread
+/// sites; more would only repeat what the pyramid does better.
+const RINGS: usize = 3;
+
+/// Whether all leaf buckets under node `(x, y)` of level `lvl` lie within
+/// Chebyshev distance `r` of leaf bucket `(bx, by)`.
+fn within_block(x: usize, y: usize, lvl: usize, bx: usize, by: usize, r: usize) -> bool {
+    let span = |c: usize, center: usize| {
+        let first = c << lvl;
+        let last = ((c + 1) << lvl) - 1;
+        first >= center.saturating_sub(r) && last <= center + r
+    };
+    span(x, bx) && span(y, by)
+}
 
 /// The power diagram of `sites` clipped to `clip`, computed cell by cell with a
 /// security-radius stop (near O(n log n) on spread-out sites).
@@ -32,28 +48,47 @@ const SORT_AT_MOST: usize = 64;
 ///
 /// The result is bit-identical whether or not it is computed in parallel.
 pub fn power_diagram(sites: &[Site], clip: &ConvexPolygon) -> PowerDiagram {
+    power_diagram_with(sites, clip, sites.len() >= PARALLEL_FROM)
+}
+
+/// [`power_diagram`] with the choice of parallelism made by the caller (tests
+/// use it to show both ways give identical bits).
+pub(crate) fn power_diagram_with(
+    sites: &[Site],
+    clip: &ConvexPolygon,
+    parallel: bool,
+) -> PowerDiagram {
     let input = Prepared::new(sites, clip);
     let (lo, hi) = clip.bbox();
-    let grid = Grid::new(&input.pos, &input.w, &input.usable, lo, hi);
+    let grid = Grid::new(&input.pos, &input.w, &input.active, lo, hi);
     let n = input.len();
-    let build = |state: &mut Walker, i: usize| -> Cell { state.cell(&input, &grid, i) };
-    let mut cells: Vec<Cell> = if n >= PARALLEL_FROM {
-        (0..n)
-            .into_par_iter()
-            .map_init(Walker::new, build)
-            .collect()
+    // Cells are built in the grid's spatial order, so neighbouring sites' data
+    // is still in cache, then put back in site order; each cell depends only
+    // on the input, so order and threading cannot change a bit of the result.
+    let order = grid.spatial_order();
+    let build = |state: &mut Walker, i: &usize| -> Cell { state.cell(&input, &grid, *i) };
+    let built: Vec<Cell> = if parallel {
+        order.par_iter().map_init(Walker::new, build).collect()
     } else {
         let mut state = Walker::new();
-        (0..n).map(|i| build(&mut state, i)).collect()
+        order.iter().map(|i| build(&mut state, i)).collect()
     };
-    symmetrize(&mut cells);
+    // Sites outside the grid (ignored or shadowed) get their empty cells here.
+    let mut cells: Vec<Cell> = (0..n)
+        .map(|i| empty_cell(input.pos[i], input.shadow[i]))
+        .collect();
+    for (&i, cell) in order.iter().zip(built) {
+        cells[i] = cell;
+    }
+    symmetrize(&mut cells, parallel);
     PowerDiagram { cells }
 }
 
 /// Per-thread scratch for building cells; its contents never influence results.
 struct Walker {
     builder: CellBuilder,
-    candidates: Vec<(f64, usize)>,
+    /// (squared distance, index, position, weight) of the first sites to visit.
+    candidates: Vec<(f64, usize, Point, f64)>,
     /// Pending pyramid nodes: (squared distance lower bound, level, node).
     stack: Vec<(f64, usize, usize)>,
 }
@@ -82,10 +117,16 @@ impl Walker {
         }
     }
 
-    fn cell(&mut self, input: &Prepared<'_>, grid: &Grid, i: usize) -> Cell {
-        if !input.usable[i] {
-            return super::assemble::empty_cell(input.pos[i], None);
+    /// Visits every site of a leaf bucket outside the first block (so never
+    /// the site itself).
+    fn visit_bucket(&mut self, grid: &Grid, x: usize, y: usize) {
+        let b = grid.bucket(x, y);
+        for (n, &j) in b.index.iter().enumerate() {
+            self.builder.visit(j, b.pos[n], b.w[n], true);
         }
+    }
+
+    fn cell(&mut self, input: &Prepared<'_>, grid: &Grid, i: usize) -> Cell {
         self.builder.start(input, i);
         let p = self.builder.position();
         let (bx, by) = grid.bucket_xy(p);
@@ -95,10 +136,11 @@ impl Walker {
         self.candidates.clear();
         for y in by.saturating_sub(1)..(by + 2).min(leaf.ny) {
             for x in bx.saturating_sub(1)..(bx + 2).min(leaf.nx) {
-                for &j in grid.bucket(x, y) {
+                let b = grid.bucket(x, y);
+                for (n, &j) in b.index.iter().enumerate() {
                     if j != i {
-                        self.candidates
-                            .push(((input.pos[j] - p).length_squared(), j));
+                        let d2 = (b.pos[n] - p).length_squared();
+                        self.candidates.push((d2, j, b.pos[n], b.w[n]));
                     }
                 }
             }
@@ -107,12 +149,32 @@ impl Walker {
             self.candidates
                 .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         }
-        for &(_, j) in &self.candidates {
-            self.builder.visit(input, j, true);
+        for &(_, j, pj, wj) in &self.candidates {
+            self.builder.visit(j, pj, wj, true);
         }
 
-        // Then everything else that might still matter, depth first through the
-        // pyramid, nearer children first; pruned nodes provably hold no site that
+        // Then a few rings of buckets around the block: on evenly spread sites
+        // the security radius is met within them. Every site in ring `r` or
+        // beyond is at least `ring_bound(r)` away and no heavier than the global
+        // maximum weight, so once `prune` holds for that pair nothing farther
+        // out matters and the cell is final.
+        let wmax = grid.max_weight();
+        for r in 2..=RINGS {
+            let bound = grid.ring_bound(p, bx, by, r);
+            if self.prune(bound * bound, wmax) {
+                return self.builder.finish(input.clip, input.edge_tol);
+            }
+            grid.for_ring(bx, by, r, |x, y| {
+                let k = y * leaf.nx + x;
+                if !self.prune(leaf.dist2(k, p), leaf.wmax[k]) {
+                    self.visit_bucket(grid, x, y);
+                }
+            });
+        }
+
+        // Still not provably final (very uneven weights or sites): search the
+        // rest depth first through the pyramid, nearer children first, skipping
+        // the buckets already seen. Pruned nodes provably hold no site that
         // cuts the cell or dominates the site.
         self.stack.clear();
         let top = grid.levels.len() - 1;
@@ -123,15 +185,11 @@ impl Walker {
                 continue;
             }
             let (x, y) = (k % level.nx, k / level.nx);
+            if within_block(x, y, lvl, bx, by, RINGS) {
+                continue; // every bucket under this node was seen above
+            }
             if lvl == 0 {
-                if x.abs_diff(bx) <= 1 && y.abs_diff(by) <= 1 {
-                    continue; // already visited in the first block
-                }
-                for &j in grid.bucket(x, y) {
-                    if j != i {
-                        self.builder.visit(input, j, true);
-                    }
-                }
+                self.visit_bucket(grid, x, y);
                 continue;
             }
             let down = &grid.levels[lvl - 1];

@@ -58,7 +58,9 @@ pub struct Cell {
     /// `Some(j)` when the site's own position lies strictly outside its cell
     /// because `w_j − w_i > |p_i − p_j|²` (or `j` is a coincident site of equal
     /// weight and lower index); `j` is the nearest such site, the lowest index
-    /// on ties. `None` otherwise.
+    /// on ties, except that a site sitting exactly on a heavier (or equally
+    /// heavy, lower-index) site is never named: the site it sits on is.
+    /// `None` otherwise.
     pub dominated_by: Option<usize>,
 }
 
@@ -197,11 +199,11 @@ mod tests {
             site(3.0, 3.0, 0.0),
         ];
         for d in both(&sites, &square()) {
-            // The heavier of the three coincident sites wins; the two equal ones
-            // are dominated by it (nearest = distance 0; ties → lowest index).
+            // The heavier of the three coincident sites wins; the two lighter
+            // ones are dominated by it.
             assert!(d.cells[2].polygon.is_some());
             assert_eq!(d.cells[0].dominated_by, Some(2));
-            assert_eq!(d.cells[1].dominated_by, Some(0));
+            assert_eq!(d.cells[1].dominated_by, Some(2));
             assert_eq!(d.cells[0].polygon, None);
             assert_eq!(d.cells[1].polygon, None);
         }
