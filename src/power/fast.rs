@@ -126,6 +126,35 @@ impl Walker {
         }
     }
 
+    /// [`Self::prune`] for a box of sites, sharpened: when the circle bound
+    /// alone is not enough, the test is made at each vertex `v` of the cell.
+    /// If `dist(v, box)² − wmax ≥ |v − p_i|² − w_i` at every vertex, then for
+    /// each site `j` in the box `|v − p_j|² − w_j ≥ |v − p_i|² − w_i` at every
+    /// vertex; that difference is affine in `v`, so it holds on the whole
+    /// convex cell and `j` cannot cut it. This settles long thin cells (sites
+    /// on a line, elongated treemap cells), whose circumscribed circle is far
+    /// larger than the cell. `dist2` gives the squared distance from a point
+    /// (absolute coordinates) to the box.
+    fn prune_box(&self, d2: f64, wmax: f64, dist2: impl Fn(Point) -> f64) -> bool {
+        if self.prune(d2, wmax) {
+            return true;
+        }
+        let b = &self.builder;
+        if b.poly.is_empty() {
+            return false;
+        }
+        let (p, wi) = (b.position(), b.weight());
+        // The site itself is tested like a vertex (`d2` is its distance to the
+        // box): the argument then covers the hull of the cell and the site, so
+        // the box holds no dominator either even when the site lies outside its
+        // cell, and `dominated_by` stays exact.
+        d2 - wmax >= -wi
+            && b.poly
+                .verts
+                .iter()
+                .all(|v| dist2(*v + p) - wmax >= v.length_squared() - wi)
+    }
+
     fn cell(&mut self, input: &Prepared<'_>, grid: &Grid, i: usize) -> Cell {
         self.builder.start(input, i);
         let p = self.builder.position();
@@ -161,12 +190,13 @@ impl Walker {
         let wmax = grid.max_weight();
         for r in 2..=RINGS {
             let bound = grid.ring_bound(p, bx, by, r);
-            if self.prune(bound * bound, wmax) {
+            let beyond = |v: Point| grid.ring_bound(v, bx, by, r).powi(2);
+            if self.prune_box(bound * bound, wmax, beyond) {
                 return self.builder.finish(input.clip, input.edge_tol);
             }
             grid.for_ring(bx, by, r, |x, y| {
                 let k = y * leaf.nx + x;
-                if !self.prune(leaf.dist2(k, p), leaf.wmax[k]) {
+                if !self.prune_box(leaf.dist2(k, p), leaf.wmax[k], |v| leaf.dist2(k, v)) {
                     self.visit_bucket(grid, x, y);
                 }
             });
@@ -181,7 +211,7 @@ impl Walker {
         self.stack.push((grid.levels[top].dist2(0, p), top, 0));
         while let Some((d2, lvl, k)) = self.stack.pop() {
             let level = &grid.levels[lvl];
-            if self.prune(d2, level.wmax[k]) {
+            if self.prune_box(d2, level.wmax[k], |v| level.dist2(k, v)) {
                 continue;
             }
             let (x, y) = (k % level.nx, k / level.nx);
@@ -199,7 +229,7 @@ impl Walker {
                 for cx in 2 * x..(2 * x + 2).min(down.nx) {
                     let c = cy * down.nx + cx;
                     let cd2 = down.dist2(c, p);
-                    if !self.prune(cd2, down.wmax[c]) {
+                    if !self.prune_box(cd2, down.wmax[c], |v| down.dist2(c, v)) {
                         children[count] = (cd2, c);
                         count += 1;
                     }

@@ -148,9 +148,10 @@ impl Grid {
             .map_or(f64::NEG_INFINITY, |top| top.wmax[0])
     }
 
-    /// A lower bound on the distance from `p` (in leaf bucket `(bx, by)`) to any
-    /// site in a bucket at Chebyshev distance `r` or more (`r ≥ 1`); +∞ when no
-    /// such bucket exists.
+    /// A lower bound on the distance from a point `p` to any site in a bucket
+    /// at Chebyshev distance `r` or more (`r ≥ 1`) from leaf bucket `(bx, by)`;
+    /// +∞ when no such bucket exists. `p` need not lie in that bucket (the
+    /// bound is then 0 where `p` is already beyond the block).
     ///
     /// Such a site's bucket column is `≤ bx − r` or `≥ bx + r` (or likewise its
     /// row). A site in column `c ≥ 1` has true `x ≥ origin + c·cell` and one in
