@@ -24,8 +24,8 @@ const SORT_AT_MOST: usize = 64;
 
 /// Outermost ring of buckets (Chebyshev radius) searched around the site
 /// before falling back to the pyramid: rings 2 and 3, beyond the first 3 × 3
-/// block, settle about 97% of the cells of evenly spread sites (measured with
-/// `examples/power_speed`); more rings would only repeat what the pyramid does
+/// block, settle about 97% of the cells of evenly spread sites (counted once with
+/// temporary counters on the `examples/power_speed` inputs); more rings would only repeat what the pyramid does
 /// better.
 const RINGS: usize = 3;
 
