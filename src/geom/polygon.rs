@@ -79,8 +79,8 @@ impl ConvexPolygon {
         let sides = sides.max(3);
         let pts = (0..sides)
             .map(|k| {
-                let t = -std::f64::consts::FRAC_PI_2
-                    + std::f64::consts::TAU * k as f64 / sides as f64;
+                let t =
+                    -std::f64::consts::FRAC_PI_2 + std::f64::consts::TAU * k as f64 / sides as f64;
                 center + radius * Point::new(t.cos(), t.sin())
             })
             .collect();
@@ -173,7 +173,11 @@ impl ConvexPolygon {
     /// part has no area.
     pub fn clip_halfplane(&self, normal: Point, offset: f64) -> Option<Self> {
         let n = self.points.len();
-        let side: Vec<f64> = self.points.iter().map(|p| normal.dot(*p) - offset).collect();
+        let side: Vec<f64> = self
+            .points
+            .iter()
+            .map(|p| normal.dot(*p) - offset)
+            .collect();
         if side.iter().all(|s| *s <= 0.0) {
             return Some(self.clone());
         }
@@ -205,7 +209,11 @@ impl ConvexPolygon {
         for (k, w) in self.points[1..].windows(2).enumerate() {
             let tri = 0.5 * cross(w[0] - o, w[1] - o);
             if target <= tri || k + 1 == last {
-                let t = if tri > 0.0 { (target / tri).clamp(0.0, 1.0) } else { 0.5 };
+                let t = if tri > 0.0 {
+                    (target / tri).clamp(0.0, 1.0)
+                } else {
+                    0.5
+                };
                 // Square-root warp: uniform in the triangle (o, w0, w1).
                 let s = t.sqrt();
                 let v = v.clamp(0.0, 1.0);

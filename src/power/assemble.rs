@@ -4,6 +4,8 @@
 //! caller's job) and does no clipping arithmetic of its own beyond
 //! [`LabelledPolygon`].
 
+use rayon::prelude::*;
+
 use super::clip::{dominates, ClipOutcome, LabelledPolygon, CLIP_EDGE};
 use super::{Cell, Neighbour, Site};
 use crate::geom::{ConvexPolygon, Point};
@@ -16,8 +18,13 @@ const EDGE_TOL_REL: f64 = 1e-9;
 pub(crate) struct Prepared<'a> {
     pub(crate) pos: Vec<Point>,
     pub(crate) w: Vec<f64>,
-    /// False for a site with a non-finite coordinate or weight: it is ignored.
-    pub(crate) usable: Vec<bool>,
+    /// `Some(k)` for a site sitting exactly on site `k` that dominates it (the
+    /// heaviest of the coincident group, lowest index on ties).
+    pub(crate) shadow: Vec<Option<usize>>,
+    /// Finite position and weight, and not shadowed: the sites whose bisectors
+    /// are clipped with. A site with a NaN or infinite coordinate or weight is
+    /// ignored entirely.
+    pub(crate) active: Vec<bool>,
     pub(crate) clip: &'a ConvexPolygon,
     /// Minimum length of a reported shared edge.
     pub(crate) edge_tol: f64,
@@ -25,13 +32,21 @@ pub(crate) struct Prepared<'a> {
 
 impl<'a> Prepared<'a> {
     pub(crate) fn new(sites: &[Site], clip: &'a ConvexPolygon) -> Self {
+        let usable: Vec<bool> = sites
+            .iter()
+            .map(|s| s.position.is_finite() && s.weight.is_finite())
+            .collect();
+        let shadow = shadows(sites, &usable);
+        let active = usable
+            .iter()
+            .zip(&shadow)
+            .map(|(u, s)| *u && s.is_none())
+            .collect();
         Prepared {
             pos: sites.iter().map(|s| s.position).collect(),
             w: sites.iter().map(|s| s.weight).collect(),
-            usable: sites
-                .iter()
-                .map(|s| s.position.is_finite() && s.weight.is_finite())
-                .collect(),
+            shadow,
+            active,
             clip,
             edge_tol: EDGE_TOL_REL * clip.diameter_bound(),
         }
@@ -41,6 +56,39 @@ impl<'a> Prepared<'a> {
     pub(crate) fn len(&self) -> usize {
         self.pos.len()
     }
+}
+
+/// For each site lying exactly on another usable site, the one that wins their
+/// shared region: the highest weight, then the lowest index.
+///
+/// The losers are taken out of all clipping. Their half-planes are never
+/// tighter than the winner's (same bisector direction, no larger weight), so
+/// this changes no cell; but it stops identical bisectors from competing for
+/// the same edge label, which round-off would decide arbitrarily.
+fn shadows(sites: &[Site], usable: &[bool]) -> Vec<Option<usize>> {
+    // `+ 0.0` turns −0.0 into 0.0 so that equal coordinates sort together.
+    let key = |k: usize| (sites[k].position.x + 0.0, sites[k].position.y + 0.0);
+    let mut order: Vec<usize> = (0..sites.len()).filter(|&k| usable[k]).collect();
+    order.sort_by(|&a, &b| {
+        let (ka, kb) = (key(a), key(b));
+        ka.0.total_cmp(&kb.0)
+            .then(ka.1.total_cmp(&kb.1))
+            .then(a.cmp(&b))
+    });
+    let mut shadow = vec![None; sites.len()];
+    for group in order.chunk_by(|&a, &b| key(a) == key(b)) {
+        let winner = group.iter().copied().fold(group[0], |best, k| {
+            if sites[k].weight > sites[best].weight {
+                k
+            } else {
+                best
+            }
+        });
+        for &k in group.iter().filter(|&&k| k != winner) {
+            shadow[k] = Some(winner);
+        }
+    }
+    shadow
 }
 
 /// One cell under construction: the polygon so far and the nearest dominating
@@ -88,9 +136,8 @@ impl CellBuilder {
     /// bisector unless the cell is empty or (with `may_skip`) the security-radius
     /// test proves the bisector cannot cut the cell.
     #[inline]
-    pub(crate) fn visit(&mut self, input: &Prepared<'_>, j: usize, may_skip: bool) {
-        let wj = input.w[j];
-        let d = input.pos[j] - self.p;
+    pub(crate) fn visit(&mut self, j: usize, pj: Point, wj: f64, may_skip: bool) {
+        let d = pj - self.p;
         let d2 = d.length_squared();
         if dominates(j, wj, self.i, self.wi, d2)
             && self.best.map_or(true, |(bd2, bj)| (d2, j) < (bd2, bj))
@@ -184,27 +231,48 @@ pub(crate) fn empty_cell(position: Point, dominated_by: Option<usize>) -> Cell {
 /// neighbour); then, when `i` lists `j` but `j` does not list `i` (its copy of
 /// the edge fell below the length tolerance), `j` gets `i`'s edge, reversed to
 /// follow `j`'s orientation.
-pub(crate) fn symmetrize(cells: &mut [Cell]) {
+pub(crate) fn symmetrize(cells: &mut [Cell], parallel: bool) {
     let nonempty: Vec<bool> = cells.iter().map(|c| c.polygon.is_some()).collect();
-    for c in cells.iter_mut() {
+    let keep_live = |c: &mut Cell| {
         c.neighbours
             .retain(|nb| nonempty.get(nb.site).copied().unwrap_or(false));
+    };
+    if parallel {
+        cells.par_iter_mut().for_each(keep_live);
+    } else {
+        cells.iter_mut().for_each(keep_live);
     }
-    let mut additions: Vec<(usize, Neighbour)> = Vec::new();
-    for (i, c) in cells.iter().enumerate() {
-        for nb in &c.neighbours {
-            let back = &cells[nb.site].neighbours;
-            if back.binary_search_by_key(&i, |x| x.site).is_err() {
-                additions.push((
+    let missing = |(i, c): (usize, &Cell)| -> Vec<(usize, Neighbour)> {
+        c.neighbours
+            .iter()
+            .filter(|nb| {
+                cells[nb.site]
+                    .neighbours
+                    .binary_search_by_key(&i, |x| x.site)
+                    .is_err()
+            })
+            .map(|nb| {
+                (
                     nb.site,
                     Neighbour {
                         site: i,
                         edge: [nb.edge[1], nb.edge[0]],
                     },
-                ));
-            }
-        }
-    }
+                )
+            })
+            .collect()
+    };
+    // Collected in site order either way, so the result does not depend on
+    // `parallel`.
+    let additions: Vec<(usize, Neighbour)> = if parallel {
+        cells
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(missing)
+            .collect()
+    } else {
+        cells.iter().enumerate().flat_map(missing).collect()
+    };
     for (j, nb) in additions {
         let list = &mut cells[j].neighbours;
         if let Err(at) = list.binary_search_by_key(&nb.site, |x| x.site) {
@@ -252,7 +320,7 @@ mod tests {
             site: 2,
             edge: [p(0.0, 0.0), p(1.0, 0.0)],
         });
-        symmetrize(&mut cells);
+        symmetrize(&mut cells, false);
         assert_eq!(cells[1].neighbours.len(), 1);
         assert_eq!(cells[1].neighbours[0].site, 0);
         assert_eq!(cells[1].neighbours[0].edge, [p(1.0, 1.0), p(1.0, 0.0)]);

@@ -34,6 +34,17 @@ pub(crate) struct Grid {
     /// Leaf bucket `b` holds `items[start[b]..start[b + 1]]` (site indices, ascending).
     start: Vec<usize>,
     items: Vec<usize>,
+    /// Positions and weights copied into bucket order, so that scanning a
+    /// bucket reads contiguous memory instead of jumping through the site list.
+    item_pos: Vec<Point>,
+    item_w: Vec<f64>,
+}
+
+/// The sites of one leaf bucket: indices (ascending), positions, weights.
+pub(crate) struct BucketSites<'g> {
+    pub(crate) index: &'g [usize],
+    pub(crate) pos: &'g [Point],
+    pub(crate) w: &'g [f64],
 }
 
 impl Grid {
@@ -61,6 +72,8 @@ impl Grid {
             levels: Vec::new(),
             start: vec![0; nx * ny + 1],
             items: Vec::with_capacity(count),
+            item_pos: Vec::new(),
+            item_w: Vec::new(),
         };
         // Counting sort into buckets; indices stay ascending within a bucket.
         let bucket_of: Vec<usize> = positions
@@ -90,6 +103,8 @@ impl Grid {
                 fill[b] += 1;
             }
         }
+        grid.item_pos = grid.items.iter().map(|&k| positions[k]).collect();
+        grid.item_w = grid.items.iter().map(|&k| weights[k]).collect();
         let mut leaf = Level::empty(nx, ny);
         for b in 0..nx * ny {
             for &k in &grid.items[grid.start[b]..grid.start[b + 1]] {
@@ -126,10 +141,81 @@ impl Grid {
         by * nx + bx
     }
 
-    /// Site indices in leaf bucket `(bx, by)`, ascending.
-    pub(crate) fn bucket(&self, bx: usize, by: usize) -> &[usize] {
+    /// Largest weight of any indexed site (−∞ when there is none).
+    pub(crate) fn max_weight(&self) -> f64 {
+        self.levels
+            .last()
+            .map_or(f64::NEG_INFINITY, |top| top.wmax[0])
+    }
+
+    /// A lower bound on the distance from a point `p` to any site in a bucket
+    /// at Chebyshev distance `r` or more (`r ≥ 1`) from leaf bucket `(bx, by)`;
+    /// +∞ when no such bucket exists. `p` need not lie in that bucket (the
+    /// bound is then 0 where `p` is already beyond the block).
+    ///
+    /// Such a site's bucket column is `≤ bx − r` or `≥ bx + r` (or likewise its
+    /// row). A site in column `c ≥ 1` has true `x ≥ origin + c·cell` and one in
+    /// column `c ≤ nx − 2` has `x < origin + (c + 1)·cell`, clamped or not, so
+    /// the distance to the nearest such column line bounds it. The result is
+    /// shrunk by a hair so that round-off in bucket assignment cannot make it
+    /// claim too much.
+    pub(crate) fn ring_bound(&self, p: Point, bx: usize, by: usize, r: usize) -> f64 {
+        let leaf = &self.levels[0];
+        let side = |q: f64, o: f64, h: f64, b: usize, n: usize| -> f64 {
+            let mut d = f64::INFINITY;
+            if b >= r {
+                d = d.min(q - (o + (b - r + 1) as f64 * h));
+            }
+            if b + r < n {
+                d = d.min(o + (b + r) as f64 * h - q);
+            }
+            d
+        };
+        let d = side(p.x, self.origin.x, self.cell.x, bx, leaf.nx).min(side(
+            p.y,
+            self.origin.y,
+            self.cell.y,
+            by,
+            leaf.ny,
+        ));
+        (d - 1e-9 * (self.cell.x + self.cell.y)).max(0.0)
+    }
+
+    /// Calls `f(x, y)` for every leaf bucket at Chebyshev distance exactly `r`
+    /// from `(bx, by)`, row by row.
+    pub(crate) fn for_ring(&self, bx: usize, by: usize, r: usize, mut f: impl FnMut(usize, usize)) {
+        let leaf = &self.levels[0];
+        let (x0, x1) = (bx.saturating_sub(r), (bx + r).min(leaf.nx - 1));
+        let (y0, y1) = (by.saturating_sub(r), (by + r).min(leaf.ny - 1));
+        for y in y0..=y1 {
+            if y.abs_diff(by) == r {
+                (x0..=x1).for_each(|x| f(x, y));
+            } else {
+                if bx >= r {
+                    f(bx - r, y);
+                }
+                if bx + r < leaf.nx {
+                    f(bx + r, y);
+                }
+            }
+        }
+    }
+
+    /// The sites in leaf bucket `(bx, by)`, indices ascending.
+    pub(crate) fn bucket(&self, bx: usize, by: usize) -> BucketSites<'_> {
         let b = by * self.levels[0].nx + bx;
-        &self.items[self.start[b]..self.start[b + 1]]
+        let range = self.start[b]..self.start[b + 1];
+        BucketSites {
+            index: &self.items[range.clone()],
+            pos: &self.item_pos[range.clone()],
+            w: &self.item_w[range],
+        }
+    }
+
+    /// All indexed sites, bucket by bucket (row-major): an order in which
+    /// consecutive sites are mostly near each other.
+    pub(crate) fn spatial_order(&self) -> &[usize] {
+        &self.items
     }
 }
 
@@ -190,8 +276,9 @@ mod tests {
         for by in 0..leaf.ny {
             for bx in 0..leaf.nx {
                 let b = g.bucket(bx, by);
-                assert!(b.windows(2).all(|w| w[0] < w[1]));
-                for &k in b {
+                assert!(b.index.windows(2).all(|w| w[0] < w[1]));
+                for (n, &k) in b.index.iter().enumerate() {
+                    assert_eq!((b.pos[n], b.w[n]), (pos[k], w[k]));
                     seen[k] += 1;
                     // The bucket's box holds the true position.
                     assert_eq!(leaf.dist2(by * leaf.nx + bx, pos[k]), 0.0);

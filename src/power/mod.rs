@@ -58,7 +58,9 @@ pub struct Cell {
     /// `Some(j)` when the site's own position lies strictly outside its cell
     /// because `w_j − w_i > |p_i − p_j|²` (or `j` is a coincident site of equal
     /// weight and lower index); `j` is the nearest such site, the lowest index
-    /// on ties. `None` otherwise.
+    /// on ties, except that a site sitting exactly on a heavier (or equally
+    /// heavy, lower-index) site is never named: the site it sits on is.
+    /// `None` otherwise.
     pub dominated_by: Option<usize>,
 }
 
@@ -197,11 +199,11 @@ mod tests {
             site(3.0, 3.0, 0.0),
         ];
         for d in both(&sites, &square()) {
-            // The heavier of the three coincident sites wins; the two equal ones
-            // are dominated by it (nearest = distance 0; ties → lowest index).
+            // The heavier of the three coincident sites wins; the two lighter
+            // ones are dominated by it.
             assert!(d.cells[2].polygon.is_some());
             assert_eq!(d.cells[0].dominated_by, Some(2));
-            assert_eq!(d.cells[1].dominated_by, Some(0));
+            assert_eq!(d.cells[1].dominated_by, Some(2));
             assert_eq!(d.cells[0].polygon, None);
             assert_eq!(d.cells[1].polygon, None);
         }
@@ -267,6 +269,96 @@ mod tests {
                 "{}",
                 d.cells[1].area
             );
+        }
+    }
+
+    /// SplitMix64 in [0, 1), for seeded test inputs.
+    fn rng(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    #[test]
+    fn many_sites_tile_the_clip() {
+        let clip = ConvexPolygon::regular(Point::new(0.0, 0.0), 100.0, 11).expect("clip");
+        let mut next = rng(7);
+        let n = 12_000;
+        let sites: Vec<Site> = (0..n)
+            .map(|_| Site {
+                position: clip.sample(next(), next()),
+                weight: 2.0 * next(),
+            })
+            .collect();
+        let d = power_diagram(&sites, &clip);
+        d.sanity_check(&sites, &clip).expect("sane");
+    }
+
+    #[test]
+    fn long_line_of_sites_stays_cheap_and_correct() {
+        // Strip cells have a circumscribed circle far larger than the cell;
+        // the vertex-wise box test keeps this near linear.
+        let clip = ConvexPolygon::rectangle(0.0, 0.0, 100.0, 100.0).expect("clip");
+        let n = 10_000;
+        let sites: Vec<Site> = (0..n)
+            .map(|k| site((k as f64 + 0.5) * 100.0 / n as f64, 50.0, 0.0))
+            .collect();
+        let d = power_diagram(&sites, &clip);
+        d.sanity_check(&sites, &clip).expect("sane");
+        for c in &d.cells {
+            assert!((c.area - 1.0).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn all_sites_equal() {
+        let sites = vec![site(1.0, 3.0, 2.0); 5_000];
+        let d = power_diagram(&sites, &square());
+        d.sanity_check(&sites, &square()).expect("sane");
+        assert!((d.cells[0].area - 16.0).abs() < 1e-12);
+        assert!(d.cells[1..]
+            .iter()
+            .all(|c| c.polygon.is_none() && c.dominated_by == Some(0)));
+    }
+
+    #[test]
+    fn sites_far_outside() {
+        let sites = [
+            site(-1e6, 2.0, 0.0),
+            site(2.0, 1e7, 0.0),
+            site(1e6, -1e6, 0.0),
+            site(2.0, 2.0, -1e9),
+        ];
+        for d in both(&sites, &square()) {
+            let total: f64 = d.cells.iter().map(|c| c.area).sum();
+            assert!((total - 16.0).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn one_giant_weight_among_many() {
+        // One site owns most of the clip: cells near it need the pyramid
+        // search (the global maximum weight defeats the ring bound).
+        let clip = ConvexPolygon::rectangle(0.0, 0.0, 100.0, 100.0).expect("clip");
+        let mut next = rng(11);
+        let mut sites: Vec<Site> = (0..3000)
+            .map(|_| site(100.0 * next(), 100.0 * next(), next()))
+            .collect();
+        sites.push(site(50.0, 50.0, 1500.0));
+        let d = power_diagram(&sites, &clip);
+        d.sanity_check(&sites, &clip).expect("sane");
+        let naive = power_diagram_naive(&sites, &clip);
+        for (a, b) in d.cells.iter().zip(&naive.cells) {
+            assert_eq!(a.dominated_by, b.dominated_by);
+            assert!((a.area - b.area).abs() < 1e-9 * 1e4);
+            let sa: Vec<usize> = a.neighbours.iter().map(|x| x.site).collect();
+            let sb: Vec<usize> = b.neighbours.iter().map(|x| x.site).collect();
+            assert_eq!(sa, sb);
         }
     }
 }

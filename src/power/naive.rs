@@ -16,16 +16,16 @@ pub fn power_diagram_naive(sites: &[Site], clip: &ConvexPolygon) -> PowerDiagram
     let mut builder = CellBuilder::new(LabelledPolygon::default());
     let mut cells: Vec<Cell> = (0..input.len())
         .map(|i| {
-            if !input.usable[i] {
-                return super::assemble::empty_cell(input.pos[i], None);
+            if !input.active[i] {
+                return super::assemble::empty_cell(input.pos[i], input.shadow[i]);
             }
             builder.start(&input, i);
-            for j in (0..input.len()).filter(|&j| j != i && input.usable[j]) {
-                builder.visit(&input, j, false);
+            for j in (0..input.len()).filter(|&j| j != i && input.active[j]) {
+                builder.visit(j, input.pos[j], input.w[j], false);
             }
             builder.finish(input.clip, input.edge_tol)
         })
         .collect();
-    symmetrize(&mut cells);
+    symmetrize(&mut cells, false);
     PowerDiagram { cells }
 }
