@@ -11,9 +11,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut builder = DatasetBuilder::new();
     builder.add(NodeSpec::new("fruit"));
     for (group, items) in [
-        ("citrus", &[("orange", 5.0), ("lemon", 2.0), ("lime", 1.0)][..]),
+        (
+            "citrus",
+            &[("orange", 5.0), ("lemon", 2.0), ("lime", 1.0)][..],
+        ),
         ("berries", &[("strawberry", 4.0), ("blueberry", 3.0)][..]),
-        ("stone", &[("peach", 2.5), ("cherry", 1.5), ("plum", 1.0)][..]),
+        (
+            "stone",
+            &[("peach", 2.5), ("cherry", 1.5), ("plum", 1.0)][..],
+        ),
     ] {
         builder.add(NodeSpec::new(group).parent("fruit"));
         for (name, weight) in items {

@@ -53,8 +53,16 @@ pub fn quality(dataset: &Dataset, layout: &Layout) -> Quality {
         }
     }
     Quality {
-        area_error_diagram_mean: if diagrams > 0 { sum / diagrams as f64 } else { 0.0 },
+        area_error_diagram_mean: if diagrams > 0 {
+            sum / diagrams as f64
+        } else {
+            0.0
+        },
         area_error_diagram_max: max,
-        aspect_ratio_mean: if leaves > 0 { aspect_sum / leaves as f64 } else { 0.0 },
+        aspect_ratio_mean: if leaves > 0 {
+            aspect_sum / leaves as f64
+        } else {
+            0.0
+        },
     }
 }

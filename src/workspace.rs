@@ -21,8 +21,8 @@ pub enum InputError {
     Parse {
         /// The file.
         path: PathBuf,
-        /// What is wrong and where.
-        source: FormatError,
+        /// What is wrong and where (boxed: it is large and errors are rare).
+        source: Box<FormatError>,
     },
 }
 
@@ -44,6 +44,6 @@ pub fn read_dataset(path: &Path, options: &ReadOptions) -> Result<Dataset, Input
     };
     parse_hierarchy_json(&bytes, &opts).map_err(|source| InputError::Parse {
         path: path.to_path_buf(),
-        source,
+        source: Box::new(source),
     })
 }

@@ -53,8 +53,14 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
     let extras = JsonExtras {
         constraints: Vec::new(),
         metrics: vec![
-            ("area_error_diagram_mean".to_string(), q.area_error_diagram_mean),
-            ("area_error_diagram_max".to_string(), q.area_error_diagram_max),
+            (
+                "area_error_diagram_mean".to_string(),
+                q.area_error_diagram_mean,
+            ),
+            (
+                "area_error_diagram_max".to_string(),
+                q.area_error_diagram_max,
+            ),
             ("aspect_ratio_mean".to_string(), q.aspect_ratio_mean),
         ],
     };
@@ -72,7 +78,8 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
         })
         .collect();
     for (path, bytes) in &rendered {
-        store::write_atomic(path, bytes).with_context(|| format!("{}: cannot write", path.display()))?;
+        store::write_atomic(path, bytes)
+            .with_context(|| format!("{}: cannot write", path.display()))?;
     }
     Ok(())
 }

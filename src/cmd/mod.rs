@@ -78,9 +78,7 @@ pub(crate) struct UsageError(pub(crate) String);
 /// Exit code for an error: 2 when the input or the arguments are at fault.
 pub(crate) fn exit_code(err: &anyhow::Error) -> u8 {
     let user = err.chain().any(|e| {
-        e.is::<InputError>()
-            || e.is::<UsageError>()
-            || e.is::<nptreemap::layout::LayoutError>()
+        e.is::<InputError>() || e.is::<UsageError>() || e.is::<nptreemap::layout::LayoutError>()
     });
     if user {
         2

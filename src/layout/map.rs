@@ -59,15 +59,25 @@ pub struct MapSimulation {
     rng: Rng,
 }
 
-/// Repair rounds per diagram evaluation. One round fixes every dominated site
-/// seen; chains of domination need a few, and more than a handful means the
-/// input is pathological, where the next tick continues the repair.
+/// Repair rounds per diagram evaluation. One round fixes every empty cell seen;
+/// more than a handful means pathological input, where the next tick goes on.
 const REPAIR_ROUNDS: usize = 8;
 
 /// A dominated site's weight is raised to leave this share of the squared site
 /// distance as margin, so the repaired site lies strictly inside its cell
 /// (d3-voronoi-map's `handleOverweighted` uses the full distance plus epsilon).
 const REPAIR_MARGIN: f64 = 0.9;
+
+/// [`MapSimulation::prevent_domination`] keeps `w_j − w_i` below this share of
+/// `d²`, so the bisector stays at least `(1 − margin)·d/2` from the site. A
+/// small cell next to a big one needs its bisector close to its site (a 1:10⁴
+/// area ratio needs about d/300), so the margin is thin; a wider one pinned
+/// small corner cells above their target area.
+const PREVENT_MARGIN: f64 = 0.999;
+
+/// Passes of [`MapSimulation::prevent_domination`]; raising one weight can make
+/// that site dominate another, which the next pass catches.
+const PREVENT_PASSES: usize = 3;
 
 /// Newton steps are shortened so no bisector moves by more than this share of
 /// its site distance: the linearisation is good for moderate moves, and a site
@@ -166,8 +176,40 @@ impl MapSimulation {
     }
 
     fn recompute(&mut self) {
+        self.prevent_domination();
         self.diagram = power_diagram(&self.sites, &self.clip);
         self.repair();
+    }
+
+    /// Before a new diagram: raise the weight of any site that a neighbour or
+    /// its dominator in the previous diagram would swallow at the current
+    /// positions. A cheap local version of d3-voronoi-map's all-pairs
+    /// `handleOverweighted` (O(n²)); what it misses, [`Self::repair`] catches.
+    fn prevent_domination(&mut self) {
+        for _ in 0..PREVENT_PASSES {
+            let mut changed = false;
+            for i in 0..self.sites.len() {
+                let cell = &self.diagram.cells[i];
+                let others = cell
+                    .neighbours
+                    .iter()
+                    .map(|nb| nb.site)
+                    .chain(cell.dominated_by);
+                for j in others {
+                    let d2 = self.sites[i]
+                        .position
+                        .distance_squared(self.sites[j].position);
+                    let floor = self.sites[j].weight - PREVENT_MARGIN * d2;
+                    if self.sites[i].weight < floor {
+                        self.sites[i].weight = floor;
+                        changed = true;
+                    }
+                }
+            }
+            if !changed {
+                return;
+            }
+        }
     }
 
     fn area_error(&self) -> f64 {
@@ -194,29 +236,39 @@ impl MapSimulation {
         }
     }
 
-    /// Gives every site a non-empty cell: a dominated site's weight is raised to
-    /// just below the level at which its dominator swallows it; an empty cell
-    /// that is not dominated (coincident sites) gets a fresh random position.
+    /// Gives every site a non-empty cell, recomputing the diagram while any cell
+    /// is empty: a dominated site's weight is raised to just below the level at
+    /// which its dominator swallows it; an empty cell that is not dominated
+    /// (coincident sites) gets a fresh random position. Sites that are dominated
+    /// but still have a cell are left to [`Self::prevent_domination`] before the
+    /// next diagram: fixing them here cascades (a raised site dominates the
+    /// next), costing a full diagram per round.
     fn repair(&mut self) {
         for _ in 0..REPAIR_ROUNDS {
             let mut changed = false;
             for i in 0..self.sites.len() {
                 let cell = &self.diagram.cells[i];
-                match (cell.dominated_by, cell.polygon.is_some()) {
-                    (Some(j), _) => {
-                        let d2 = self.sites[i]
-                            .position
-                            .distance_squared(self.sites[j].position);
+                if cell.polygon.is_some() {
+                    continue;
+                }
+                let dominator = cell.dominated_by.map(|j| {
+                    let d2 = self.sites[i]
+                        .position
+                        .distance_squared(self.sites[j].position);
+                    (j, d2)
+                });
+                match dominator {
+                    // A dominator on the very same spot (coincident sites) cannot
+                    // be escaped through weights.
+                    Some((j, d2)) if d2 > 0.0 => {
                         self.sites[i].weight = self.sites[j].weight - REPAIR_MARGIN * d2;
-                        changed = true;
                     }
-                    (None, false) => {
+                    _ => {
                         self.sites[i].position =
                             self.clip.sample(self.rng.next_f64(), self.rng.next_f64());
-                        changed = true;
                     }
-                    (None, true) => {}
                 }
+                changed = true;
             }
             if !changed {
                 return;
@@ -288,8 +340,7 @@ impl MapSimulation {
         // Shorten the step so no bisector moves too far (see MAX_BISECTOR_SHIFT).
         let mut alpha: f64 = 1.0;
         for i in 0..n {
-            for k in start[i]..start[i + 1] {
-                let j = cols[k];
+            for &j in &cols[start[i]..start[i + 1]] {
                 let dw = (x[i] - x[j]).abs();
                 if dw > 0.0 {
                     let d2 = self.sites[i]
@@ -328,7 +379,7 @@ fn conjugate_gradient(b: &[f64], diag: &[f64], apply: impl Fn(&[f64], &mut [f64]
     for _ in 0..CG_MAX_ITER {
         apply(&p, &mut ap);
         let pap = dot(&p, &ap);
-        if !(pap > 0.0) {
+        if pap.is_nan() || pap <= 0.0 {
             break;
         }
         let a = rz / pap;

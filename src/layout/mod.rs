@@ -5,6 +5,8 @@
 //! internal node's cell is split among its children by a one-level power-diagram
 //! optimisation ([`map`]), run by the recursion in [`treemap`].
 
+/// Invariant checks a finished layout must pass.
+pub mod check;
 /// One-level optimiser: Lloyd steps plus weight adaptation towards target areas.
 pub mod map;
 /// Run parameters and their defaults.
@@ -13,8 +15,6 @@ pub mod params;
 pub mod rng;
 /// Start positions and weights for one diagram.
 pub mod seed;
-/// Invariant checks a finished layout must pass.
-pub mod check;
 /// Top-down recursion over the hierarchy.
 pub mod treemap;
 

@@ -57,7 +57,13 @@ mod tests {
             assert_eq!(x, b.next_f64());
             assert!((0.0..1.0).contains(&x));
         }
-        assert_ne!(Rng::for_key(1, "a").next_u64(), Rng::for_key(1, "b").next_u64());
-        assert_ne!(Rng::for_key(1, "a").next_u64(), Rng::for_key(2, "a").next_u64());
+        assert_ne!(
+            Rng::for_key(1, "a").next_u64(),
+            Rng::for_key(1, "b").next_u64()
+        );
+        assert_ne!(
+            Rng::for_key(1, "a").next_u64(),
+            Rng::for_key(2, "a").next_u64()
+        );
     }
 }

@@ -22,7 +22,8 @@ use crate::layout::{Canvas, Layout, LayoutCell};
 /// +--------------+--------+
 /// ```
 pub(crate) fn sample() -> (Dataset, Layout) {
-    let dataset = DatasetBuilder::new()
+    let mut builder = DatasetBuilder::new();
+    builder
         .add(NodeSpec::new("root"))
         .add(NodeSpec::new("A").parent("root"))
         .add(
@@ -34,9 +35,8 @@ pub(crate) fn sample() -> (Dataset, Layout) {
         )
         .add(NodeSpec::new("A1").parent("A").weight(24000.0))
         .add(NodeSpec::new("A2").parent("A").weight(23520.0))
-        .add(NodeSpec::new("A3").parent("A").weight(480.0))
-        .build()
-        .expect("sample dataset is valid");
+        .add(NodeSpec::new("A3").parent("A").weight(480.0));
+    let dataset = builder.build().expect("sample dataset is valid");
     let rect = |id: &str| match id {
         "root" => (0.0, 0.0, 400.0, 200.0),
         "A" => (0.0, 0.0, 240.0, 200.0),

@@ -5,11 +5,15 @@ use nptreemap::layout::{Outline, Params};
 
 #[test]
 fn default_yaml_matches_params_default() {
-    let text = include_str!("../config/default.yaml");
+    let text = include_str!("../../config/default.yaml");
     let doc: serde_yaml::Value = serde_yaml::from_str(text).expect("default.yaml parses");
     let layout = &doc["layout"];
     let p = Params::default();
-    let num = |k: &str| layout[k].as_f64().unwrap_or_else(|| panic!("layout.{k} is a number"));
+    let num = |k: &str| {
+        layout[k]
+            .as_f64()
+            .unwrap_or_else(|| panic!("layout.{k} is a number"))
+    };
     assert_eq!(num("width"), p.canvas.width);
     assert_eq!(num("height"), p.canvas.height);
     assert_eq!(num("seed") as u64, p.seed);

@@ -12,9 +12,17 @@ fn every_paper_file_passes_check_layout() {
         .filter(|p| p.extension().is_some_and(|e| e == "json"))
         .collect();
     files.sort();
-    assert!(files.len() >= 11, "expected the paper's 11 files, found {}", files.len());
+    assert!(
+        files.len() >= 11,
+        "expected the paper's 11 files, found {}",
+        files.len()
+    );
     for file in files {
-        let stem = file.file_stem().expect("file name").to_string_lossy().into_owned();
+        let stem = file
+            .file_stem()
+            .expect("file name")
+            .to_string_lossy()
+            .into_owned();
         let json = dir.join(format!("{stem}.json"));
         let svg = dir.join(format!("{stem}.svg"));
         support::layout(&file, &[&json, &svg], &[]);

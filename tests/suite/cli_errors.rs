@@ -15,7 +15,12 @@ fn missing_input_names_the_file() {
     let dir = support::temp_dir("cli_missing");
     let out = dir.join("x.json");
     fails_with(
-        &["layout", "no/such/file.json", "--out", out.to_str().expect("utf8")],
+        &[
+            "layout",
+            "no/such/file.json",
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
         "no/such/file.json",
     );
     assert!(!out.exists());
@@ -25,14 +30,26 @@ fn missing_input_names_the_file() {
 fn malformed_json_names_file_line_and_column_and_keeps_outputs() {
     let dir = support::temp_dir("cli_malformed");
     let input = dir.join("broken.json");
-    std::fs::write(&input, "{\n  \"children\": [\n    {\"id\": \"a\", \"weight\": 1},\n    {\"id\": \n").expect("write");
+    std::fs::write(
+        &input,
+        "{\n  \"children\": [\n    {\"id\": \"a\", \"weight\": 1},\n    {\"id\": \n",
+    )
+    .expect("write");
     let out = dir.join("old.svg");
     std::fs::write(&out, "previous picture").expect("write");
     fails_with(
-        &["layout", input.to_str().expect("utf8"), "--out", out.to_str().expect("utf8")],
+        &[
+            "layout",
+            input.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
         "broken.json: line 5",
     );
-    assert_eq!(std::fs::read_to_string(&out).expect("read"), "previous picture");
+    assert_eq!(
+        std::fs::read_to_string(&out).expect("read"),
+        "previous picture"
+    );
 }
 
 #[test]
@@ -46,7 +63,12 @@ fn negative_weight_names_the_node() {
     .expect("write");
     let out = dir.join("x.json");
     fails_with(
-        &["layout", input.to_str().expect("utf8"), "--out", out.to_str().expect("utf8")],
+        &[
+            "layout",
+            input.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
         "\"bad\"",
     );
     assert!(!out.exists());
@@ -56,7 +78,12 @@ fn negative_weight_names_the_node() {
 fn unknown_output_kind_is_a_usage_error() {
     let input = support::shared().join("paper-data/syntheticPoints_4.json");
     fails_with(
-        &["layout", input.to_str().expect("utf8"), "--out", "picture.bmp"],
+        &[
+            "layout",
+            input.to_str().expect("utf8"),
+            "--out",
+            "picture.bmp",
+        ],
         "picture.bmp",
     );
 }

@@ -60,7 +60,10 @@ fn zero_weight_leaves_get_small_cells() {
     let expected = params.min_weight_ratio * 10.0 / (20.0 + 2.0 * params.min_weight_ratio * 10.0);
     for id in ["n0", "n3"] {
         let s = share(&ds, &l, id);
-        assert!(s > 0.0 && (s - expected).abs() < 0.01, "{id}: share {s}, expected {expected}");
+        assert!(
+            s > 0.0 && (s - expected).abs() < 0.01,
+            "{id}: share {s}, expected {expected}"
+        );
     }
 }
 
@@ -110,10 +113,21 @@ fn coincident_initial_sites_separate() {
         max_iterations: 200,
         min_iterations: 5,
     };
-    let mut sim = MapSimulation::new(clip.clone(), targets, positions, None, settings, Rng::new(1));
+    let mut sim = MapSimulation::new(
+        clip.clone(),
+        targets,
+        positions,
+        None,
+        settings,
+        Rng::new(1),
+    );
     sim.run();
     let state = sim.state();
-    assert!(state.convergence_ratio <= 0.01, "error {}", state.convergence_ratio);
+    assert!(
+        state.convergence_ratio <= 0.01,
+        "error {}",
+        state.convergence_ratio
+    );
     assert!(state.diagram.cells.iter().all(|c| c.polygon.is_some()));
     state
         .diagram

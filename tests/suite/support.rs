@@ -5,17 +5,17 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// The repository's sibling `shared/` folder (the paper data, the checker, the peers).
-pub fn shared() -> PathBuf {
+pub(crate) fn shared() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared")
 }
 
 /// The `nptreemap` binary built for this test run.
-pub fn bin() -> Command {
+pub(crate) fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_nptreemap"))
 }
 
 /// A fresh temporary directory under the target dir, unique per test name.
-pub fn temp_dir(name: &str) -> PathBuf {
+pub(crate) fn temp_dir(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create temp dir");
@@ -23,7 +23,7 @@ pub fn temp_dir(name: &str) -> PathBuf {
 }
 
 /// Runs `nptreemap layout INPUT --out ...` and asserts success.
-pub fn layout(input: &Path, outs: &[&Path], extra: &[&str]) -> Output {
+pub(crate) fn layout(input: &Path, outs: &[&Path], extra: &[&str]) -> Output {
     let mut cmd = bin();
     cmd.arg("layout").arg(input);
     for o in outs {
@@ -41,7 +41,7 @@ pub fn layout(input: &Path, outs: &[&Path], extra: &[&str]) -> Output {
 }
 
 /// Runs `shared/tools/check-layout` on a layout file and returns its report.
-pub fn check_layout(json: &Path) -> serde_json::Value {
+pub(crate) fn check_layout(json: &Path) -> serde_json::Value {
     let out = Command::new("python3")
         .arg(shared().join("tools/check-layout"))
         .arg(json)
@@ -58,7 +58,7 @@ pub fn check_layout(json: &Path) -> serde_json::Value {
 }
 
 /// Asserts the checker's per-diagram area error is within d3's default target.
-pub fn assert_area_error(report: &serde_json::Value, limit: f64) {
+pub(crate) fn assert_area_error(report: &serde_json::Value, limit: f64) {
     let err = report["area_error_diagram_mean"]
         .as_f64()
         .expect("area_error_diagram_mean is a number");
@@ -66,7 +66,7 @@ pub fn assert_area_error(report: &serde_json::Value, limit: f64) {
 }
 
 /// Writes a random hierarchy with `shared/peers/gen.py` and returns its path.
-pub fn generate(dir: &Path, leaves: usize, depth: usize, seed: u64) -> PathBuf {
+pub(crate) fn generate(dir: &Path, leaves: usize, depth: usize, seed: u64) -> PathBuf {
     let path = dir.join(format!("h{leaves}_d{depth}_s{seed}.json"));
     let status = Command::new("python3")
         .arg(shared().join("peers/gen.py"))
