@@ -59,6 +59,9 @@ pub struct Report {
     pub area_error_max: f64,
     /// Diagrams that stopped at `max_iterations` above the convergence target.
     pub unconverged: usize,
+    /// Cells the optimiser left empty and that got a stand-in sliver; 0 unless
+    /// the input is pathological. Such a layout fails `sanity_check`.
+    pub degenerate: usize,
 }
 
 impl Layout {

@@ -9,17 +9,17 @@ use rayon::prelude::*;
 use super::map::{MapSettings, MapSimulation};
 use super::rng::Rng;
 use super::{seed, Layout, LayoutCell, LayoutError, Params, Report};
-use crate::geom::ConvexPolygon;
+use crate::geom::{ConvexPolygon, Point};
 use nptreemap_formats::Dataset;
 
 /// Outcome of dividing one parent's cell.
 struct Division {
-    parent: usize,
     cells: Vec<(usize, LayoutCell)>,
     iterations: usize,
     error: f64,
     converged: bool,
     optimised: bool,
+    degenerate: usize,
 }
 
 /// Lays out the whole hierarchy.
@@ -53,11 +53,10 @@ pub fn layout(dataset: &Dataset, params: &Params) -> Result<(Layout, Report), La
             .par_iter()
             .filter(|p| !dataset.node(**p).children.is_empty())
             .map(|&parent| {
-                // Invariant: a parent's cell is set before its children are laid out.
                 let polygon = cells[parent]
                     .as_ref()
                     .map(|c| c.polygon.clone())
-                    .unwrap_or_else(|| unreachable_parent(parent));
+                    .expect("invariant: a level's cells are set before the next level");
                 divide(dataset, params, settings, parent, polygon)
             })
             .collect();
@@ -72,11 +71,11 @@ pub fn layout(dataset: &Dataset, params: &Params) -> Result<(Layout, Report), La
                     report.unconverged += 1;
                 }
             }
+            report.degenerate += d.degenerate;
             for (child, cell) in d.cells {
                 cells[child] = Some(cell);
                 next.push(child);
             }
-            let _ = d.parent;
         }
         frontier = next;
     }
@@ -85,22 +84,14 @@ pub fn layout(dataset: &Dataset, params: &Params) -> Result<(Layout, Report), La
     }
     let cells = cells
         .into_iter()
-        .enumerate()
-        .map(|(i, c)| c.unwrap_or_else(|| unreachable_parent(i)))
+        .map(|c| c.expect("invariant: every node is reached from the root"))
         .collect();
-    Ok((
-        Layout {
-            canvas: params.canvas,
-            cells,
-        },
-        report,
-    ))
-}
-
-#[cold]
-fn unreachable_parent(index: usize) -> ! {
-    // Every node is reached from the root in BFS order, which Dataset guarantees.
-    panic!("node {index} was not reached by the layout recursion")
+    let layout = Layout {
+        canvas: params.canvas,
+        cells,
+    };
+    debug_assert_eq!(layout.sanity_check(dataset), Ok(()));
+    Ok((layout, report))
 }
 
 /// Target areas for the children of a cell of area `area` (see [`layout`] for
@@ -133,29 +124,33 @@ fn divide(
             polygon,
         };
         return Division {
-            parent,
             cells: vec![(children[0], cell)],
             iterations: 0,
             error: 0.0,
             converged: true,
             optimised: false,
+            degenerate: 0,
         };
     }
     let values: Vec<f64> = children.iter().map(|c| dataset.node(*c).value).collect();
     let targets = target_areas(&values, polygon.area(), params.min_weight_ratio);
     let mut rng = Rng::for_key(params.seed, &dataset.node(parent).id);
     let positions = seed::halton_positions(&polygon, children.len(), &mut rng);
-    let mut sim = MapSimulation::new(polygon, targets, positions, None, settings, rng);
+    let mut sim = MapSimulation::new(polygon.clone(), targets, positions, None, settings, rng);
     sim.run();
     let iterations = sim.state().iteration_count;
     let error = sim.state().convergence_ratio;
     let converged = sim.converged();
     let (sites, diagram) = sim.into_parts();
+    let mut degenerate = 0;
     let cells = children
         .iter()
         .zip(sites.iter().zip(diagram.cells))
         .map(|(&child, (site, cell))| {
-            let polygon = cell.polygon.unwrap_or_else(|| sliver(site.position));
+            let polygon = cell.polygon.unwrap_or_else(|| {
+                degenerate += 1;
+                sliver(&polygon, site.position)
+            });
             (
                 child,
                 LayoutCell {
@@ -167,21 +162,23 @@ fn divide(
         })
         .collect();
     Division {
-        parent,
         cells,
         iterations,
         error,
         converged,
         optimised: true,
+        degenerate,
     }
 }
 
-/// Last resort for a cell the optimiser could not keep non-empty: a tiny
-/// triangle at its site. Unreachable in practice (the repair step keeps cells
-/// non-empty); the sanity check would flag the overlap.
-fn sliver(at: crate::geom::Point) -> ConvexPolygon {
-    use crate::geom::Point;
-    let e = 1e-6;
-    ConvexPolygon::from_convex(vec![at, at + Point::new(e, 0.0), at + Point::new(0.0, e)])
-        .unwrap_or_else(|| unreachable_parent(usize::MAX))
+/// Last resort for a cell the optimiser could not keep non-empty (the repair
+/// step makes this unreachable in practice; [`Report::degenerate`] counts it): a
+/// triangle of a millionth of the parent's size between the site and the
+/// parent's centroid, so the node still has a drawable cell inside its parent.
+fn sliver(parent: &ConvexPolygon, at: Point) -> ConvexPolygon {
+    let c = parent.centroid();
+    let a = at + (c - at) * 0.5;
+    let e = 1e-6 * parent.diameter_bound();
+    ConvexPolygon::from_convex(vec![a, a + Point::new(e, 0.0), a + Point::new(0.0, e)])
+        .unwrap_or_else(|| parent.clone())
 }
