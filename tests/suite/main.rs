@@ -3,6 +3,7 @@
 
 mod support;
 
+mod architecture;
 mod cli_errors;
 mod config_defaults;
 mod degenerate;
