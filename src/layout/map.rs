@@ -57,6 +57,8 @@ pub struct MapSimulation {
     ended: bool,
     settings: MapSettings,
     rng: Rng,
+    /// Share of the Newton step taken, lowered while the error oscillates.
+    damping: f64,
 }
 
 /// Repair rounds per diagram evaluation. One round fixes every empty cell seen;
@@ -83,6 +85,9 @@ const PREVENT_PASSES: usize = 3;
 /// its site distance: the linearisation is good for moderate moves, and a site
 /// is never overtaken by a neighbour's bisector in one step.
 const MAX_BISECTOR_SHIFT: f64 = 1.0;
+
+/// Smallest share of the Newton step taken while the error oscillates.
+const MIN_DAMPING: f64 = 1.0 / 16.0;
 
 /// Conjugate-gradient stop: residual below this share of the right-hand side.
 /// The step is re-linearised next tick anyway, so a rough solve is enough.
@@ -123,6 +128,7 @@ impl MapSimulation {
             ended: false,
             settings,
             rng,
+            damping: 1.0,
         };
         sim.repair();
         sim.error = sim.area_error();
@@ -139,7 +145,18 @@ impl MapSimulation {
         self.newton_weights();
         self.recompute();
         self.iteration += 1;
+        let previous = self.error;
         self.error = self.area_error();
+        // Flicker mitigation (d3-voronoi-map's `flickeringMitigation` plays the
+        // same role): past the relaxation ticks, whose site moves raise the
+        // error by design, a tick that made the error worse halves the next
+        // weight step; good ticks win the step length back.
+        let relaxed = self.iteration > self.settings.min_iterations;
+        self.damping = if relaxed && self.error > previous {
+            (self.damping * 0.5).max(MIN_DAMPING)
+        } else {
+            (self.damping * 2.0).min(1.0)
+        };
         let converged = self.error <= self.settings.convergence_ratio
             && self.iteration >= self.settings.min_iterations;
         if converged || self.iteration >= self.settings.max_iterations {
@@ -338,7 +355,7 @@ impl MapSimulation {
         };
         let x = conjugate_gradient(&b, &diag, apply);
         // Shorten the step so no bisector moves too far (see MAX_BISECTOR_SHIFT).
-        let mut alpha: f64 = 1.0;
+        let mut alpha: f64 = self.damping;
         for i in 0..n {
             for &j in &cols[start[i]..start[i + 1]] {
                 let dw = (x[i] - x[j]).abs();
@@ -401,4 +418,91 @@ fn conjugate_gradient(b: &[f64], diag: &[f64], apply: impl Fn(&[f64], &mut [f64]
         }
     }
     x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings() -> MapSettings {
+        MapSettings {
+            convergence_ratio: 1e-4,
+            max_iterations: 100,
+            min_iterations: 3,
+        }
+    }
+
+    #[test]
+    fn conjugate_gradient_solves_a_path_laplacian() {
+        // Path 0 - 1 - 2 with unit conductances; b sums to zero.
+        let diag = [1.0, 2.0, 1.0];
+        let apply = |x: &[f64], out: &mut [f64]| {
+            out[0] = x[0] - x[1];
+            out[1] = 2.0 * x[1] - x[0] - x[2];
+            out[2] = x[2] - x[1];
+        };
+        let b = [1.0, 0.0, -1.0];
+        let x = conjugate_gradient(&b, &diag, apply);
+        let mut lx = [0.0; 3];
+        apply(&x, &mut lx);
+        for (l, b) in lx.iter().zip(b) {
+            assert!((l - b).abs() < 1e-9, "{lx:?}");
+        }
+    }
+
+    #[test]
+    fn two_sites_reach_a_one_to_three_split() {
+        let clip = ConvexPolygon::rectangle(0.0, 0.0, 4.0, 1.0).expect("rect");
+        let positions = vec![Point::new(1.0, 0.5), Point::new(3.0, 0.5)];
+        let mut sim = MapSimulation::new(
+            clip,
+            vec![1.0, 3.0],
+            positions,
+            None,
+            settings(),
+            Rng::new(1),
+        );
+        sim.run();
+        let state = sim.state();
+        assert!(state.ended && state.iteration_count < 100);
+        assert!((state.diagram.cells[0].area - 1.0).abs() < 1e-3);
+        assert!((state.diagram.cells[1].area - 3.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn tick_counts_and_stops_at_the_cap() {
+        let clip = ConvexPolygon::regular(Point::new(0.0, 0.0), 10.0, 6).expect("hexagon");
+        let area = clip.area();
+        let targets: Vec<f64> = (1..=7).map(|k| area * k as f64 / 28.0).collect();
+        let mut rng = Rng::new(9);
+        let positions = crate::layout::seed::halton_positions(&clip, 7, &mut rng);
+        let capped = MapSettings {
+            convergence_ratio: 0.0,
+            max_iterations: 5,
+            min_iterations: 0,
+        };
+        let mut sim = MapSimulation::new(clip.clone(), targets, positions, None, capped, rng);
+        for k in 1..=5 {
+            assert!(!sim.state().ended);
+            sim.tick();
+            assert_eq!(sim.state().iteration_count, k);
+        }
+        assert!(sim.state().ended);
+        sim.tick();
+        assert_eq!(
+            sim.state().iteration_count,
+            5,
+            "ticks after the end do nothing"
+        );
+        let state = sim.state();
+        state
+            .diagram
+            .sanity_check(state.sites, &clip)
+            .expect("diagram sane");
+        assert!(
+            state.convergence_ratio < 0.05,
+            "{}",
+            state.convergence_ratio
+        );
+    }
 }
