@@ -14,6 +14,7 @@
 pub mod geom;
 pub mod layout;
 pub mod metrics;
+pub mod neighborhood;
 pub mod power;
 pub mod render;
 pub mod store;

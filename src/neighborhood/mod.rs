@@ -1,0 +1,18 @@
+//! Neighbourhood preservation, the data side: similarity between nodes, the
+//! preparation of a hierarchy (virtual nodes, aggregation), the constraint
+//! pipeline of the paper (method-reference §3), 2-D projections, assignment
+//! (Kuhn–Munkres) and level-wide adjacency with the paper's metrics. Pure: no I/O.
+
+/// Level-wide cell adjacency from polygons, graph distances and Table 2 metrics.
+pub mod adjacency;
+/// Binning and filtering of similarities into constraints (stages A to E).
+pub mod constraints;
+/// Kuhn–Munkres assignment (minimum-cost perfect matching).
+pub mod matching;
+/// Virtual nodes for uniform depth and bottom-up aggregation (paper §4).
+pub mod prepare;
+/// 2-D projections: PCA of feature vectors, classical MDS of a similarity matrix.
+pub mod projection;
+/// Similarity functions between two nodes.
+pub mod similarity;
+
