@@ -19,6 +19,9 @@ struct Cli {
 enum Command {
     /// Lay out one hierarchy file and write JSON and/or SVG.
     Layout(cmd::layout::LayoutArgs),
+    /// Print the paper's Table 2 row (constraints realised, area error, graph
+    /// distance, aspect ratio) for one file and one method or all of them.
+    Eval(cmd::eval::EvalArgs),
     /// Time the layout of one file (parsing excluded) and print one JSON line.
     Bench(cmd::bench::BenchArgs),
 }
@@ -31,6 +34,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Layout(args) => cmd::layout::run(&args),
+        Command::Eval(args) => cmd::eval::run(&args),
         Command::Bench(args) => cmd::bench::run(&args),
     };
     match result {

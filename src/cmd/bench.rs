@@ -1,6 +1,7 @@
 //! `nptreemap bench`: lays one input out several times in one process and prints
-//! one JSON line with the median time (layout only, parsing excluded) and the
-//! layout's quality, for `benches/peers.py`.
+//! one JSON line with the median time of the whole layout step (preparation,
+//! constraints and layout; parsing excluded) and the layout's quality, for
+//! `benches/peers.py`.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -24,19 +25,20 @@ pub(crate) struct BenchArgs {
 
 pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
-    let params = args.options.params();
+    let request = args.options.request();
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..args.repeat.max(1) {
         let t = Instant::now();
-        let result = nptreemap::layout::layout(&dataset, &params)?;
+        let computed = nptreemap::layout::compute(&dataset, &request)?;
         times.push(t.elapsed().as_secs_f64() * 1000.0);
-        last = Some(result);
+        last = Some(computed);
     }
-    let Some((layout, report)) = last else {
+    let Some(computed) = last else {
         anyhow::bail!("no layout was made");
     };
-    let q = metrics::quality(&dataset, &layout);
+    let report = &computed.report;
+    let q = metrics::quality(&computed.dataset, &computed.layout);
     let mut sorted = times.clone();
     sorted.sort_by(f64::total_cmp);
     let line = serde_json::json!({
@@ -51,6 +53,9 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         "iterations": report.iterations,
         "diagrams": report.diagrams,
         "unconverged": report.unconverged,
+        "method": computed.method.name(),
+        "constraints": computed.constraints.len(),
+        "realized": computed.realized.iter().filter(|r| **r).count(),
     });
     println!("{line}");
     Ok(())

@@ -6,8 +6,8 @@ use anyhow::Context;
 use clap::Args;
 
 use super::{LayoutOptions, UsageError};
-use nptreemap::render::{layout_json, svg, JsonExtras, SvgStyle};
-use nptreemap::{metrics, store, workspace};
+use nptreemap::render::{layout_json, svg, SvgStyle};
+use nptreemap::{store, workspace};
 
 /// Arguments of `nptreemap layout`.
 #[derive(Debug, Args)]
@@ -41,7 +41,8 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
         })
         .collect::<Result<Vec<_>, _>>()?;
     let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
-    let (layout, report) = nptreemap::layout::layout(&dataset, &args.options.params())?;
+    let computed = nptreemap::layout::compute(&dataset, &args.options.request())?;
+    let report = &computed.report;
     if report.unconverged > 0 {
         tracing::warn!(
             unconverged = report.unconverged,
@@ -49,21 +50,8 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
             "some diagrams stopped at the iteration cap above the area-error target"
         );
     }
-    let q = metrics::quality(&dataset, &layout);
-    let extras = JsonExtras {
-        constraints: Vec::new(),
-        metrics: vec![
-            (
-                "area_error_diagram_mean".to_string(),
-                q.area_error_diagram_mean,
-            ),
-            (
-                "area_error_diagram_max".to_string(),
-                q.area_error_diagram_max,
-            ),
-            ("aspect_ratio_mean".to_string(), q.aspect_ratio_mean),
-        ],
-    };
+    let extras = super::json_extras(&computed);
+    let (dataset, layout) = (&computed.dataset, &computed.layout);
     // Render everything first: a failure leaves every existing output untouched.
     let rendered: Vec<(PathBuf, Vec<u8>)> = args
         .out
@@ -71,8 +59,8 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
         .zip(&kinds)
         .map(|(path, kind)| {
             let bytes = match kind {
-                Kind::Json => layout_json(&dataset, &layout, &extras).into_bytes(),
-                Kind::Svg => svg(&dataset, &layout, &SvgStyle::default()).into_bytes(),
+                Kind::Json => layout_json(dataset, layout, &extras).into_bytes(),
+                Kind::Svg => svg(dataset, layout, &SvgStyle::default()).into_bytes(),
             };
             (path.clone(), bytes)
         })

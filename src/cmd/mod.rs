@@ -1,10 +1,12 @@
 //! Subcommands of the binary, one file each, plus the options they share.
 
 pub(crate) mod bench;
+pub(crate) mod eval;
 pub(crate) mod layout;
 
 use clap::{Args, ValueEnum};
-use nptreemap::layout::{Canvas, Outline, Params};
+use nptreemap::layout::{Canvas, Method, Outline, Params, Request};
+use nptreemap::neighborhood::SimilarityKind;
 use nptreemap::workspace::InputError;
 
 /// Layout options shared by every subcommand that makes a layout.
@@ -31,6 +33,54 @@ pub(crate) struct LayoutOptions {
     /// Iteration cap per diagram.
     #[arg(long, default_value_t = 200)]
     pub(crate) max_iterations: usize,
+    /// Layout method (default: neighbor when the data has a similarity, else plain).
+    #[arg(long, value_enum)]
+    pub(crate) method: Option<MethodArg>,
+    /// Similarity between nodes (default: what the data declares).
+    #[arg(long, value_enum)]
+    pub(crate) similarity: Option<SimilarityArg>,
+}
+
+/// Layout methods on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum MethodArg {
+    /// The classic Voronoi treemap; similarity ignored.
+    Plain,
+    /// Random assignment to a CVT, then classic optimisation (Yao et al.).
+    RandomCvt,
+    /// Projection shrunk into the parent, then classic optimisation (Nocaj and Brandes).
+    ProjScale,
+    /// CVT, Kuhn–Munkres matching and swaps only.
+    MatchSwap,
+    /// The full neighbourhood-preserving method.
+    Neighbor,
+}
+
+impl MethodArg {
+    pub(crate) fn method(self) -> Method {
+        match self {
+            MethodArg::Plain => Method::Plain,
+            MethodArg::RandomCvt => Method::RandomCvt,
+            MethodArg::ProjScale => Method::ProjScale,
+            MethodArg::MatchSwap => Method::MatchSwap,
+            MethodArg::Neighbor => Method::Neighbor,
+        }
+    }
+}
+
+/// Similarity functions on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum SimilarityArg {
+    /// Cosine of feature vectors, rescaled to [0, 1].
+    Cosine,
+    /// Jaccard index of the vectors' non-zero supports.
+    Jaccard,
+    /// 1 for identical vectors (e.g. identical genre sets), else 0.
+    Binary,
+    /// 1 for nodes listed as each other's neighbours (shared borders), else 0.
+    Neighbors,
+    /// Pearson correlation of the vectors (time series), rescaled to [0, 1].
+    Pearson,
 }
 
 /// Root outline choices on the command line.
@@ -63,6 +113,21 @@ impl LayoutOptions {
         }
     }
 
+    pub(crate) fn request(&self) -> Request {
+        Request {
+            params: self.params(),
+            method: self.method.map(MethodArg::method),
+            similarity: self.similarity.map(|s| match s {
+                SimilarityArg::Cosine => SimilarityKind::Cosine,
+                SimilarityArg::Jaccard => SimilarityKind::Jaccard,
+                SimilarityArg::Binary => SimilarityKind::Binary,
+                SimilarityArg::Neighbors => SimilarityKind::NeighborList,
+                SimilarityArg::Pearson => SimilarityKind::Pearson,
+            }),
+            neighbor: Default::default(),
+        }
+    }
+
     pub(crate) fn read_options(&self) -> nptreemap::workspace::ReadOptions {
         nptreemap::workspace::ReadOptions {
             weight_field: self.weight.clone(),
@@ -84,5 +149,30 @@ pub(crate) fn exit_code(err: &anyhow::Error) -> u8 {
         2
     } else {
         1
+    }
+}
+
+/// The layout JSON's constraints and metrics for a computed layout.
+pub(crate) fn json_extras(computed: &nptreemap::layout::Computed) -> nptreemap::render::JsonExtras {
+    let ds = &computed.dataset;
+    let q = nptreemap::metrics::quality(ds, &computed.layout);
+    nptreemap::render::JsonExtras {
+        constraints: computed
+            .constraints
+            .iter()
+            .zip(&computed.realized)
+            .map(|(c, r)| nptreemap::render::ConstraintOut {
+                a: ds.node(c.a).id.clone(),
+                b: ds.node(c.b).id.clone(),
+                similarity: c.similarity,
+                strength: c.strength,
+                realized: *r,
+            })
+            .collect(),
+        metrics: vec![
+            ("area_error_diagram_mean".to_string(), q.area_error_diagram_mean),
+            ("area_error_diagram_max".to_string(), q.area_error_diagram_max),
+            ("aspect_ratio_mean".to_string(), q.aspect_ratio_mean),
+        ],
     }
 }

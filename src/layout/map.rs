@@ -164,6 +164,68 @@ impl MapSimulation {
         }
     }
 
+    /// One step with positions chosen by the caller (the neighbourhood
+    /// optimiser's attraction moves) instead of the Lloyd step: the new
+    /// positions, a diagram, a Newton weight step, a diagram. Positions must lie
+    /// inside the clip. Counts as a tick but never ends the simulation.
+    pub fn tick_with_positions(&mut self, positions: &[Point]) {
+        for (site, p) in self.sites.iter_mut().zip(positions) {
+            site.position = *p;
+        }
+        self.recompute();
+        self.newton_weights();
+        self.recompute();
+        self.iteration += 1;
+        self.error = self.area_error();
+    }
+
+    /// One step that moves only weights (sites stay put): the final settling
+    /// of a layout whose site arrangement carries meaning, such as realised
+    /// neighbourhoods. Returns the new area error.
+    pub fn settle_weights(&mut self) -> f64 {
+        // No `prevent_domination` here: with sites fixed, the weights that give
+        // the target areas may leave a site outside its own cell, and forcing it
+        // back in stalls the solve.
+        self.newton_weights();
+        self.recompute();
+        self.iteration += 1;
+        self.error = self.area_error();
+        self.error
+    }
+
+    /// Exchanges the sites (position and weight) of each pair of cells, and so
+    /// their cells: node `a` takes over `b`'s place and vice versa (the swaps
+    /// of method-reference §4.4), then recomputes the diagram once.
+    pub fn swap_sites(&mut self, pairs: &[(usize, usize)]) {
+        if pairs.is_empty() {
+            return;
+        }
+        for &(a, b) in pairs {
+            self.sites.swap(a, b);
+        }
+        self.recompute();
+        self.error = self.area_error();
+    }
+
+    /// Replaces the target areas (same length), e.g. after a CVT phase with
+    /// equal areas. The ended flag is cleared so the run can continue.
+    pub fn set_targets(&mut self, targets: Vec<f64>) {
+        debug_assert_eq!(targets.len(), self.targets.len());
+        self.targets = targets;
+        self.error = self.area_error();
+        self.ended = false;
+    }
+
+    /// The stopping rules.
+    pub fn settings(&self) -> MapSettings {
+        self.settings
+    }
+
+    /// The clip polygon.
+    pub fn clip(&self) -> &ConvexPolygon {
+        &self.clip
+    }
+
     /// Ticks until the simulation ends.
     pub fn run(&mut self) {
         while !self.ended {

@@ -7,8 +7,14 @@
 
 /// Invariant checks a finished layout must pass.
 pub mod check;
+/// The whole pure layout step: prepare, constraints, method dispatch.
+pub mod compute;
 /// One-level optimiser: Lloyd steps plus weight adaptation towards target areas.
 pub mod map;
+/// Which layout strategy runs.
+pub mod method;
+/// Similarity-driven layouts: initialisation, baselines, joint optimisation.
+pub mod neighbor;
 /// Run parameters and their defaults.
 pub mod params;
 /// Seeded, dependency-free random numbers (SplitMix64).
@@ -22,6 +28,9 @@ use crate::geom::{ConvexPolygon, Point};
 use nptreemap_formats::Dataset;
 
 pub use check::SanityError;
+pub use compute::{compute, Computed, Request};
+pub use method::Method;
+pub use neighbor::NeighborParams;
 pub use params::{Canvas, Outline, Params};
 pub use treemap::layout;
 
@@ -87,5 +96,18 @@ pub enum LayoutError {
         name: &'static str,
         /// What is wrong with it.
         reason: String,
+    },
+    /// A similarity-driven method was asked for data without a similarity.
+    #[error("method `{method}` needs a similarity, and the data has none (give one with --similarity)")]
+    NoSimilarity {
+        /// The method asked for.
+        method: &'static str,
+    },
+    /// Cells stayed empty despite repair (pathological input); the layout
+    /// would not be a partition.
+    #[error("{cells} cells stayed empty; the layout is degenerate")]
+    Degenerate {
+        /// How many.
+        cells: usize,
     },
 }

@@ -8,5 +8,6 @@ mod cli_errors;
 mod config_defaults;
 mod degenerate;
 mod determinism;
+mod neighborhood;
 mod paper_data;
 mod random_hierarchies;

@@ -1,0 +1,747 @@
+//! Similarity-driven layouts, level by level from the root down: the paper's
+//! initialisation (a CVT per parent, Kuhn–Munkres matching of projected nodes to
+//! CVT sites, greedy swaps; method-reference §4), its two baselines (§6.2), and
+//! the joint per-level optimisation of Algorithms 1 and 2 (§5).
+//!
+//! Where this departs from the prototype, and why:
+//! - Cells track their target areas during the whole optimisation (a Newton
+//!   weight step every tick, see [`super::map`]) instead of growing in the last
+//!   30% of ticks: growth at the end undoes neighbourhoods the attraction has
+//!   just built. The final weight-only settling keeps the arrangement.
+//! - Distance constants are relative to the level's typical cell size instead of
+//!   screen pixels (method-reference §10 row 1), so the method behaves the same
+//!   on any canvas and at any depth.
+//! - Diagrams of a level read cousins at their start-of-round positions (§5.2),
+//!   so they are independent within a round and run in parallel.
+
+use rayon::prelude::*;
+
+use super::map::{MapSettings, MapSimulation};
+use super::method::Method;
+use super::rng::Rng;
+use super::treemap::target_areas;
+use super::{seed, Canvas, Layout, LayoutCell, LayoutError, Params, Report};
+use crate::geom::{cross, ConvexPolygon, Point};
+use crate::neighborhood::adjacency::{level_adjacency, LevelAdjacency};
+use crate::neighborhood::{matching, projection, Constraint};
+use nptreemap_formats::Dataset;
+
+/// Settings of the similarity-driven methods.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NeighborParams {
+    /// Lloyd ticks of the equal-area CVT every diagram starts from. Default: 40.
+    pub cvt_iterations: usize,
+    /// Ticks of the joint optimisation per level (the prototype's 150). Default: 150.
+    pub ticks: usize,
+    /// Greedy swap rounds after matching (method-reference §4.4). Default: 4.
+    pub swap_rounds: usize,
+    /// One more swap round every this many ticks, until 20 ticks before the end
+    /// (the prototype's t = 20, 40, …, 120). 0 disables. Default: 20.
+    pub swap_every: usize,
+    /// Weight-only ticks at most to settle the areas at the end. Default: 100.
+    pub settle_iterations: usize,
+}
+
+impl Default for NeighborParams {
+    fn default() -> Self {
+        Self {
+            cvt_iterations: 40,
+            ticks: 150,
+            swap_rounds: 4,
+            swap_every: 20,
+            settle_iterations: 100,
+        }
+    }
+}
+
+/// Distance constants as shares of the level's unit length, the square root of
+/// its mean cell area. Derived from the prototype's pixels (method-reference
+/// §5.6–5.7) on its country map, where leaf cells average about 4,000 px², a
+/// unit of 63 px: `D_OPT` 40 px, `D_MAX` 80 px, step 5 px × 0.8, gap 10 px.
+const D_OPT: f64 = 0.63;
+const D_MAX: f64 = 1.27;
+const STEP: f64 = 0.063;
+const GAP: f64 = 0.16;
+/// Share of the way to the centroid a Lloyd step goes (the prototype's 0.8, §5.7c).
+const CENTROID_STEP: f64 = 0.8;
+/// Minimum shared boundary, as a share of the canvas diagonal, for two cells
+/// to count as neighbours: the independent checker's default.
+const MIN_SHARED: f64 = 1e-6;
+
+/// One parent's diagram on the level being laid out.
+enum Diagram {
+    /// A parent with one child: the child takes the parent's cell.
+    Single { child: usize, polygon: ConvexPolygon },
+    /// A parent with several children.
+    Sim {
+        children: Vec<usize>,
+        sim: Box<MapSimulation>,
+    },
+}
+
+/// 2-D positions for every node of `dataset`, in any scale: PCA of the
+/// feature vectors when every node has one of the same length (after
+/// [`crate::neighborhood::prepare`] internal nodes have the mean of their
+/// children), else classical MDS of `1 − similarity`.
+pub fn projection_of(dataset: &Dataset, similarity: impl Fn(usize, usize) -> f64) -> Vec<Point> {
+    let nodes = dataset.nodes();
+    let dim = nodes.first().and_then(|n| n.features.as_ref().map(Vec::len));
+    let uniform = dim.is_some_and(|d| {
+        d > 0
+            && nodes
+                .iter()
+                .all(|n| n.features.as_ref().is_some_and(|f| f.len() == d))
+    });
+    if uniform {
+        let vectors: Vec<Vec<f64>> = nodes
+            .iter()
+            .map(|n| n.features.clone().unwrap_or_default())
+            .collect();
+        projection::pca_2d(&vectors)
+    } else {
+        projection::classical_mds_2d(|a, b| 1.0 - similarity(a, b), nodes.len())
+    }
+}
+
+/// Lays out a prepared dataset (uniform depth) with a similarity-driven method.
+/// `constraints` are those of [`crate::neighborhood::build_constraints`];
+/// `projection` has one point per node (see [`projection_of`]).
+pub fn layout_similar(
+    dataset: &Dataset,
+    constraints: &[Constraint],
+    projection: &[Point],
+    method: Method,
+    params: &Params,
+    np: &NeighborParams,
+) -> Result<(Layout, Report), LayoutError> {
+    params.validate()?;
+    let root_polygon = params.outline.polygon(params.canvas)?;
+    let (box_lo, box_hi) = root_polygon.bbox();
+    let n = dataset.len();
+    let mut cells: Vec<Option<LayoutCell>> = vec![None; n];
+    cells[dataset.root()] = Some(LayoutCell {
+        site: root_polygon.centroid(),
+        power_weight: 0.0,
+        polygon: root_polygon,
+    });
+    let settings = MapSettings {
+        convergence_ratio: params.convergence_ratio,
+        max_iterations: params.max_iterations,
+        min_iterations: params.min_iterations.min(params.max_iterations),
+    };
+    let mut report = Report::default();
+    let mut error_sum = 0.0;
+    for depth in 0..dataset.max_depth() {
+        let parents: Vec<usize> = (0..n)
+            .filter(|&i| dataset.node(i).depth == depth && !dataset.node(i).children.is_empty())
+            .collect();
+        let level: Vec<usize> = parents
+            .iter()
+            .flat_map(|p| dataset.node(*p).children.iter().copied())
+            .collect();
+        let projected = projection::fit_into(
+            &level.iter().map(|i| projection[*i]).collect::<Vec<_>>(),
+            box_lo,
+            box_hi,
+        );
+        let mut proj_of = vec![Point::ZERO; n];
+        for (i, p) in level.iter().zip(projected) {
+            proj_of[*i] = p;
+        }
+        let mut diagrams: Vec<Diagram> = parents
+            .par_iter()
+            .map(|&parent| {
+                let polygon = cells[parent]
+                    .as_ref()
+                    .map(|c| c.polygon.clone())
+                    .expect("invariant: parents are laid out before their children");
+                init_diagram(dataset, parent, polygon, &proj_of, method, params, np, settings)
+            })
+            .collect();
+        let links = LevelLinks::new(dataset, &level, constraints, depth + 1);
+        let canvas = params.canvas;
+        if matches!(method, Method::MatchSwap | Method::Neighbor) {
+            for _ in 0..np.swap_rounds {
+                swap_round(&mut diagrams, &links, canvas);
+            }
+        }
+        // Swaps compared cells of the equal-area CVT; from here on cells aim
+        // for their real areas.
+        diagrams.par_iter_mut().for_each(|d| {
+            if let Diagram::Sim { children, sim } = d {
+                let targets = sim_targets(dataset, sim.clip(), children, params);
+                sim.set_targets(targets);
+            }
+        });
+        match method {
+            Method::Neighbor => optimise_level(&mut diagrams, &links, canvas, np),
+            Method::MatchSwap => diagrams.par_iter_mut().for_each(|d| settle(d, np)),
+            _ => {}
+        }
+        if matches!(method, Method::RandomCvt | Method::ProjScale) {
+            diagrams.par_iter_mut().for_each(|d| {
+                if let Diagram::Sim { sim, .. } = d {
+                    sim.run();
+                }
+            });
+        }
+        for d in diagrams {
+            match d {
+                Diagram::Single { child, polygon } => {
+                    cells[child] = Some(LayoutCell {
+                        site: polygon.centroid(),
+                        power_weight: 0.0,
+                        polygon,
+                    });
+                }
+                Diagram::Sim { children, sim } => {
+                    let state = sim.state();
+                    report.diagrams += 1;
+                    report.iterations += state.iteration_count;
+                    error_sum += state.convergence_ratio;
+                    report.area_error_max = report.area_error_max.max(state.convergence_ratio);
+                    if !sim.converged() {
+                        report.unconverged += 1;
+                    }
+                    let (sites, diagram) = sim.into_parts();
+                    for ((child, site), cell) in children.iter().zip(&sites).zip(diagram.cells) {
+                        let polygon = match cell.polygon {
+                            Some(p) => p,
+                            None => {
+                                report.degenerate += 1;
+                                continue;
+                            }
+                        };
+                        cells[*child] = Some(LayoutCell {
+                            site: site.position,
+                            power_weight: site.weight,
+                            polygon,
+                        });
+                    }
+                }
+            }
+        }
+    }
+    if report.diagrams > 0 {
+        report.area_error_mean = error_sum / report.diagrams as f64;
+    }
+    if report.degenerate > 0 {
+        return Err(LayoutError::Degenerate {
+            cells: report.degenerate,
+        });
+    }
+    let cells = cells
+        .into_iter()
+        .map(|c| c.expect("invariant: every node is reached from the root"))
+        .collect();
+    let layout = Layout {
+        canvas: params.canvas,
+        cells,
+    };
+    debug_assert_eq!(layout.sanity_check(dataset), Ok(()));
+    Ok((layout, report))
+}
+
+fn sim_targets(dataset: &Dataset, clip: &ConvexPolygon, children: &[usize], params: &Params) -> Vec<f64> {
+    let values: Vec<f64> = children.iter().map(|c| dataset.node(*c).value).collect();
+    target_areas(&values, clip.area(), params.min_weight_ratio)
+}
+
+/// Builds one parent's diagram in its starting state for `method`.
+#[allow(clippy::too_many_arguments)]
+fn init_diagram(
+    dataset: &Dataset,
+    parent: usize,
+    polygon: ConvexPolygon,
+    projected: &[Point],
+    method: Method,
+    params: &Params,
+    np: &NeighborParams,
+    settings: MapSettings,
+) -> Diagram {
+    let children = dataset.node(parent).children.clone();
+    if children.len() == 1 {
+        return Diagram::Single {
+            child: children[0],
+            polygon,
+        };
+    }
+    let k = children.len();
+    let mut rng = Rng::for_key(params.seed, &dataset.node(parent).id);
+    let targets = sim_targets(dataset, &polygon, &children, params);
+    let (positions, weights) = if method == Method::ProjScale {
+        let points: Vec<Point> = children.iter().map(|c| projected[*c]).collect();
+        (project_and_scale(&polygon, &points, &mut rng), None)
+    } else {
+        // Equal-area CVT (method-reference §4.2).
+        let equal = vec![polygon.area() / k as f64; k];
+        let start = seed::halton_positions(&polygon, k, &mut rng);
+        let cvt_settings = MapSettings {
+            convergence_ratio: 0.0,
+            max_iterations: np.cvt_iterations.max(1),
+            min_iterations: np.cvt_iterations.max(1),
+        };
+        let mut cvt = MapSimulation::new(polygon.clone(), equal, start, None, cvt_settings, rng.clone());
+        cvt.run();
+        let sites = cvt.state().sites.to_vec();
+        let site_pos: Vec<Point> = sites.iter().map(|s| s.position).collect();
+        // order[c] = the CVT site child c takes.
+        let order: Vec<usize> = if method == Method::RandomCvt {
+            let mut perm: Vec<usize> = (0..k).collect();
+            for i in (1..k).rev() {
+                let j = (rng.next_u64() % (i as u64 + 1)) as usize;
+                perm.swap(i, j);
+            }
+            perm
+        } else {
+            let points: Vec<Point> = children.iter().map(|c| projected[*c]).collect();
+            matching::match_points(&site_pos, &points)
+        };
+        let positions = order.iter().map(|&s| site_pos[s]).collect();
+        let weights = order.iter().map(|&s| sites[s].weight).collect();
+        (positions, Some(weights))
+    };
+    // Similarity methods start from the CVT's equal areas; targets are set when
+    // their optimisation starts, so swaps compare cells of the CVT geometry.
+    let start_targets = if method == Method::ProjScale {
+        targets
+    } else {
+        vec![polygon.area() / k as f64; k]
+    };
+    let sim = MapSimulation::new(polygon, start_targets, positions, weights, settings, rng);
+    Diagram::Sim {
+        children,
+        sim: Box::new(sim),
+    }
+}
+
+/// The projection-and-scale start of Nocaj and Brandes (method-reference §6.2):
+/// move the points' hull centroid onto the parent's centroid, then shrink
+/// towards it by factors 0.99, 0.89, …, 0.09 until every point is inside.
+fn project_and_scale(parent: &ConvexPolygon, points: &[Point], rng: &mut Rng) -> Vec<Point> {
+    let c = parent.centroid();
+    let hull_centre = match ConvexPolygon::new(points.to_vec()) {
+        Ok(h) => h.centroid(),
+        Err(_) => points.iter().copied().sum::<Point>() / points.len().max(1) as f64,
+    };
+    let moved: Vec<Point> = points.iter().map(|p| *p - hull_centre + c).collect();
+    let mut placed = None;
+    for step in 0..10 {
+        let f = 0.99 - 0.1 * step as f64;
+        let scaled: Vec<Point> = moved.iter().map(|p| c + (*p - c) * f).collect();
+        if scaled.iter().all(|p| parent.contains(*p)) {
+            placed = Some(scaled);
+            break;
+        }
+    }
+    let mut out = placed.unwrap_or_else(|| moved.iter().map(|p| c + (*p - c) * 0.09).collect());
+    // Points still outside, or on top of each other, start at a random spot.
+    for i in 0..out.len() {
+        let clash = (0..i).any(|j| out[j] == out[i]);
+        if clash || !parent.contains(out[i]) {
+            out[i] = parent.sample(rng.next_f64(), rng.next_f64());
+        }
+    }
+    out
+}
+
+/// Settles a diagram's areas with its sites held in place.
+fn settle(d: &mut Diagram, np: &NeighborParams) {
+    if let Diagram::Sim { sim, .. } = d {
+        let target = sim.settings().convergence_ratio;
+        for _ in 0..np.settle_iterations {
+            if sim.settle_weights() <= target {
+                break;
+            }
+        }
+    }
+}
+
+/// The constraints of one level, in level-local indices.
+struct LevelLinks {
+    /// Level-local index of every node, `usize::MAX` off the level.
+    local: Vec<usize>,
+    /// Node index of every level-local index.
+    nodes: Vec<usize>,
+    /// Partners and scores per level-local index, Stage E order (§3.7): all
+    /// score-100 links first, then by score descending; ties by index.
+    links: Vec<Vec<(usize, u8)>>,
+}
+
+impl LevelLinks {
+    fn new(dataset: &Dataset, level: &[usize], constraints: &[Constraint], depth: usize) -> Self {
+        let mut local = vec![usize::MAX; dataset.len()];
+        for (k, &i) in level.iter().enumerate() {
+            local[i] = k;
+        }
+        let mut links = vec![Vec::new(); level.len()];
+        for c in constraints {
+            if dataset.node(c.a).depth != depth || c.score <= 1 {
+                continue;
+            }
+            let (a, b) = (local[c.a], local[c.b]);
+            if a == usize::MAX || b == usize::MAX {
+                continue;
+            }
+            links[a].push((b, c.score));
+            links[b].push((a, c.score));
+        }
+        for l in &mut links {
+            l.sort_by(|x, y| y.1.cmp(&x.1).then(x.0.cmp(&y.0)));
+        }
+        Self {
+            local,
+            nodes: level.to_vec(),
+            links,
+        }
+    }
+
+    fn score(&self, a: usize, b: usize) -> Option<u8> {
+        self.links[a].iter().find(|(t, _)| *t == b).map(|(_, s)| *s)
+    }
+}
+
+/// Current geometry of the level: per level-local index the site, centroid,
+/// polygon, the diagram it belongs to and its index there.
+struct Snapshot {
+    site: Vec<Point>,
+    centroid: Vec<Point>,
+    diagram: Vec<usize>,
+    slot: Vec<usize>,
+    adjacency: LevelAdjacency,
+}
+
+fn snapshot(diagrams: &[Diagram], links: &LevelLinks, canvas: Canvas) -> Snapshot {
+    let m = links.nodes.len();
+    let mut site = vec![Point::ZERO; m];
+    let mut centroid = vec![Point::ZERO; m];
+    let mut diagram = vec![0; m];
+    let mut slot = vec![0; m];
+    let mut polygons: Vec<Option<ConvexPolygon>> = vec![None; m];
+    for (d, dg) in diagrams.iter().enumerate() {
+        match dg {
+            Diagram::Single { child, polygon } => {
+                let k = links.local[*child];
+                site[k] = polygon.centroid();
+                centroid[k] = site[k];
+                diagram[k] = d;
+                polygons[k] = Some(polygon.clone());
+            }
+            Diagram::Sim { children, sim } => {
+                let state = sim.state();
+                for (j, c) in children.iter().enumerate() {
+                    let k = links.local[*c];
+                    site[k] = state.sites[j].position;
+                    centroid[k] = state.diagram.cells[j].centroid;
+                    diagram[k] = d;
+                    slot[k] = j;
+                    polygons[k] = state.diagram.cells[j].polygon.clone();
+                }
+            }
+        }
+    }
+    // An empty cell (only transiently possible) is given a point-sized stand-in
+    // so indices stay aligned; it has no neighbours.
+    let cells = polygons
+        .into_iter()
+        .zip(&site)
+        .map(|(p, s)| LayoutCell {
+            site: *s,
+            power_weight: 0.0,
+            polygon: p.unwrap_or_else(|| tiny_square(*s)),
+        })
+        .collect();
+    let layout = Layout { canvas, cells };
+    let all: Vec<usize> = (0..m).collect();
+    let adjacency = level_adjacency(&layout, &all, MIN_SHARED);
+    Snapshot {
+        site,
+        centroid,
+        diagram,
+        slot,
+        adjacency,
+    }
+}
+
+fn tiny_square(at: Point) -> ConvexPolygon {
+    let e = 1e-9;
+    ConvexPolygon::from_convex(vec![
+        at,
+        at + Point::new(e, 0.0),
+        at + Point::new(e, e),
+        at + Point::new(0.0, e),
+    ])
+    .unwrap_or_else(|| {
+        ConvexPolygon::rectangle(at.x, at.y, 1.0, 1.0).expect("a unit square is a polygon")
+    })
+}
+
+/// One greedy swap round over the level (method-reference §4.4): candidate
+/// pairs of same-parent cells whose exchange realises more constraints, best
+/// gain first, each cell swapped at most once and its neighbours left alone.
+fn swap_round(diagrams: &mut [Diagram], links: &LevelLinks, canvas: Canvas) -> usize {
+    let snap = snapshot(diagrams, links, canvas);
+    let adj = &snap.adjacency;
+    let realised = |x: usize, at: usize| -> i64 {
+        // Partners of x adjacent to the cell at `at`.
+        links.links[x]
+            .iter()
+            .filter(|(t, _)| *t != at && adj.are_adjacent(*t, at))
+            .count() as i64
+    };
+    let mut candidates: Vec<(i64, usize, usize)> = Vec::new();
+    for a in 0..links.nodes.len() {
+        if matches!(diagrams[snap.diagram[a]], Diagram::Single { .. }) {
+            continue;
+        }
+        // Only cells next to a partner of `a` can gain by taking a's node.
+        let mut seen: Vec<usize> = Vec::new();
+        for &(t, _) in &links.links[a] {
+            for &b in adj.neighbours(t) {
+                if b != a && snap.diagram[b] == snap.diagram[a] && !seen.contains(&b) {
+                    seen.push(b);
+                }
+            }
+        }
+        for b in seen {
+            let now = realised(a, a) + realised(b, b);
+            let after = realised(a, b) + realised(b, a);
+            let gain = after - now;
+            if gain > 0 {
+                let (x, y) = if a < b { (a, b) } else { (b, a) };
+                candidates.push((gain, x, y));
+            }
+        }
+    }
+    candidates.sort_by(|p, q| q.0.cmp(&p.0).then(p.1.cmp(&q.1)).then(p.2.cmp(&q.2)));
+    candidates.dedup();
+    let mut dirty = vec![false; links.nodes.len()];
+    let mut per_diagram: Vec<Vec<(usize, usize)>> = vec![Vec::new(); diagrams.len()];
+    let mut applied = 0;
+    for (_, a, b) in candidates {
+        if dirty[a] || dirty[b] {
+            continue;
+        }
+        for x in [a, b] {
+            dirty[x] = true;
+            for &y in adj.neighbours(x) {
+                dirty[y] = true;
+            }
+        }
+        per_diagram[snap.diagram[a]].push((snap.slot[a], snap.slot[b]));
+        applied += 1;
+    }
+    diagrams
+        .par_iter_mut()
+        .zip(per_diagram.par_iter())
+        .for_each(|(d, pairs)| {
+            if let Diagram::Sim { sim, .. } = d {
+                sim.swap_sites(pairs);
+            }
+        });
+    applied
+}
+
+/// The joint optimisation of one level (paper Algorithm 1): every tick, the
+/// level's neighbourhoods are recomputed and every diagram makes one step in
+/// which each cell either makes one attraction move (Algorithm 2) or a
+/// centroid step, followed by a weight step towards the target areas.
+fn optimise_level(
+    diagrams: &mut [Diagram],
+    links: &LevelLinks,
+    canvas: Canvas,
+    np: &NeighborParams,
+) {
+    // The unit length of the level: square root of its mean cell area.
+    let total: f64 = diagrams
+        .iter()
+        .map(|d| match d {
+            Diagram::Single { polygon, .. } => polygon.area(),
+            Diagram::Sim { sim, .. } => sim.clip().area(),
+        })
+        .sum();
+    let unit = (total / links.nodes.len().max(1) as f64).sqrt();
+    for tick in 0..np.ticks {
+        if np.swap_every > 0 && tick > 0 && tick % np.swap_every == 0 && tick + 20 < np.ticks {
+            swap_round(diagrams, links, canvas);
+        }
+        let snap = snapshot(diagrams, links, canvas);
+        let last_ticks = tick + 10 >= np.ticks;
+        diagrams.par_iter_mut().for_each(|d| {
+            if let Diagram::Sim { children, sim } = d {
+                let positions = attraction_moves(children, sim, links, &snap, unit, last_ticks);
+                sim.tick_with_positions(&positions);
+            }
+        });
+    }
+    diagrams.par_iter_mut().for_each(|d| settle(d, np));
+}
+
+/// New site positions for one diagram: Algorithm 2 for each cell, furthest
+/// strongest link first (§5.4), at most one successful move per cell (§5.6).
+fn attraction_moves(
+    children: &[usize],
+    sim: &MapSimulation,
+    links: &LevelLinks,
+    snap: &Snapshot,
+    unit: f64,
+    last_ticks: bool,
+) -> Vec<Point> {
+    let state = sim.state();
+    let clip = sim.clip();
+    let mut pos: Vec<Point> = state.sites.iter().map(|s| s.position).collect();
+    let local: Vec<usize> = children.iter().map(|c| links.local[*c]).collect();
+    let gap = GAP * unit;
+    let step = STEP * unit;
+    // Order: decreasing distance to the strongest partner, ties by index.
+    let mut order: Vec<(f64, usize)> = (0..children.len())
+        .map(|j| {
+            let d = links.links[local[j]]
+                .first()
+                .map(|(t, _)| pos[j].distance(snap.site[*t]))
+                .unwrap_or(0.0);
+            (d, j)
+        })
+        .collect();
+    order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    for (_, j) in order {
+        let me = local[j];
+        let centroid = state.diagram.cells[j].centroid;
+        let neighbours_here: Vec<usize> = state.diagram.cells[j]
+            .neighbours
+            .iter()
+            .map(|nb| nb.site)
+            .collect();
+        let accept = |p: Point, pos: &[Point], cross_parent: bool| -> bool {
+            clip.contains(p)
+                && neighbours_here.iter().all(|&o| p.distance(pos[o]) >= gap)
+                && (!cross_parent || boundary_distance(clip, p) >= gap)
+        };
+        let mut moved = false;
+        if !last_ticks && !links.links[me].is_empty() {
+            // Different parent first, then same parent; each by distance, furthest first (§5.5).
+            let mut records: Vec<(bool, f64, usize, u8)> = links.links[me]
+                .iter()
+                .map(|&(t, s)| {
+                    let same = snap.diagram[t] == snap.diagram[me];
+                    let target = if same { pos[snap.slot[t]] } else { snap.site[t] };
+                    (same, pos[j].distance(target), t, s)
+                })
+                .collect();
+            records.sort_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
+            for (same, dist, t, score) in records {
+                let neighbour = snap.adjacency.are_adjacent(me, t);
+                if same {
+                    if neighbour || dist < D_OPT * unit || !has_free_neighbour(links, snap, t, score) {
+                        continue;
+                    }
+                    let target = pos[snap.slot[t]];
+                    if let Some(p) = step_towards(pos[j], target, step) {
+                        if accept(p, &pos, false) {
+                            pos[j] = p;
+                            moved = true;
+                            break;
+                        }
+                    }
+                    continue;
+                }
+                let (d, edge) = exit_through(clip, centroid, snap.centroid[t]);
+                let toward = step_towards(pos[j], snap.site[t], step);
+                let slide = edge.and_then(|(a, b)| slide_along(pos[j], centroid, snap.centroid[t], a, b, step));
+                if neighbour {
+                    let candidate = if d <= D_MAX * unit { slide } else { toward };
+                    if let Some(p) = candidate {
+                        if accept(p, &pos, true) {
+                            pos[j] = p;
+                            moved = true;
+                            break;
+                        }
+                    }
+                } else if d > D_OPT * unit {
+                    if let Some(p) = toward {
+                        if accept(p, &pos, true) {
+                            pos[j] = p;
+                            moved = true;
+                            break;
+                        }
+                    }
+                } else if let Some(p) = slide {
+                    // Aligning along the parent edge is not a move of its own (§5.6 rule 8).
+                    if accept(p, &pos, true) {
+                        pos[j] = p;
+                    }
+                }
+            }
+        }
+        if !moved {
+            let p = pos[j] + (centroid - pos[j]) * CENTROID_STEP;
+            if clip.contains(p) && state.diagram.cells[j].polygon.is_some() {
+                pos[j] = p;
+            }
+        }
+    }
+    pos
+}
+
+/// Does target `t` have a neighbour that a link of strength `score` could
+/// displace: one without a constraint to `t`, or with a weaker one (the
+/// paper's Fig. 4e/f test)?
+fn has_free_neighbour(links: &LevelLinks, snap: &Snapshot, t: usize, score: u8) -> bool {
+    snap.adjacency
+        .neighbours(t)
+        .iter()
+        .any(|&m| links.score(t, m).is_none_or(|s| s < score))
+}
+
+fn step_towards(from: Point, to: Point, step: f64) -> Option<Point> {
+    let d = to - from;
+    let len = d.length();
+    (len > 0.0).then(|| from + d * (step.min(len) / len))
+}
+
+/// Where the segment from `from` (inside `clip`) to `to` leaves `clip`: the
+/// distance to the exit point and the edge crossed. When `to` is inside too,
+/// the distance to `to` and no edge.
+fn exit_through(clip: &ConvexPolygon, from: Point, to: Point) -> (f64, Option<(Point, Point)>) {
+    let pts = clip.points();
+    let dir = to - from;
+    let mut best: Option<(f64, (Point, Point))> = None;
+    for k in 0..pts.len() {
+        let a = pts[k];
+        let b = pts[(k + 1) % pts.len()];
+        let e = b - a;
+        let denom = cross(dir, e);
+        if denom == 0.0 {
+            continue;
+        }
+        let t = cross(a - from, e) / denom;
+        let u = cross(a - from, dir) / denom;
+        if (0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u) && best.is_none_or(|(bt, _)| t < bt) {
+            best = Some((t, (a, b)));
+        }
+    }
+    match best {
+        Some((t, edge)) => (dir.length() * t, Some(edge)),
+        None => (dir.length(), None),
+    }
+}
+
+/// The slide along a parent edge `a`–`b` that aligns the projections of the
+/// two centroids on it (§5.7b), or `None` when already aligned.
+fn slide_along(p: Point, source: Point, target: Point, a: Point, b: Point, step: f64) -> Option<Point> {
+    let u = (b - a).normalize_or_zero();
+    let gap = (target - a).dot(u) - (source - a).dot(u);
+    (gap.abs() > step).then(|| p + u * (step * gap.signum()))
+}
+
+/// Distance from a point inside a convex polygon to its boundary.
+fn boundary_distance(clip: &ConvexPolygon, p: Point) -> f64 {
+    let pts = clip.points();
+    (0..pts.len())
+        .map(|k| {
+            let a = pts[k];
+            let e = pts[(k + 1) % pts.len()] - a;
+            cross(e, p - a) / e.length().max(f64::MIN_POSITIVE)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
