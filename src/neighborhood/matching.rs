@@ -1,1 +1,365 @@
-//! (being written)
+//! Minimum-cost assignment (Kuhn–Munkres / Hungarian algorithm) and its use for the
+//! initial layout: matching CVT sites to nodes' projected positions (method-reference
+//! §4.3). Pure and deterministic: fixed tie-breaking, no randomness, no I/O.
+
+use crate::geom::Point;
+
+/// Marks a row that has no column (only when there are more rows than columns).
+const UNASSIGNED: usize = usize::MAX;
+
+/// Solves the rectangular assignment problem: for each row of the `rows × cols` cost
+/// matrix (`cost`, row-major) a distinct column, minimising the total cost.
+///
+/// Algorithm: shortest augmenting paths with row and column potentials (the O(n²·m)
+/// Hungarian algorithm in Jonker–Volgenant form), one row added per phase. Ties are
+/// broken deterministically: among equally cheap columns an unassigned one is preferred,
+/// then the lowest index. So equal costs give the identity (row `i` → column `i`).
+///
+/// Contract and degenerate input:
+/// - `rows ≤ cols` is expected. With more rows than columns the transposed problem is
+///   solved and the `rows − cols` rows left without a column get `usize::MAX`.
+/// - NaN, +∞ and entries missing from a too-short `cost` count as a "large" cost, larger
+///   than the total of any assignment that avoids them, so they are used only when no
+///   assignment avoids them; −∞ counts as the same magnitude, negative.
+/// - Costs may be negative. All costs are scaled by one power of two (exact) so that any
+///   finite magnitude works without overflow.
+///
+/// Cost: O(rows²·cols) time, O(rows·cols) extra memory for the sanitised copy.
+pub fn min_cost_assignment(cost: &[f64], rows: usize, cols: usize) -> Vec<usize> {
+    if rows == 0 {
+        return Vec::new();
+    }
+    if rows > cols {
+        let mut transposed = vec![f64::NAN; rows * cols];
+        for r in 0..rows {
+            for c in 0..cols {
+                transposed[c * rows + r] = cost.get(r * cols + c).copied().unwrap_or(f64::NAN);
+            }
+        }
+        let mut out = vec![UNASSIGNED; rows];
+        for (c, r) in hungarian(&sanitize(&transposed, cols, rows), cols, rows)
+            .into_iter()
+            .enumerate()
+        {
+            out[r] = c;
+        }
+        return out;
+    }
+    hungarian(&sanitize(cost, rows, cols), rows, cols)
+}
+
+/// Assigns each of `points` (nodes' projected positions) to a distinct site of `sites`
+/// (CVT sites), minimising the total Euclidean distance (method-reference §4.3; call it
+/// once per parent, or pass the prototype's level-wide 10⁶ penalty in your own cost
+/// matrix to [`min_cost_assignment`]).
+///
+/// Returns, for each point, the index of its site: a permutation when the counts are
+/// equal. With more points than sites the surplus points get `usize::MAX`. Non-finite
+/// coordinates make their distances "large" (see [`min_cost_assignment`]).
+pub fn match_points(sites: &[Point], points: &[Point]) -> Vec<usize> {
+    let cost: Vec<f64> = points
+        .iter()
+        .flat_map(|p| sites.iter().map(move |s| p.distance(*s)))
+        .collect();
+    min_cost_assignment(&cost, points.len(), sites.len())
+}
+
+/// A `rows × cols` copy of `cost` with every entry finite and of magnitude < 2, except
+/// the stand-ins for NaN/±∞/missing, which are ±`large`.
+fn sanitize(cost: &[f64], rows: usize, cols: usize) -> Vec<f64> {
+    let len = rows * cols;
+    let cost = &cost[..cost.len().min(len)];
+    let max = cost
+        .iter()
+        .filter(|c| c.is_finite())
+        .fold(0.0_f64, |m, c| m.max(c.abs()));
+    // Dividing by a power of two is exact, so ties and the optimum are unchanged; after
+    // it, potentials (sums of at most `rows` costs) cannot overflow.
+    let scale = if max > 0.0 { pow2_floor(max) } else { 1.0 };
+    // Any assignment total of finite entries lies in (−2·rows, 2·rows): one "large" entry
+    // outweighs every difference between such totals.
+    let large = 4.0 * rows as f64 + 4.0;
+    let mut out: Vec<f64> = cost
+        .iter()
+        .map(|&c| {
+            if c.is_finite() {
+                c / scale
+            } else if c == f64::NEG_INFINITY {
+                -large
+            } else {
+                large
+            }
+        })
+        .collect();
+    out.resize(len, large);
+    out
+}
+
+/// The shortest-augmenting-path Hungarian algorithm on a sanitised matrix, rows ≤ cols.
+/// Index 0 of the column arrays is a virtual column holding the row being inserted;
+/// real columns are 1-based there.
+fn hungarian(cost: &[f64], rows: usize, cols: usize) -> Vec<usize> {
+    let mut u = vec![0.0; rows + 1];
+    let mut v = vec![0.0; cols + 1];
+    // Row (1-based) assigned to each column, 0 for none.
+    let mut owner = vec![0usize; cols + 1];
+    // Previous column on the shortest path tree.
+    let mut way = vec![0usize; cols + 1];
+    let mut minv = vec![f64::INFINITY; cols + 1];
+    let mut used = vec![false; cols + 1];
+    for i in 1..=rows {
+        owner[0] = i;
+        let mut j0 = 0;
+        minv.fill(f64::INFINITY);
+        used.fill(false);
+        loop {
+            used[j0] = true;
+            let i0 = owner[j0];
+            let row = &cost[(i0 - 1) * cols..i0 * cols];
+            let ui = u[i0];
+            let mut delta = f64::INFINITY;
+            let mut j1 = 0;
+            for j in 1..=cols {
+                if used[j] {
+                    continue;
+                }
+                let cur = row[j - 1] - ui - v[j];
+                if cur < minv[j] {
+                    minv[j] = cur;
+                    way[j] = j0;
+                }
+                // Prefer a free column on ties: it ends the search, and with equal costs
+                // it keeps every row on its own column.
+                if j1 == 0
+                    || minv[j] < delta
+                    || (minv[j] == delta && owner[j] == 0 && owner[j1] != 0)
+                {
+                    delta = minv[j];
+                    j1 = j;
+                }
+            }
+            if j1 == 0 {
+                // Unreachable while rows ≤ cols (a free column always remains); stop
+                // rather than index out of bounds.
+                break;
+            }
+            for j in 0..=cols {
+                if used[j] {
+                    u[owner[j]] += delta;
+                    v[j] -= delta;
+                } else {
+                    minv[j] -= delta;
+                }
+            }
+            j0 = j1;
+            if owner[j0] == 0 {
+                break;
+            }
+        }
+        // Flip the alternating path back to the virtual column.
+        while j0 != 0 {
+            let prev = way[j0];
+            owner[j0] = owner[prev];
+            j0 = prev;
+        }
+    }
+    let mut out = vec![UNASSIGNED; rows];
+    for (j, &r) in owner.iter().enumerate().skip(1) {
+        if r != 0 {
+            out[r - 1] = j - 1;
+        }
+    }
+    out
+}
+
+/// The largest power of two not above `x` (finite, > 0); dividing by it is exact.
+fn pow2_floor(x: f64) -> f64 {
+    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
+    const TWO_52: f64 = 4_503_599_627_370_496.0;
+    if x >= f64::MIN_POSITIVE {
+        f64::from_bits(x.to_bits() & EXPONENT)
+    } else {
+        // Subnormal: lift into the normal range first.
+        f64::from_bits((x * TWO_52).to_bits() & EXPONENT) / TWO_52
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// SplitMix64: seeded test data without a dependency.
+    struct SplitMix64(u64);
+    impl SplitMix64 {
+        fn next_u64(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+        fn next_f64(&mut self) -> f64 {
+            (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn below(&mut self, n: u64) -> u64 {
+            self.next_u64() % n
+        }
+    }
+
+    fn total(cost: &[f64], cols: usize, assignment: &[usize]) -> f64 {
+        assignment
+            .iter()
+            .enumerate()
+            .map(|(r, &c)| cost[r * cols + c])
+            .sum()
+    }
+
+    /// Minimum total over all injective row → column maps, by exhaustive search.
+    fn brute_force(cost: &[f64], rows: usize, cols: usize) -> f64 {
+        fn go(cost: &[f64], cols: usize, row: usize, rows: usize, taken: &mut [bool]) -> f64 {
+            if row == rows {
+                return 0.0;
+            }
+            let mut best = f64::INFINITY;
+            for c in 0..cols {
+                if !taken[c] {
+                    taken[c] = true;
+                    best = best.min(cost[row * cols + c] + go(cost, cols, row + 1, rows, taken));
+                    taken[c] = false;
+                }
+            }
+            best
+        }
+        go(cost, cols, 0, rows, &mut vec![false; cols])
+    }
+
+    fn assert_valid(assignment: &[usize], rows: usize, cols: usize) {
+        assert_eq!(assignment.len(), rows);
+        let mut seen = vec![false; cols];
+        for &c in assignment {
+            assert!(c < cols && !seen[c], "{assignment:?}");
+            seen[c] = true;
+        }
+    }
+
+    #[test]
+    fn matches_brute_force_on_random_square_matrices() {
+        let mut rng = SplitMix64(2024);
+        for case in 0..200 {
+            let n = 1 + rng.below(7) as usize;
+            // Mix continuous costs with small integers, which produce many ties.
+            let integer = case % 2 == 0;
+            let cost: Vec<f64> = (0..n * n)
+                .map(|_| {
+                    if integer {
+                        rng.below(5) as f64
+                    } else {
+                        rng.next_f64() * 100.0
+                    }
+                })
+                .collect();
+            let a = min_cost_assignment(&cost, n, n);
+            assert_valid(&a, n, n);
+            let best = brute_force(&cost, n, n);
+            assert!(
+                (total(&cost, n, &a) - best).abs() < 1e-9,
+                "case {case}: {cost:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn matches_brute_force_on_rectangular_matrices() {
+        let mut rng = SplitMix64(7);
+        for case in 0..100 {
+            let rows = 1 + rng.below(5) as usize;
+            let cols = rows + rng.below(3) as usize;
+            let cost: Vec<f64> = (0..rows * cols).map(|_| rng.next_f64()).collect();
+            let a = min_cost_assignment(&cost, rows, cols);
+            assert_valid(&a, rows, cols);
+            let best = brute_force(&cost, rows, cols);
+            assert!((total(&cost, cols, &a) - best).abs() < 1e-12, "case {case}");
+        }
+    }
+
+    #[test]
+    fn known_three_by_three() {
+        // Optimum 1 + 2 + 2 = 5 (row 0 → 1, row 1 → 0, row 2 → 2), unique.
+        let cost = [4.0, 1.0, 3.0, 2.0, 0.0, 5.0, 3.0, 2.0, 2.0];
+        assert_eq!(min_cost_assignment(&cost, 3, 3), vec![1, 0, 2]);
+    }
+
+    #[test]
+    fn equal_costs_give_the_identity() {
+        for n in [1, 2, 5, 30] {
+            let identity: Vec<usize> = (0..n).collect();
+            assert_eq!(min_cost_assignment(&vec![3.5; n * n], n, n), identity);
+            assert_eq!(
+                min_cost_assignment(&vec![0.0; n * (n + 3)], n, n + 3),
+                identity
+            );
+        }
+        assert_eq!(min_cost_assignment(&[7.0], 1, 1), vec![0]);
+        assert_eq!(min_cost_assignment(&[3.0, 1.0, 2.0], 1, 3), vec![1]);
+    }
+
+    #[test]
+    fn non_finite_and_missing_costs_are_avoided() {
+        // Diagonal is NaN / +inf: the off-diagonal assignment must win despite its size.
+        let cost = [f64::NAN, 1e9, 1e9, f64::INFINITY];
+        assert_eq!(min_cost_assignment(&cost, 2, 2), vec![1, 0]);
+        // Missing tail (only 3 of 4 entries): entry (1,1) is "large".
+        assert_eq!(min_cost_assignment(&[0.0, 0.0, 0.0], 2, 2), vec![1, 0]);
+        // −inf is the most attractive.
+        let cost = [0.0, f64::NEG_INFINITY, 0.0, 0.0];
+        assert_eq!(min_cost_assignment(&cost, 2, 2), vec![1, 0]);
+        // All NaN still yields a valid assignment.
+        let a = min_cost_assignment(&[f64::NAN; 9], 3, 3);
+        assert_valid(&a, 3, 3);
+        // Huge and tiny magnitudes do not overflow.
+        let cost = [f64::MAX, 0.0, 0.0, f64::MAX];
+        assert_eq!(min_cost_assignment(&cost, 2, 2), vec![1, 0]);
+        let cost = [5e-324, 0.0, 0.0, 1e-320];
+        assert_eq!(min_cost_assignment(&cost, 2, 2), vec![1, 0]);
+        assert!(min_cost_assignment(&[], 0, 4).is_empty());
+    }
+
+    #[test]
+    fn more_rows_than_columns_leaves_the_worst_rows_unassigned() {
+        // Three rows, two columns: row 1 is expensive everywhere.
+        let cost = [1.0, 5.0, 9.0, 9.0, 5.0, 1.0];
+        assert_eq!(min_cost_assignment(&cost, 3, 2), vec![0, UNASSIGNED, 1]);
+        assert_eq!(min_cost_assignment(&[1.0, 2.0], 2, 0), vec![UNASSIGNED; 2]);
+    }
+
+    #[test]
+    fn match_points_minimises_total_distance() {
+        let sites = [
+            Point::new(0.0, 0.0),
+            Point::new(10.0, 0.0),
+            Point::new(0.0, 10.0),
+        ];
+        let points = [
+            Point::new(1.0, 9.0),
+            Point::new(0.5, 0.5),
+            Point::new(9.0, 1.0),
+        ];
+        assert_eq!(match_points(&sites, &points), vec![2, 0, 1]);
+        // Fewer points than sites.
+        assert_eq!(match_points(&sites, &[Point::new(9.0, 0.0)]), vec![1]);
+        // A NaN point takes whatever is left.
+        let points = [Point::new(f64::NAN, 0.0), Point::new(0.1, 0.0)];
+        assert_eq!(match_points(&sites[..2], &points), vec![1, 0]);
+        assert!(match_points(&[], &[]).is_empty());
+    }
+
+    #[test]
+    fn deterministic_on_a_larger_instance() {
+        let mut rng = SplitMix64(5);
+        let n = 60;
+        let cost: Vec<f64> = (0..n * n).map(|_| rng.below(4) as f64).collect();
+        let a = min_cost_assignment(&cost, n, n);
+        assert_valid(&a, n, n);
+        assert_eq!(a, min_cost_assignment(&cost, n, n));
+    }
+}
