@@ -16,3 +16,6 @@ pub mod projection;
 /// Similarity functions between two nodes.
 pub mod similarity;
 
+pub use constraints::{build_constraints, Constraint};
+pub use prepare::prepare;
+pub use similarity::SimilarityKind;
