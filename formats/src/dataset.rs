@@ -306,6 +306,9 @@ impl NodeSpec {
 #[derive(Clone, Debug, Default)]
 pub struct DatasetBuilder {
     specs: Vec<NodeSpec>,
+    // Parallel to `specs`: true for nodes added with `add_virtual`. Kept outside
+    // `NodeSpec` so readers that build specs field by field are unaffected.
+    virtual_flags: Vec<bool>,
     similarity_hint: Option<SimilarityHint>,
 }
 
@@ -318,6 +321,16 @@ impl DatasetBuilder {
     /// Adds a node. Siblings keep the order in which they are added.
     pub fn add(&mut self, spec: NodeSpec) -> &mut Self {
         self.specs.push(spec);
+        self.virtual_flags.push(false);
+        self
+    }
+
+    /// Adds a node marked [`Node::is_virtual`]: one inserted to make leaf depth
+    /// uniform (method-reference §2.2), not taken from the source data. Otherwise
+    /// the same as [`DatasetBuilder::add`].
+    pub fn add_virtual(&mut self, spec: NodeSpec) -> &mut Self {
+        self.specs.push(spec);
+        self.virtual_flags.push(true);
         self
     }
 
@@ -336,6 +349,7 @@ impl DatasetBuilder {
     pub fn build(self) -> Result<Dataset, ModelError> {
         let DatasetBuilder {
             specs,
+            virtual_flags,
             similarity_hint,
         } = self;
         if specs.is_empty() {
@@ -464,7 +478,7 @@ impl DatasetBuilder {
                 color: spec.color,
                 features: spec.features,
                 relations,
-                is_virtual: false,
+                is_virtual: virtual_flags.get(old).copied().unwrap_or(false),
             });
         }
 
@@ -621,6 +635,22 @@ mod tests {
         assert_eq!(dataset.node(3).features, Some(vec![1.0, 0.5]));
         assert!(dataset.nodes().iter().all(|n| !n.is_virtual));
         assert_eq!(dataset.similarity_hint(), None);
+    }
+
+    #[test]
+    fn virtual_nodes_are_marked() {
+        let mut builder = DatasetBuilder::new();
+        builder
+            .add(NodeSpec::new("r"))
+            .add_virtual(NodeSpec::new("v").parent("a"))
+            .add(NodeSpec::new("a").parent("r"));
+        let dataset = builder.build().expect("valid");
+        let flags: Vec<(&str, bool)> = dataset
+            .nodes()
+            .iter()
+            .map(|n| (n.id.as_str(), n.is_virtual))
+            .collect();
+        assert_eq!(flags, [("r", false), ("a", false), ("v", true)]);
     }
 
     #[test]

@@ -1,1 +1,740 @@
-//! (being written)
+//! The constraint pipeline of the prototype (method-reference §3.1–3.6): per-node
+//! similarity lists over a whole level, min–max binning, the capped top bin
+//! (Stage A), propagation to parents (Stage B), one extra link per following bin
+//! (Stage C) and symmetrisation (Stage D), ending in the unordered pairs with
+//! score > 1 that the paper counts. Stage E (the optimiser's per-round reordering)
+//! is left to the optimiser; it can be derived from [`ConstraintLists`].
+
+use std::collections::BTreeMap;
+
+use nptreemap_formats::Dataset;
+use rayon::prelude::*;
+
+use super::similarity::{
+    clamp_unit, cosine_from_parts, norm_of, pair_similarity, score, NodeFeatures, SimilarityKind,
+};
+
+/// Stage A keeps at most this many links from the top bin (`slice(0, 6)`, §3.3).
+const TOP_BIN_CAP: usize = 6;
+/// Stage C stops once a node holds more than this many links (§3.5).
+const STAGE_C_STOP_ABOVE: usize = 3;
+/// Number of bins before empty thresholds are dropped (§3.2).
+const BIN_COUNT: usize = 5;
+/// How many of each bin's best entries are kept. Stage A reads at most
+/// [`TOP_BIN_CAP`]; Stage C enters a bin only while the node holds at most
+/// [`STAGE_C_STOP_ABOVE`] links, so among a bin's first 4 entries one is new.
+const BIN_HEAD: usize = 8;
+/// A pair is a constraint when its score exceeds this (§3.6: `s > 1`).
+const MIN_PAIR_SCORE: u8 = 1;
+
+/// One undirected constraint between two nodes at the same depth of a prepared
+/// dataset (see [`super::prepare::prepare`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Constraint {
+    /// Index of the first node in the prepared dataset; `a < b`.
+    pub a: usize,
+    /// Index of the second node, at the same depth as `a`.
+    pub b: usize,
+    /// The pipeline's integer score in 2..=100: the larger of the scores the two
+    /// directed lists hold for the pair (a propagated link carries its child
+    /// link's score, §3.4).
+    pub score: u8,
+    /// The raw similarity of the two nodes in [0, 1], recomputed from the measure
+    /// (for the directed neighbour flag, the larger of both directions).
+    pub similarity: f64,
+    /// 1..=3 for the layout JSON: 3 when the link came from a node's top bin or
+    /// has score 100, 2 when it came from the second bin, 1 for later bins and
+    /// for weaker links propagated from children; the larger of both directions.
+    pub strength: u8,
+}
+
+/// One entry of a node's constraint list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ListEntry {
+    /// Index of the linked node (same depth) in the prepared dataset.
+    pub target: usize,
+    /// Integer score 1..=100 (never 0: such links are not created, §3.5).
+    pub score: u8,
+    /// Strength 1..=3, as for [`Constraint::strength`].
+    pub strength: u8,
+}
+
+/// Per-node ordered constraint lists, indexed like the prepared dataset.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConstraintLists {
+    /// After Stage C: what each node asked for itself (top bin, propagation,
+    /// one per following bin), in the order added.
+    pub directed: Vec<Vec<ListEntry>>,
+    /// After Stage D: `directed` plus the reverse of every link the node lacked,
+    /// appended in level order. Undirected from here on; may exceed the caps.
+    pub symmetric: Vec<Vec<ListEntry>>,
+}
+
+/// The similarity bins of one node, top bin first, each with its best entries.
+#[derive(Clone, Debug, Default)]
+struct Bins {
+    bins: Vec<Bin>,
+}
+
+/// One bin: how many entries it has and the first [`BIN_HEAD`] of them in list
+/// order (similarity descending, ties in breadth-first order).
+#[derive(Clone, Debug, Default)]
+struct Bin {
+    len: usize,
+    head: Vec<Candidate>,
+}
+
+/// A node of the level with its raw similarity and score.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    similarity: f64,
+    node: usize,
+    score: u8,
+}
+
+/// The d3.bin thresholds of §3.2 for scores in `lo..=hi`: the candidates
+/// `lo + (t/5)·(hi − lo)` for t = 0..4, without those `<= lo` (d3 drops
+/// thresholds at or below the domain's start) or `> hi`.
+fn thresholds(lo: u8, hi: u8) -> Vec<f64> {
+    let (lo, hi) = (f64::from(lo), f64::from(hi));
+    (0..BIN_COUNT)
+        .map(|t| lo + (t as f64 / BIN_COUNT as f64) * (hi - lo))
+        .filter(|&x| x > lo && x <= hi)
+        .collect()
+}
+
+/// The bin of `score`, counted from the top bin (0), for these thresholds. A value
+/// equal to a threshold belongs to the upper bin (bisect-right, as d3.bin).
+fn bin_from_top(score: u8, thresholds: &[f64]) -> usize {
+    let value = f64::from(score);
+    let ascending = thresholds.iter().take_while(|&&x| x <= value).count();
+    thresholds.len() - ascending
+}
+
+/// Keeps `head` as the first [`BIN_HEAD`] candidates by (similarity descending,
+/// node ascending). Candidates arrive in breadth-first order, so on equal
+/// similarity the one already present stays ahead: the stable sort of §3.1.
+fn push_head(head: &mut Vec<Candidate>, candidate: Candidate) {
+    if head.len() == BIN_HEAD
+        && head
+            .last()
+            .is_some_and(|last| last.similarity >= candidate.similarity)
+    {
+        return;
+    }
+    let position = head.partition_point(|c| c.similarity >= candidate.similarity);
+    head.insert(position, candidate);
+    head.truncate(BIN_HEAD);
+}
+
+/// Lanes per block of the transposed layout: eight dot products advance together,
+/// each still its own left-to-right sum, so the CPU can vectorise across pairs
+/// without changing a single bit of any result (§1.4).
+const LANES: usize = 8;
+
+/// A level's vectors for the dot-product measures, transposed in blocks of
+/// [`LANES`] nodes: `blocks[(block · d + k) · LANES + lane]` is coordinate `k` of
+/// node `block · LANES + lane`. Built only when every node of the level has a
+/// vector of the same length `d`; padding lanes are zero.
+struct Transposed {
+    d: usize,
+    blocks: Vec<f64>,
+    norms: Vec<f64>,
+}
+
+impl Transposed {
+    /// The layout for these nodes, or `None` when a vector is missing, lengths
+    /// differ, or the measure is not a dot product.
+    fn new(kind: SimilarityKind, features: &[NodeFeatures<'_>]) -> Option<Self> {
+        if !matches!(kind, SimilarityKind::Cosine | SimilarityKind::Pearson) {
+            return None;
+        }
+        let d = features.first()?.values()?.len();
+        let block_count = features.len().div_ceil(LANES);
+        let mut blocks = vec![0.0; block_count * d * LANES];
+        for (j, f) in features.iter().enumerate() {
+            let v = f.values().filter(|v| v.len() == d)?;
+            let (block, lane) = (j / LANES, j % LANES);
+            for (k, &x) in v.iter().enumerate() {
+                blocks[(block * d + k) * LANES + lane] = x;
+            }
+        }
+        let norms = features.iter().map(norm_of).collect();
+        Some(Transposed { d, blocks, norms })
+    }
+
+    /// Dot products of `a` (length `d`) with the nodes of block `block`.
+    fn dot_block(&self, a: &[f64], block: usize) -> [f64; LANES] {
+        let rows = &self.blocks[block * self.d * LANES..(block + 1) * self.d * LANES];
+        let mut acc = [0.0f64; LANES];
+        for (&x, row) in a.iter().zip(rows.chunks_exact(LANES)) {
+            for lane in 0..LANES {
+                acc[lane] += x * row[lane];
+            }
+        }
+        acc
+    }
+}
+
+/// Similarities of `level[i]` to every node of the level (`out[i]` is unused),
+/// as [`pair_similarity`] gives them, bit for bit.
+fn similarity_row(
+    kind: SimilarityKind,
+    features: &[NodeFeatures<'_>],
+    transposed: Option<&Transposed>,
+    level: &[usize],
+    i: usize,
+    out: &mut Vec<f64>,
+) {
+    out.clear();
+    out.resize(level.len(), 0.0);
+    let a = &features[i];
+    match (transposed, a.values()) {
+        (Some(t), Some(va)) => {
+            let norm_a = t.norms[i];
+            for block in 0..level.len().div_ceil(LANES) {
+                let dots = t.dot_block(va, block);
+                let first = block * LANES;
+                let last = (first + LANES).min(level.len());
+                for (j, &d) in (first..last).zip(&dots) {
+                    out[j] = cosine_from_parts(d, norm_a, t.norms[j]);
+                }
+            }
+        }
+        _ => {
+            for (j, &node) in level.iter().enumerate() {
+                if j != i {
+                    out[j] = pair_similarity(kind, a, &features[j], node);
+                }
+            }
+        }
+    }
+}
+
+/// The bins of node `level[i]` (§3.1–3.2; the neighbour-list variant has one bin,
+/// the nodes it lists, all at score 100).
+fn bin_node(
+    kind: SimilarityKind,
+    features: &[NodeFeatures<'_>],
+    transposed: Option<&Transposed>,
+    level: &[usize],
+    i: usize,
+    (row, scores): &mut (Vec<f64>, Vec<u8>),
+) -> Bins {
+    if level.len() < 2 {
+        return Bins::default();
+    }
+    similarity_row(kind, features, transposed, level, i, row);
+    let row: &[f64] = row;
+    // Scores once per pair; `u8::MAX` marks the node itself.
+    scores.clear();
+    scores.extend(row.iter().map(|&s| score(s)));
+    scores[i] = u8::MAX;
+    let candidate = |j: usize| Candidate {
+        similarity: row[j],
+        node: level[j],
+        score: scores[j],
+    };
+    if kind == SimilarityKind::NeighborList {
+        let mut bin = Bin::default();
+        for j in (0..level.len()).filter(|&j| j != i && scores[j] > 0) {
+            bin.len += 1;
+            push_head(&mut bin.head, candidate(j));
+        }
+        return Bins { bins: vec![bin] };
+    }
+    let (mut lo, mut hi) = (u8::MAX, 0u8);
+    for (j, &s) in scores.iter().enumerate() {
+        if j != i {
+            lo = lo.min(s);
+            hi = hi.max(s);
+        }
+    }
+    let thresholds = thresholds(lo, hi);
+    // Bin of every possible score, so the per-pair work is a table lookup.
+    let mut bin_of = [0u8; 101];
+    for (s, slot) in bin_of.iter_mut().enumerate() {
+        *slot = bin_from_top(s as u8, &thresholds) as u8;
+    }
+    let mut bins = vec![Bin::default(); thresholds.len() + 1];
+    for (j, &s) in scores.iter().enumerate() {
+        if j != i {
+            let bin = &mut bins[usize::from(bin_of[usize::from(s)])];
+            bin.len += 1;
+            push_head(&mut bin.head, candidate(j));
+        }
+    }
+    Bins { bins }
+}
+
+/// Strength of a link taken from bin `bin` (0 = top) with this score.
+fn strength_for(bin: usize, score: u8) -> u8 {
+    if score == 100 || bin == 0 {
+        3
+    } else if bin == 1 {
+        2
+    } else {
+        1
+    }
+}
+
+/// True when `list` already links to `target`.
+fn has(list: &[ListEntry], target: usize) -> bool {
+    list.iter().any(|e| e.target == target)
+}
+
+/// Runs Stages A to D (method-reference §3.1–3.6) on a prepared dataset (uniform
+/// leaf depth, vectors aggregated: [`super::prepare::prepare`]) and returns every
+/// node's list after Stage C and after Stage D.
+///
+/// Similarities are computed level by level over all pairs (`O(n²·d)` per level;
+/// rows in parallel, results independent of the thread count).
+pub fn constraint_lists(prepared: &Dataset, kind: SimilarityKind) -> ConstraintLists {
+    let nodes = prepared.nodes();
+
+    // Levels in breadth-first order: the tie-break order of §2.1.
+    let mut levels: Vec<Vec<usize>> = vec![Vec::new(); prepared.max_depth() + 1];
+    for (index, node) in nodes.iter().enumerate() {
+        levels[node.depth].push(index);
+    }
+
+    // §3.1–3.2: bins per non-root node.
+    let mut bins: Vec<Bins> = vec![Bins::default(); nodes.len()];
+    for level in levels.iter().skip(1) {
+        // Norms, supports and centred vectors once per node, not per pair.
+        let level_features: Vec<NodeFeatures<'_>> = level
+            .iter()
+            .map(|&n| NodeFeatures::new(kind, prepared, n))
+            .collect();
+        let transposed = Transposed::new(kind, &level_features);
+        let level_bins: Vec<Bins> = (0..level.len())
+            .into_par_iter()
+            .map_init(
+                || (Vec::new(), Vec::new()),
+                |buffers, i| {
+                    bin_node(
+                        kind,
+                        &level_features,
+                        transposed.as_ref(),
+                        level,
+                        i,
+                        buffers,
+                    )
+                },
+            )
+            .collect();
+        for (&node, node_bins) in level.iter().zip(level_bins) {
+            bins[node] = node_bins;
+        }
+    }
+
+    // Stage A (§3.3): the top bin, capped; nothing when the best score is 0.
+    let mut lists: Vec<Vec<ListEntry>> = vec![Vec::new(); nodes.len()];
+    for (node, node_bins) in bins.iter().enumerate() {
+        let Some(top) = node_bins.bins.first() else {
+            continue;
+        };
+        if top.head.first().map_or(true, |c| c.score == 0) {
+            continue;
+        }
+        lists[node] = top
+            .head
+            .iter()
+            .take(TOP_BIN_CAP)
+            .map(|c| ListEntry {
+                target: c.node,
+                score: c.score,
+                strength: strength_for(0, c.score),
+            })
+            .collect();
+    }
+
+    // Stage B (§3.4): children's links become links between their parents. Children
+    // come after their parent in breadth-first order, so the reverse sweep sees
+    // every child's list complete, as the prototype's post-order walk does.
+    for d in (0..nodes.len()).rev() {
+        for &p in &nodes[d].children {
+            for k in 0..lists[p].len() {
+                let link = lists[p][k];
+                let parent = nodes[link.target].parent.unwrap_or(0);
+                if parent == d || has(&lists[d], parent) {
+                    continue;
+                }
+                // A perfect child link always propagates; a weaker one only gives
+                // the parent its first link.
+                if link.score == 100 || lists[d].is_empty() {
+                    lists[d].push(ListEntry {
+                        target: parent,
+                        score: link.score,
+                        strength: strength_for(usize::MAX, link.score),
+                    });
+                }
+            }
+        }
+    }
+
+    // Stage C (§3.5): one more link from each following non-empty bin while the
+    // node holds at most 3, stopping at the first empty bin. Skipped when the top
+    // bin is empty; score-0 links are never created (§3.5, §10 #2).
+    for (node, node_bins) in bins.iter().enumerate() {
+        if node_bins.bins.first().map_or(true, |top| top.len == 0) {
+            continue;
+        }
+        for (b, bin) in node_bins.bins.iter().enumerate() {
+            if lists[node].len() > STAGE_C_STOP_ABOVE || bin.len == 0 {
+                break;
+            }
+            if let Some(c) = bin.head.iter().find(|c| !has(&lists[node], c.node)) {
+                if c.score > 0 {
+                    lists[node].push(ListEntry {
+                        target: c.node,
+                        score: c.score,
+                        strength: strength_for(b, c.score),
+                    });
+                }
+            }
+        }
+    }
+    let directed = lists.clone();
+
+    // Stage D (§3.6): per level, parents in order and their children in order,
+    // i.e. breadth-first order; links only join nodes of one level, so one sweep
+    // over all nodes is the same as one sweep per level.
+    for c in 0..nodes.len() {
+        for k in 0..lists[c].len() {
+            let link = lists[c][k];
+            if !has(&lists[link.target], c) {
+                lists[link.target].push(ListEntry {
+                    target: c,
+                    score: link.score,
+                    strength: link.strength,
+                });
+            }
+        }
+    }
+
+    ConstraintLists {
+        directed,
+        symmetric: lists,
+    }
+}
+
+/// The unordered pairs with score > 1 (§3.6) of every level of a prepared dataset,
+/// sorted by (depth, a, b). See [`Constraint`] for score, similarity and strength.
+pub fn build_constraints(prepared: &Dataset, kind: SimilarityKind) -> Vec<Constraint> {
+    pairs(prepared, kind, &constraint_lists(prepared, kind))
+}
+
+/// The pairs of [`build_constraints`] from lists already computed with
+/// [`constraint_lists`] for the same dataset and measure.
+pub fn pairs(prepared: &Dataset, kind: SimilarityKind, lists: &ConstraintLists) -> Vec<Constraint> {
+    // A BTreeMap keyed by (a, b) gives the (depth, a, b) order directly: indices
+    // are breadth-first, so a deeper node always has a larger index.
+    let mut best: BTreeMap<(usize, usize), (u8, u8)> = BTreeMap::new();
+    for (c, list) in lists.symmetric.iter().enumerate() {
+        for link in list {
+            let key = (c.min(link.target), c.max(link.target));
+            let entry = best.entry(key).or_insert((0, 0));
+            entry.0 = entry.0.max(link.score);
+            entry.1 = entry.1.max(link.strength);
+        }
+    }
+    best.into_iter()
+        .filter(|&(_, (score, _))| score > MIN_PAIR_SCORE)
+        .map(|((a, b), (score, strength))| {
+            let fa = NodeFeatures::new(kind, prepared, a);
+            let fb = NodeFeatures::new(kind, prepared, b);
+            let s = pair_similarity(kind, &fa, &fb, b).max(pair_similarity(kind, &fb, &fa, a));
+            Constraint {
+                a,
+                b,
+                score,
+                similarity: clamp_unit(s),
+                strength: if score == 100 { 3 } else { strength },
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::prepare::prepare;
+    use super::*;
+
+    fn paper(name: &str) -> (Dataset, SimilarityKind) {
+        let dataset = super::super::prepare::test_data::dataset(name);
+        let prepared = prepare(&dataset);
+        let kind = SimilarityKind::for_dataset(&prepared);
+        (prepared, kind)
+    }
+
+    /// Pair counts per depth 1..=D.
+    fn counts_per_level(name: &str) -> Vec<usize> {
+        let (p, kind) = paper(name);
+        let pairs = build_constraints(&p, kind);
+        (1..=p.max_depth())
+            .map(|depth| pairs.iter().filter(|c| p.node(c.a).depth == depth).count())
+            .collect()
+    }
+
+    #[test]
+    fn golden_counts_per_level() {
+        // Method-reference §3.9; leaf-level values are Table 2's.
+        assert_eq!(counts_per_level("country_pop_50M_AUS.json"), [1, 18]);
+        assert_eq!(counts_per_level("imdb_100_genre_sim_2child.json"), [25, 42]);
+        assert_eq!(
+            counts_per_level("syntheticPoints_10nodes_2components.json"),
+            [11]
+        );
+        assert_eq!(
+            counts_per_level("2_level_4_cousin_constraints.json"),
+            [4, 24]
+        );
+        assert_eq!(counts_per_level("cifar10.json"), [1, 12, 19]);
+        assert_eq!(counts_per_level("flare.json"), [14, 209, 488, 547]);
+    }
+
+    fn id_pair(p: &Dataset, c: &Constraint) -> String {
+        let (a, b) = (&p.node(c.a).id, &p.node(c.b).id);
+        if a < b {
+            format!("{a}-{b}")
+        } else {
+            format!("{b}-{a}")
+        }
+    }
+
+    #[test]
+    fn golden_country_pairs() {
+        let (p, kind) = paper("country_pop_50M_AUS.json");
+        assert_eq!(kind, SimilarityKind::NeighborList);
+        let pairs = build_constraints(&p, kind);
+        let mut leaf: Vec<String> = pairs
+            .iter()
+            .filter(|c| p.node(c.a).depth == 2)
+            .map(|c| id_pair(&p, c))
+            .collect();
+        leaf.sort();
+        let expected = [
+            "BD-IN", "BD-MM", "CD-TZ", "CN-IN", "CN-MM", "CN-PK", "CN-RU", "CN-VN", "DE-FR",
+            "ET-KE", "FR-IT", "IN-MM", "IN-PK", "IR-PK", "IR-TR", "KE-TZ", "MM-TH", "MX-US",
+        ];
+        assert_eq!(leaf, expected);
+        for c in &pairs {
+            assert_eq!(c.score, 100);
+            assert_eq!(c.strength, 3);
+            // Leaves share a border; the continents' link is propagated (§3.4) and
+            // continents list no neighbours, so their own similarity is 0.
+            let expected = if p.node(c.a).depth == 2 { 1.0 } else { 0.0 };
+            assert_eq!(c.similarity, expected, "{}", id_pair(&p, c));
+        }
+        let level1: Vec<String> = pairs
+            .iter()
+            .filter(|c| p.node(c.a).depth == 1)
+            .map(|c| id_pair(&p, c))
+            .collect();
+        assert_eq!(level1, ["Cont_AS-Cont_EU"]);
+    }
+
+    #[test]
+    fn synthetic_two_level_lists() {
+        let (p, kind) = paper("2_level_4_cousin_constraints.json");
+        let lists = constraint_lists(&p, kind);
+        let ids = |node: &str| -> Vec<String> {
+            let index = p.find(node).expect("exists");
+            let mut v: Vec<String> = lists.directed[index]
+                .iter()
+                .map(|e| p.node(e.target).id.clone())
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(ids("P13"), ["P1", "P14", "P15", "P16", "P17"]);
+        assert_eq!(ids("P2"), ["P3"]);
+        // Level 1: P21 linked to P22..P25 (through Stage B), nothing else.
+        let pairs = build_constraints(&p, kind);
+        let level1: Vec<String> = pairs
+            .iter()
+            .filter(|c| p.node(c.a).depth == 1)
+            .map(|c| id_pair(&p, c))
+            .collect();
+        assert_eq!(level1, ["P21-P25", "P21-P24", "P21-P23", "P21-P22"]);
+    }
+
+    #[test]
+    fn pairs_are_sorted_symmetric_and_never_weak() {
+        for name in [
+            "flare.json",
+            "cifar10.json",
+            "imdb_100_genre_sim_2child.json",
+            "country_pop_50M_AUS.json",
+        ] {
+            let (p, kind) = paper(name);
+            let lists = constraint_lists(&p, kind);
+            let pairs = pairs(&p, kind, &lists);
+            for w in pairs.windows(2) {
+                let key = |c: &Constraint| (p.node(c.a).depth, c.a, c.b);
+                assert!(key(&w[0]) < key(&w[1]), "{name}");
+            }
+            for c in &pairs {
+                assert!(c.a < c.b);
+                assert_eq!(p.node(c.a).depth, p.node(c.b).depth);
+                assert!(p.node(c.a).depth >= 1);
+                assert!(c.score > 1 && c.score <= 100);
+                assert!((1..=3).contains(&c.strength));
+                assert!((0.0..=1.0).contains(&c.similarity));
+            }
+            for (n, list) in lists.symmetric.iter().enumerate() {
+                for e in list {
+                    assert!(e.score > 0, "{name}: score-0 link");
+                    assert!(lists.symmetric[e.target].iter().any(|r| r.target == n));
+                }
+            }
+            // Deterministic.
+            assert_eq!(pairs, build_constraints(&p, kind), "{name}");
+        }
+    }
+
+    #[test]
+    fn binning_follows_d3_bin() {
+        // lo = 20, hi = 100: bins [84,100], [68,84), [52,68), [36,52), [20,36).
+        let t = thresholds(20, 100);
+        assert_eq!(t, [36.0, 52.0, 68.0, 84.0]);
+        let bin = |s| bin_from_top(s, &t);
+        assert_eq!(bin(100), 0);
+        assert_eq!(bin(84), 0);
+        assert_eq!(bin(83), 1);
+        assert_eq!(bin(68), 1);
+        assert_eq!(bin(67), 2);
+        assert_eq!(bin(52), 2);
+        assert_eq!(bin(51), 3);
+        assert_eq!(bin(36), 3);
+        assert_eq!(bin(35), 4);
+        assert_eq!(bin(20), 4);
+        // hi == lo: one bin with everything.
+        assert!(thresholds(40, 40).is_empty());
+        assert_eq!(bin_from_top(40, &thresholds(40, 40)), 0);
+        assert!(thresholds(0, 0).is_empty());
+        // Fractional thresholds: lo = 0, hi = 7 gives 1.4, 2.8, 4.2, 5.6.
+        let t = thresholds(0, 7);
+        assert_eq!(t.len(), 4);
+        assert_eq!(bin_from_top(7, &t), 0);
+        assert_eq!(bin_from_top(6, &t), 0);
+        assert_eq!(bin_from_top(5, &t), 1);
+        assert_eq!(bin_from_top(1, &t), 4);
+    }
+
+    #[test]
+    fn head_keeps_stable_descending_order() {
+        let mut head = Vec::new();
+        for (node, s) in [(0, 0.5), (1, 0.7), (2, 0.5), (3, 0.7), (4, 0.9)] {
+            push_head(
+                &mut head,
+                Candidate {
+                    similarity: s,
+                    node,
+                    score: score(s),
+                },
+            );
+        }
+        let order: Vec<usize> = head.iter().map(|c| c.node).collect();
+        assert_eq!(order, [4, 1, 3, 0, 2]);
+        for node in 10..20 {
+            push_head(
+                &mut head,
+                Candidate {
+                    similarity: 0.7,
+                    node,
+                    score: 70,
+                },
+            );
+        }
+        let order: Vec<usize> = head.iter().map(|c| c.node).collect();
+        assert_eq!(order, [4, 1, 3, 10, 11, 12, 13, 14]);
+    }
+
+    #[test]
+    fn all_zero_similarities_give_no_links() {
+        use nptreemap_formats::{DatasetBuilder, NodeSpec};
+        let mut builder = DatasetBuilder::new();
+        builder.add(NodeSpec::new("r"));
+        for i in 0..4 {
+            builder.add(NodeSpec::new(format!("n{i}")).parent("r").weight(1.0));
+        }
+        let p = prepare(&builder.build().expect("valid"));
+        let lists = constraint_lists(&p, SimilarityKind::Cosine);
+        assert!(lists.symmetric.iter().all(Vec::is_empty));
+        assert!(build_constraints(&p, SimilarityKind::Cosine).is_empty());
+        // A single node: nothing to compare with.
+        let mut builder = DatasetBuilder::new();
+        builder
+            .add(NodeSpec::new("r"))
+            .add(NodeSpec::new("x").parent("r").features(vec![1.0]));
+        let p = prepare(&builder.build().expect("valid"));
+        assert!(build_constraints(&p, SimilarityKind::Cosine).is_empty());
+    }
+
+    #[test]
+    fn fast_path_matches_the_slow_path() {
+        use nptreemap_formats::{DatasetBuilder, NodeSpec};
+        // A pseudo-random level of 37 nodes (not a multiple of the 8 lanes),
+        // checked against `pair_similarity` bit for bit.
+        let mut builder = DatasetBuilder::new();
+        builder.add(NodeSpec::new("r"));
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) as f64) / f64::from(u32::MAX) - 0.25
+        };
+        for i in 0..37 {
+            let v: Vec<f64> = (0..13).map(|_| next()).collect();
+            builder.add(
+                NodeSpec::new(format!("n{i}"))
+                    .parent("r")
+                    .weight(1.0)
+                    .features(v),
+            );
+        }
+        let p = builder.build().expect("valid");
+        let level: Vec<usize> = (1..p.len()).collect();
+        for kind in [SimilarityKind::Cosine, SimilarityKind::Pearson] {
+            let features: Vec<NodeFeatures<'_>> = level
+                .iter()
+                .map(|&n| NodeFeatures::new(kind, &p, n))
+                .collect();
+            let transposed = Transposed::new(kind, &features);
+            assert!(transposed.is_some());
+            let mut row = Vec::new();
+            for i in 0..level.len() {
+                similarity_row(kind, &features, transposed.as_ref(), &level, i, &mut row);
+                for j in 0..level.len() {
+                    if i != j {
+                        let slow = pair_similarity(kind, &features[i], &features[j], level[j]);
+                        assert_eq!(row[j].to_bits(), slow.to_bits());
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn mixed_lengths_use_the_pair_path() {
+        use nptreemap_formats::{DatasetBuilder, NodeSpec};
+        let mut builder = DatasetBuilder::new();
+        builder
+            .add(NodeSpec::new("r"))
+            .add(NodeSpec::new("a").parent("r").features(vec![1.0, 0.0]))
+            .add(NodeSpec::new("b").parent("r").features(vec![1.0, 0.1]))
+            .add(NodeSpec::new("c").parent("r").features(vec![1.0]));
+        let p = builder.build().expect("valid");
+        let features: Vec<NodeFeatures<'_>> = (1..4)
+            .map(|n| NodeFeatures::new(SimilarityKind::Cosine, &p, n))
+            .collect();
+        assert!(Transposed::new(SimilarityKind::Cosine, &features).is_none());
+        let pairs = build_constraints(&p, SimilarityKind::Cosine);
+        let ids: Vec<(usize, usize)> = pairs.iter().map(|c| (c.a, c.b)).collect();
+        // a–b are similar; c has a different length, so similarity 0 to both.
+        assert_eq!(ids, [(1, 2)]);
+    }
+}

@@ -1,1 +1,408 @@
-//! (being written)
+//! Preparation of a hierarchy for the constraint pipeline (paper §4,
+//! method-reference §2.2–2.4): virtual nodes that give every leaf the same depth,
+//! and feature vectors aggregated bottom-up for nodes that have none.
+
+use std::collections::HashSet;
+
+use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
+
+/// Returns `dataset` with uniform leaf depth and aggregated feature vectors.
+///
+/// - **Virtual nodes** (§2.2): every leaf shallower than the maximum depth `D`
+///   becomes the head of a chain of single-child virtual nodes reaching depth `D`.
+///   A virtual node's id is `<parent id>depth<parent depth>` (so a chain below
+///   `X` at depth 1 is `Xdepth1`, `Xdepth1depth2`, ...); if that id is taken, `~2`,
+///   `~3`, ... is appended, the first free one in that order. Label, colour and
+///   feature vector are copied from the node it hangs under; it has no relations
+///   and [`nptreemap_formats::Node::is_virtual`] is set.
+/// - **Weights** (§2.3): the *last* virtual node of a chain carries the original
+///   leaf's own weight and the original leaf's own weight becomes `None`. The
+///   prototype keeps the weight on the leaf and gives virtual nodes weight 0; both
+///   give the original nodes exactly the same values (here `0 + w`, bit for bit),
+///   and here every virtual node's value is the leaf's weight too, which is the
+///   area its cell must get (the prototype reaches the same through its "value 0
+///   counts as 1" rule in the optimiser, which only matters for one-child diagrams).
+/// - **Vectors** (§2.4): in post-order, a node without a vector gets the
+///   element-wise mean of its children's vectors (sum left to right, divided by
+///   the count, as mathjs's `mean`); nodes with their own (CIFAR's internal nodes)
+///   keep it. Only children with a vector count; if those vectors differ in
+///   length, the mean is undefined and the node stays without a vector (its
+///   similarities are then 0, method-reference §10 #3).
+///
+/// Original nodes keep their ids, relations and colours; the result is built
+/// through [`DatasetBuilder`], so it is in breadth-first order, the tie-break order
+/// of §2.1 step 4. A dataset that already has uniform depth comes back with only
+/// its vectors aggregated.
+pub fn prepare(dataset: &Dataset) -> Dataset {
+    let features = aggregate_features(dataset);
+    let max_depth = dataset.max_depth();
+    let nodes = dataset.nodes();
+
+    let mut taken: HashSet<String> = nodes.iter().map(|n| n.id.clone()).collect();
+    let mut builder = DatasetBuilder::new();
+    if let Some(hint) = dataset.similarity_hint() {
+        builder.similarity_hint(hint);
+    }
+    // Chains to add after the originals: (leaf index, chain length).
+    let mut chains: Vec<(usize, usize)> = Vec::new();
+    for (index, node) in nodes.iter().enumerate() {
+        let is_short_leaf = node.children.is_empty() && node.depth < max_depth;
+        let mut spec = NodeSpec::new(node.id.clone()).label(node.label.clone());
+        spec.parent = node.parent.map(|p| nodes[p].id.clone());
+        spec.weight = if is_short_leaf { None } else { node.weight };
+        spec.color = node.color.clone();
+        spec.features = features[index].clone();
+        spec.relations = node
+            .relations
+            .iter()
+            .map(|&r| nodes[r].id.clone())
+            .collect();
+        builder.add(spec);
+        if is_short_leaf {
+            chains.push((index, max_depth - node.depth));
+        }
+    }
+    for (leaf, length) in chains {
+        let node = &nodes[leaf];
+        let mut parent_id = node.id.clone();
+        for (step, parent_depth) in (node.depth..node.depth + length).enumerate() {
+            let id = unique_id(format!("{parent_id}depth{parent_depth}"), &mut taken);
+            let mut spec = NodeSpec::new(id.clone())
+                .label(node.label.clone())
+                .parent(parent_id);
+            spec.color = node.color.clone();
+            spec.features = features[leaf].clone();
+            if step + 1 == length {
+                spec.weight = node.weight;
+            }
+            builder.add_virtual(spec);
+            parent_id = id;
+        }
+    }
+    // Every spec comes from a valid dataset (ids unique by `unique_id`, parents
+    // added, values already checked), so building cannot fail; fall back to the
+    // input rather than panic if that reasoning is ever broken.
+    builder.build().unwrap_or_else(|_| dataset.clone())
+}
+
+/// `candidate` if free, else `candidate~2`, `candidate~3`, ...: the first free one.
+/// Records the result as taken.
+fn unique_id(candidate: String, taken: &mut HashSet<String>) -> String {
+    let id = if taken.contains(&candidate) {
+        let mut k = 2usize;
+        loop {
+            let attempt = format!("{candidate}~{k}");
+            if !taken.contains(&attempt) {
+                break attempt;
+            }
+            k += 1;
+        }
+    } else {
+        candidate
+    };
+    taken.insert(id.clone());
+    id
+}
+
+/// Feature vectors after the bottom-up mean (§2.4), indexed like `dataset`.
+fn aggregate_features(dataset: &Dataset) -> Vec<Option<Vec<f64>>> {
+    let nodes = dataset.nodes();
+    let mut features: Vec<Option<Vec<f64>>> = nodes.iter().map(|n| n.features.clone()).collect();
+    // Children have larger indices than their parent (breadth-first order), so a
+    // reverse sweep is a valid post-order for this purpose.
+    for index in (0..nodes.len()).rev() {
+        if features[index].is_some() {
+            continue;
+        }
+        features[index] = mean_of(
+            nodes[index]
+                .children
+                .iter()
+                .filter_map(|&c| features[c].as_deref()),
+        );
+    }
+    features
+}
+
+/// Element-wise mean of the vectors; `None` for no vectors or differing lengths.
+fn mean_of<'a>(vectors: impl Iterator<Item = &'a [f64]>) -> Option<Vec<f64>> {
+    let mut sum: Option<Vec<f64>> = None;
+    let mut count = 0usize;
+    for v in vectors {
+        match &mut sum {
+            None => sum = Some(v.to_vec()),
+            Some(s) => {
+                if s.len() != v.len() {
+                    return None;
+                }
+                for (acc, x) in s.iter_mut().zip(v) {
+                    *acc += x;
+                }
+            }
+        }
+        count += 1;
+    }
+    let mut sum = sum?;
+    let n = count as f64;
+    for value in &mut sum {
+        *value /= n;
+    }
+    Some(sum)
+}
+
+/// The paper's datasets for tests, embedded at compile time so that the tests of
+/// these pure modules do no file I/O.
+#[cfg(test)]
+pub(crate) mod test_data {
+    use nptreemap_formats::{parse_hierarchy_json, Dataset, HierarchyJsonOptions};
+
+    macro_rules! paper_file {
+        ($name:literal) => {
+            include_bytes!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../shared/paper-data/",
+                $name
+            ))
+            .as_slice()
+        };
+    }
+
+    /// The bytes of a file in `/work/shared/paper-data`.
+    pub(crate) fn bytes(name: &str) -> &'static [u8] {
+        match name {
+            "country_pop_50M_AUS.json" => paper_file!("country_pop_50M_AUS.json"),
+            "cifar10.json" => paper_file!("cifar10.json"),
+            "flare.json" => paper_file!("flare.json"),
+            "imdb_100_genre_sim_2child.json" => paper_file!("imdb_100_genre_sim_2child.json"),
+            "syntheticPoints_10nodes_2components.json" => {
+                paper_file!("syntheticPoints_10nodes_2components.json")
+            }
+            "2_level_4_cousin_constraints.json" => {
+                paper_file!("2_level_4_cousin_constraints.json")
+            }
+            other => panic!("no embedded paper file {other}"),
+        }
+    }
+
+    /// A paper dataset read by the real reader with its own flags.
+    pub(crate) fn dataset(name: &str) -> Dataset {
+        parse_hierarchy_json(bytes(name), &HierarchyJsonOptions::default()).expect("parses")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_data::dataset as paper;
+    use super::*;
+
+    fn build(specs: Vec<NodeSpec>) -> Dataset {
+        let mut builder = DatasetBuilder::new();
+        for spec in specs {
+            builder.add(spec);
+        }
+        builder.build().expect("valid")
+    }
+
+    /// r ─ a (leaf, w 2, [1,0]) ; r ─ b ─ c ─ d (w 3, [0,1]) ; b ─ e (leaf, w 1, [1,1])
+    fn uneven() -> Dataset {
+        build(vec![
+            NodeSpec::new("r"),
+            NodeSpec::new("a")
+                .parent("r")
+                .weight(2.0)
+                .features(vec![1.0, 0.0])
+                .color("#f00"),
+            NodeSpec::new("b").parent("r"),
+            NodeSpec::new("c").parent("b"),
+            NodeSpec::new("e")
+                .parent("b")
+                .weight(1.0)
+                .features(vec![1.0, 1.0]),
+            NodeSpec::new("d")
+                .parent("c")
+                .weight(3.0)
+                .features(vec![0.0, 1.0]),
+        ])
+    }
+
+    fn ids(d: &Dataset) -> Vec<&str> {
+        d.nodes().iter().map(|n| n.id.as_str()).collect()
+    }
+
+    #[test]
+    fn virtual_chains_reach_the_maximum_depth() {
+        let p = prepare(&uneven());
+        assert_eq!(
+            ids(&p),
+            [
+                "r",
+                "a",
+                "b",
+                "adepth1",
+                "c",
+                "e",
+                "adepth1depth2",
+                "d",
+                "edepth2"
+            ]
+        );
+        let max = p.max_depth();
+        assert_eq!(max, 3);
+        for leaf in p.leaves() {
+            assert_eq!(p.node(leaf).depth, max, "{}", p.node(leaf).id);
+        }
+        let virtuals: Vec<&str> = p
+            .nodes()
+            .iter()
+            .filter(|n| n.is_virtual)
+            .map(|n| n.id.as_str())
+            .collect();
+        assert_eq!(virtuals, ["adepth1", "adepth1depth2", "edepth2"]);
+        let v = p.node(p.find("adepth1depth2").expect("exists"));
+        assert_eq!(v.label, "a");
+        assert_eq!(v.color.as_deref(), Some("#f00"));
+        assert_eq!(v.features, Some(vec![1.0, 0.0]));
+        assert!(v.relations.is_empty());
+    }
+
+    #[test]
+    fn values_are_unchanged_at_every_original_node() {
+        let d = uneven();
+        let p = prepare(&d);
+        for node in d.nodes() {
+            let q = p.node(p.find(&node.id).expect("kept"));
+            assert_eq!(q.value.to_bits(), node.value.to_bits(), "{}", node.id);
+        }
+        // Weight moved to the end of the chain.
+        assert_eq!(p.node(p.find("a").expect("a")).weight, None);
+        assert_eq!(p.node(p.find("adepth1").expect("v")).weight, None);
+        assert_eq!(
+            p.node(p.find("adepth1depth2").expect("v")).weight,
+            Some(2.0)
+        );
+        assert_eq!(p.node(p.find("adepth1depth2").expect("v")).value, 2.0);
+        // Per level, values sum to the root's.
+        for depth in 0..=p.max_depth() {
+            let total: f64 = p
+                .nodes()
+                .iter()
+                .filter(|n| n.depth == depth)
+                .map(|n| n.value)
+                .sum();
+            assert_eq!(total, 6.0, "depth {depth}");
+        }
+    }
+
+    #[test]
+    fn vectors_are_mean_aggregated() {
+        let p = prepare(&uneven());
+        let f = |id: &str| p.node(p.find(id).expect("exists")).features.clone();
+        assert_eq!(f("c"), Some(vec![0.0, 1.0]));
+        assert_eq!(f("b"), Some(vec![0.5, 1.0]));
+        assert_eq!(f("r"), Some(vec![0.75, 0.5]));
+        assert_eq!(f("a"), Some(vec![1.0, 0.0]));
+    }
+
+    #[test]
+    fn own_vectors_are_kept_and_mismatched_lengths_give_none() {
+        let d = build(vec![
+            NodeSpec::new("r"),
+            NodeSpec::new("x").parent("r").features(vec![9.0]),
+            NodeSpec::new("x1")
+                .parent("x")
+                .weight(1.0)
+                .features(vec![1.0]),
+            NodeSpec::new("y").parent("r"),
+            NodeSpec::new("y1")
+                .parent("y")
+                .weight(1.0)
+                .features(vec![1.0]),
+            NodeSpec::new("y2")
+                .parent("y")
+                .weight(1.0)
+                .features(vec![1.0, 2.0]),
+            NodeSpec::new("z").parent("r"),
+            NodeSpec::new("z1").parent("z").weight(1.0),
+            NodeSpec::new("z2")
+                .parent("z")
+                .weight(1.0)
+                .features(vec![4.0]),
+        ]);
+        let p = prepare(&d);
+        let f = |id: &str| p.node(p.find(id).expect("exists")).features.clone();
+        assert_eq!(f("x"), Some(vec![9.0]));
+        assert_eq!(f("y"), None);
+        // Only children with a vector count.
+        assert_eq!(f("z"), Some(vec![4.0]));
+        assert_eq!(f("r"), Some(vec![6.5]));
+    }
+
+    #[test]
+    fn colliding_virtual_ids_get_a_suffix() {
+        let d = build(vec![
+            NodeSpec::new("r"),
+            NodeSpec::new("adepth1").parent("r"),
+            NodeSpec::new("q").parent("adepth1").weight(1.0),
+            NodeSpec::new("a").parent("r").weight(1.0),
+        ]);
+        let p = prepare(&d);
+        assert_eq!(ids(&p), ["r", "adepth1", "a", "q", "adepth1~2"]);
+        assert!(p.node(4).is_virtual);
+        assert!(!p.node(1).is_virtual);
+    }
+
+    #[test]
+    fn relations_and_hint_are_kept() {
+        let mut builder = DatasetBuilder::new();
+        builder
+            .add(NodeSpec::new("r"))
+            .add(NodeSpec::new("a").parent("r").relation("b").weight(1.0))
+            .add(NodeSpec::new("b").parent("r").weight(1.0))
+            .similarity_hint(nptreemap_formats::SimilarityHint::NeighborList);
+        let p = prepare(&builder.build().expect("valid"));
+        assert_eq!(p.node(1).relations, vec![2]);
+        assert_eq!(
+            p.similarity_hint(),
+            Some(nptreemap_formats::SimilarityHint::NeighborList)
+        );
+    }
+
+    #[test]
+    fn manifest_node_counts_include_virtual_nodes() {
+        for (file, nodes, levels) in [
+            ("country_pop_50M_AUS.json", 36, 3),
+            ("cifar10.json", 20, 4),
+            ("flare.json", 524, 5),
+            ("imdb_100_genre_sim_2child.json", 80, 3),
+            ("syntheticPoints_10nodes_2components.json", 11, 2),
+            ("2_level_4_cousin_constraints.json", 23, 3),
+        ] {
+            let original = paper(file);
+            let p = prepare(&original);
+            assert_eq!(p.len(), nodes, "{file}");
+            assert_eq!(p.max_depth() + 1, levels, "{file}");
+            for leaf in p.leaves() {
+                assert_eq!(p.node(leaf).depth, p.max_depth(), "{file}");
+            }
+            assert_eq!(p.node(0).value.to_bits(), original.node(0).value.to_bits());
+            assert!(p.nodes().iter().all(|n| n.features.is_some()), "{file}");
+        }
+    }
+
+    #[test]
+    fn cifar_keeps_its_own_internal_vectors() {
+        let original = paper("cifar10.json");
+        let p = prepare(&original);
+        let mut internal_with_own = 0;
+        for node in original.nodes() {
+            if !node.children.is_empty() {
+                if let Some(own) = &node.features {
+                    internal_with_own += 1;
+                    let q = p.node(p.find(&node.id).expect("kept"));
+                    assert_eq!(q.features.as_ref(), Some(own), "{}", node.id);
+                }
+            }
+        }
+        assert!(internal_with_own > 0);
+    }
+}

@@ -1,1 +1,503 @@
-//! (being written)
+//! Similarity between two nodes of a dataset (method-reference §1.4) and the integer
+//! score the constraint pipeline works on (§1.5). Owns the floating-point form of
+//! every measure, because the golden constraint counts depend on it bit for bit.
+
+use nptreemap_formats::{Dataset, SimilarityHint};
+
+/// How the similarity of two nodes is measured. Every measure gives a value in
+/// [0, 1]; undefined cases (zero vectors, two empty supports, a missing vector,
+/// vectors of different lengths, constant series) give 0 (method-reference §10 #3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SimilarityKind {
+    /// Cosine of the feature vectors, rescaled from [-1, 1] to [0, 1].
+    Cosine,
+    /// Jaccard index of the feature vectors' non-zero supports.
+    Jaccard,
+    /// 1 when the two feature vectors are equal element by element, else 0.
+    Binary,
+    /// 1 when the second node is among the first node's relations, else 0.
+    /// Directed, as the prototype's `useNeighborLeafs` flag (§1.4); the constraint
+    /// pipeline symmetrises later (§3.6).
+    NeighborList,
+    /// Pearson correlation of the feature vectors (for example rows of a time
+    /// series), rescaled from [-1, 1] to [0, 1].
+    Pearson,
+}
+
+impl SimilarityKind {
+    /// The measure a dataset's own hint asks for.
+    pub fn from_hint(hint: SimilarityHint) -> Self {
+        match hint {
+            SimilarityHint::Cosine => SimilarityKind::Cosine,
+            SimilarityHint::Jaccard => SimilarityKind::Jaccard,
+            SimilarityHint::Binary => SimilarityKind::Binary,
+            SimilarityHint::NeighborList => SimilarityKind::NeighborList,
+        }
+    }
+
+    /// The measure for `dataset`: its hint, else cosine (the prototype's default
+    /// `similarityMeasure`, §1.1).
+    pub fn for_dataset(dataset: &Dataset) -> Self {
+        dataset
+            .similarity_hint()
+            .map_or(SimilarityKind::Cosine, SimilarityKind::from_hint)
+    }
+}
+
+/// The similarity of nodes `a` and `b` of `dataset`, in [0, 1].
+///
+/// For [`SimilarityKind::NeighborList`] this is directed: 1 when `b` is in the
+/// relations of `a`. Indices must come from `dataset` (panics otherwise, like slice
+/// indexing). Undefined cases give 0.
+pub fn similarity(kind: SimilarityKind, dataset: &Dataset, a: usize, b: usize) -> f64 {
+    let fa = NodeFeatures::new(kind, dataset, a);
+    let fb = NodeFeatures::new(kind, dataset, b);
+    clamp_unit(pair_similarity(kind, &fa, &fb, b))
+}
+
+/// The integer score of a similarity, `floor(100·s)` clamped to 0..=100
+/// (method-reference §1.5); NaN gives 0.
+pub fn score(s: f64) -> u8 {
+    let scaled = 100.0 * s;
+    // NaN is caught first. For values in (0, 100) the cast truncates, which is
+    // `floor` for positive numbers (and avoids a libm call per pair).
+    if scaled.is_nan() || scaled <= 0.0 {
+        0
+    } else if scaled >= 100.0 {
+        100
+    } else {
+        scaled as u8
+    }
+}
+
+/// Clamps to [0, 1] for callers; the pipeline sorts on the unclamped value so that,
+/// like the prototype, a cosine of 1 + 1 ulp still sorts ahead of an exact 1.
+pub(crate) fn clamp_unit(s: f64) -> f64 {
+    if s.is_nan() {
+        0.0
+    } else {
+        s.clamp(0.0, 1.0)
+    }
+}
+
+/// What one node contributes to a similarity, computed once per node so that the
+/// all-pairs loop of the constraint pipeline allocates nothing per pair.
+#[derive(Clone, Debug)]
+pub(crate) struct NodeFeatures<'a> {
+    /// The feature vector (centred for Pearson); `None` when missing.
+    values: Option<Cow<'a>>,
+    /// Euclidean norm of `values` (cosine, Pearson), summed left to right from 0.
+    norm: f64,
+    /// Sorted positions of the non-zero values (Jaccard).
+    support: Vec<u32>,
+    /// Sorted relation targets (neighbour list).
+    relations: &'a [usize],
+}
+
+/// A borrowed vector, or an owned one when it had to be transformed (centred).
+#[derive(Clone, Debug)]
+enum Cow<'a> {
+    Borrowed(&'a [f64]),
+    Owned(Vec<f64>),
+}
+
+impl Cow<'_> {
+    fn as_slice(&self) -> &[f64] {
+        match self {
+            Cow::Borrowed(values) => values,
+            Cow::Owned(values) => values,
+        }
+    }
+}
+
+/// Sum of squares, left to right from 0 (§1.4: the order matters for the goldens).
+fn squared_norm(values: &[f64]) -> f64 {
+    let mut sum = 0.0;
+    for &v in values {
+        sum += v * v;
+    }
+    sum
+}
+
+impl<'a> NodeFeatures<'a> {
+    /// Precomputes what `kind` needs from node `index`.
+    pub(crate) fn new(kind: SimilarityKind, dataset: &'a Dataset, index: usize) -> Self {
+        let node = dataset.node(index);
+        let features = node.features.as_deref();
+        let mut result = NodeFeatures {
+            values: None,
+            norm: 0.0,
+            support: Vec::new(),
+            relations: &node.relations,
+        };
+        let Some(values) = features else {
+            return result;
+        };
+        match kind {
+            SimilarityKind::Cosine => {
+                result.norm = squared_norm(values).sqrt();
+                result.values = Some(Cow::Borrowed(values));
+            }
+            SimilarityKind::Jaccard => {
+                result.support = values
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &v)| v != 0.0)
+                    .map(|(i, _)| i as u32)
+                    .collect();
+                result.values = Some(Cow::Borrowed(values));
+            }
+            SimilarityKind::Binary => result.values = Some(Cow::Borrowed(values)),
+            SimilarityKind::NeighborList => {}
+            SimilarityKind::Pearson => {
+                let mut sum = 0.0;
+                for &v in values {
+                    sum += v;
+                }
+                let mean = if values.is_empty() {
+                    0.0
+                } else {
+                    sum / values.len() as f64
+                };
+                let centred: Vec<f64> = values.iter().map(|&v| v - mean).collect();
+                result.norm = squared_norm(&centred).sqrt();
+                result.values = Some(Cow::Owned(centred));
+            }
+        }
+        result
+    }
+
+    /// The vector, when present.
+    pub(crate) fn values(&self) -> Option<&[f64]> {
+        self.values.as_ref().map(Cow::as_slice)
+    }
+}
+
+/// Dot product, left to right from 0 (§1.4).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut sum = 0.0;
+    for (x, y) in a.iter().zip(b) {
+        sum += x * y;
+    }
+    sum
+}
+
+/// The cosine-type rescaling `(c − (−1)) / (1 − (−1))`, written literally (§1.4).
+fn rescale(c: f64) -> f64 {
+    (c - (-1.0)) / (1.0 - (-1.0))
+}
+
+/// The rescaled cosine from a dot product and two norms; NaN (a zero norm) gives 0.
+pub(crate) fn cosine_from_parts(dot: f64, norm_a: f64, norm_b: f64) -> f64 {
+    let s = rescale(dot / (norm_a * norm_b));
+    if s.is_nan() {
+        0.0
+    } else {
+        s
+    }
+}
+
+/// Norm used by [`cosine_from_parts`] for this node (the Euclidean norm).
+pub(crate) fn norm_of(features: &NodeFeatures<'_>) -> f64 {
+    features.norm
+}
+
+/// A vector measure before clamping, NaN already mapped to 0 (the neighbour flag,
+/// which needs node indices, is [`neighbor_flag`]).
+fn vector_similarity(kind: SimilarityKind, a: &NodeFeatures<'_>, b: &NodeFeatures<'_>) -> f64 {
+    let (Some(va), Some(vb)) = (a.values(), b.values()) else {
+        return 0.0;
+    };
+    if va.len() != vb.len() {
+        // Different lengths have no defined similarity; treat as unrelated.
+        return 0.0;
+    }
+    match kind {
+        SimilarityKind::Cosine | SimilarityKind::Pearson => {
+            cosine_from_parts(dot(va, vb), a.norm, b.norm)
+        }
+        SimilarityKind::Jaccard => jaccard(&a.support, &b.support),
+        SimilarityKind::Binary => {
+            // `==` on f64 treats -0 and 0 as equal, as the prototype's JSON-string
+            // comparison does (JSON.stringify(-0) is "0").
+            if va.iter().zip(vb).all(|(x, y)| x == y) {
+                1.0
+            } else {
+                0.0
+            }
+        }
+        SimilarityKind::NeighborList => 0.0,
+    }
+}
+
+/// 1 when `b` is among the relations of the node described by `a` (directed,
+/// method-reference §1.4).
+pub(crate) fn neighbor_flag(a: &NodeFeatures<'_>, b: usize) -> f64 {
+    if a.relations.binary_search(&b).is_ok() {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// Jaccard similarity of two sorted supports, in the literal form
+/// `1 − (nz − eq)/nz` that reproduces Flare's 547 (§1.4: `eq/nz` rounds
+/// differently, e.g. 1/5 gives 0.2 instead of 0.19999…). Two empty supports: 0.
+pub(crate) fn jaccard(a: &[u32], b: &[u32]) -> f64 {
+    let (mut i, mut j, mut eq) = (0, 0, 0usize);
+    while i < a.len() && j < b.len() {
+        match a[i].cmp(&b[j]) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => {
+                eq += 1;
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    let nz = a.len() + b.len() - eq;
+    if nz == 0 {
+        return 0.0;
+    }
+    1.0 - (nz - eq) as f64 / nz as f64
+}
+
+/// The similarity of two precomputed nodes before clamping, NaN mapped to 0; `b`
+/// is at dataset index `b_index` (the directed neighbour flag needs it). The
+/// pipeline sorts on this value (§3.1).
+pub(crate) fn pair_similarity(
+    kind: SimilarityKind,
+    a: &NodeFeatures<'_>,
+    b: &NodeFeatures<'_>,
+    b_index: usize,
+) -> f64 {
+    if kind == SimilarityKind::NeighborList {
+        neighbor_flag(a, b_index)
+    } else {
+        vector_similarity(kind, a, b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nptreemap_formats::{DatasetBuilder, NodeSpec};
+
+    /// A root with one child per vector (`None` = no vector), ids "n0", "n1", ...
+    fn dataset(vectors: &[Option<Vec<f64>>]) -> Dataset {
+        let mut builder = DatasetBuilder::new();
+        builder.add(NodeSpec::new("r"));
+        for (i, v) in vectors.iter().enumerate() {
+            let mut spec = NodeSpec::new(format!("n{i}")).parent("r").weight(1.0);
+            if let Some(v) = v {
+                spec = spec.features(v.clone());
+            }
+            builder.add(spec);
+        }
+        builder.build().expect("valid")
+    }
+
+    fn sim(kind: SimilarityKind, a: Vec<f64>, b: Vec<f64>) -> f64 {
+        let d = dataset(&[Some(a), Some(b)]);
+        similarity(kind, &d, 1, 2)
+    }
+
+    #[test]
+    fn cosine_is_rescaled_to_unit_interval() {
+        assert_eq!(
+            sim(SimilarityKind::Cosine, vec![1.0, 0.0], vec![1.0, 0.0]),
+            1.0
+        );
+        assert_eq!(
+            sim(SimilarityKind::Cosine, vec![1.0, 0.0], vec![0.0, 2.0]),
+            0.5
+        );
+        assert_eq!(
+            sim(SimilarityKind::Cosine, vec![1.0, 0.0], vec![-3.0, 0.0]),
+            0.0
+        );
+        let s = sim(SimilarityKind::Cosine, vec![1.0, 1.0], vec![1.0, 0.0]);
+        assert!((s - (1.0 + 0.5f64.sqrt()) / 2.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn cosine_follows_the_literal_formula_bit_for_bit() {
+        let a = vec![0.8, 0.3, 0.3, 1.0, 0.5];
+        let b = vec![0.3, 0.5, 1.0, 0.3, 0.3];
+        let mut dot = 0.0;
+        let (mut na, mut nb) = (0.0f64, 0.0f64);
+        for k in 0..a.len() {
+            dot += a[k] * b[k];
+            na += a[k] * a[k];
+            nb += b[k] * b[k];
+        }
+        let expected = (dot / (na.sqrt() * nb.sqrt()) - (-1.0)) / (1.0 - (-1.0));
+        assert_eq!(
+            sim(SimilarityKind::Cosine, a, b).to_bits(),
+            expected.to_bits()
+        );
+    }
+
+    #[test]
+    fn nan_cases_are_zero() {
+        // A zero vector (Australia's is all zeros).
+        assert_eq!(
+            sim(SimilarityKind::Cosine, vec![0.0, 0.0], vec![1.0, 0.0]),
+            0.0
+        );
+        // Two empty supports (Flare's MergeEdge).
+        assert_eq!(
+            sim(SimilarityKind::Jaccard, vec![0.0, 0.0], vec![0.0, 0.0]),
+            0.0
+        );
+        // Constant series.
+        assert_eq!(
+            sim(
+                SimilarityKind::Pearson,
+                vec![2.0, 2.0, 2.0],
+                vec![1.0, 2.0, 3.0]
+            ),
+            0.0
+        );
+        // Different lengths.
+        assert_eq!(sim(SimilarityKind::Cosine, vec![1.0], vec![1.0, 0.0]), 0.0);
+        // Missing vectors, for every kind.
+        let d = dataset(&[None, Some(vec![1.0, 2.0])]);
+        for kind in [
+            SimilarityKind::Cosine,
+            SimilarityKind::Jaccard,
+            SimilarityKind::Binary,
+            SimilarityKind::NeighborList,
+            SimilarityKind::Pearson,
+        ] {
+            assert_eq!(similarity(kind, &d, 1, 2), 0.0, "{kind:?}");
+            assert_eq!(similarity(kind, &d, 2, 1), 0.0, "{kind:?}");
+        }
+        // Empty vectors.
+        assert_eq!(sim(SimilarityKind::Cosine, vec![], vec![]), 0.0);
+        assert_eq!(sim(SimilarityKind::Pearson, vec![], vec![]), 0.0);
+    }
+
+    #[test]
+    fn jaccard_uses_the_literal_form() {
+        // eq = 1, nz = 5: 1 − 4/5 is 0.19999…, score 19, not 20 (§1.4).
+        let s = sim(
+            SimilarityKind::Jaccard,
+            vec![1.0, 1.0, 1.0, 0.0, 0.0],
+            vec![1.0, 0.0, 0.0, 1.0, 1.0],
+        );
+        assert_eq!(s.to_bits(), (1.0 - 4.0f64 / 5.0).to_bits());
+        assert!(s < 0.2);
+        assert_eq!(score(s), 19);
+        assert_eq!(score(1.0 / 5.0), 20);
+        // Means of 0/1 vectors: only the support counts.
+        let s = sim(
+            SimilarityKind::Jaccard,
+            vec![0.5, 0.25, 0.0],
+            vec![1.0, 0.0, 3.0],
+        );
+        assert_eq!(s.to_bits(), (1.0 - 2.0f64 / 3.0).to_bits());
+        assert_eq!(
+            sim(SimilarityKind::Jaccard, vec![0.0, 2.0], vec![0.0, 1.0]),
+            1.0
+        );
+        assert_eq!(
+            sim(SimilarityKind::Jaccard, vec![2.0, 0.0], vec![0.0, 1.0]),
+            0.0
+        );
+        // One empty support against a non-empty one: nz > 0, eq = 0.
+        assert_eq!(
+            sim(SimilarityKind::Jaccard, vec![0.0, 0.0], vec![0.0, 1.0]),
+            0.0
+        );
+    }
+
+    #[test]
+    fn binary_is_exact_equality() {
+        assert_eq!(
+            sim(SimilarityKind::Binary, vec![1.0, 0.0], vec![1.0, 0.0]),
+            1.0
+        );
+        assert_eq!(
+            sim(SimilarityKind::Binary, vec![1.0, 0.0], vec![1.0, 1e-12]),
+            0.0
+        );
+        assert_eq!(
+            sim(SimilarityKind::Binary, vec![-0.0, 1.0], vec![0.0, 1.0]),
+            1.0
+        );
+        assert_eq!(
+            sim(SimilarityKind::Binary, vec![0.0, 0.0], vec![0.0, 0.0]),
+            1.0
+        );
+    }
+
+    #[test]
+    fn pearson_is_rescaled_correlation() {
+        let up = vec![1.0, 2.0, 3.0, 4.0];
+        let s = sim(
+            SimilarityKind::Pearson,
+            up.clone(),
+            vec![2.0, 4.0, 6.0, 8.0],
+        );
+        assert!((s - 1.0).abs() < 1e-15);
+        let s = sim(
+            SimilarityKind::Pearson,
+            up.clone(),
+            vec![4.0, 3.0, 2.0, 1.0],
+        );
+        assert!(s.abs() < 1e-15);
+        let s = sim(SimilarityKind::Pearson, up, vec![1.0, -1.0, -1.0, 1.0]);
+        assert!((s - 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn neighbor_list_is_directed() {
+        let mut builder = DatasetBuilder::new();
+        builder
+            .add(NodeSpec::new("r"))
+            .add(NodeSpec::new("a").parent("r").relation("b"))
+            .add(NodeSpec::new("b").parent("r"));
+        let d = builder.build().expect("valid");
+        assert_eq!(similarity(SimilarityKind::NeighborList, &d, 1, 2), 1.0);
+        assert_eq!(similarity(SimilarityKind::NeighborList, &d, 2, 1), 0.0);
+    }
+
+    #[test]
+    fn score_floors_and_clamps() {
+        assert_eq!(score(1.0), 100);
+        assert_eq!(score(0.999_999), 99);
+        assert_eq!(score(0.5), 50);
+        assert_eq!(score(0.0), 0);
+        assert_eq!(score(-0.3), 0);
+        assert_eq!(score(1.5), 100);
+        assert_eq!(score(f64::NAN), 0);
+        assert_eq!(score(0.0099), 0);
+        assert_eq!(score(0.01), 1);
+    }
+
+    #[test]
+    fn from_hint_maps_every_hint() {
+        assert_eq!(
+            SimilarityKind::from_hint(SimilarityHint::Cosine),
+            SimilarityKind::Cosine
+        );
+        assert_eq!(
+            SimilarityKind::from_hint(SimilarityHint::Jaccard),
+            SimilarityKind::Jaccard
+        );
+        assert_eq!(
+            SimilarityKind::from_hint(SimilarityHint::Binary),
+            SimilarityKind::Binary
+        );
+        assert_eq!(
+            SimilarityKind::from_hint(SimilarityHint::NeighborList),
+            SimilarityKind::NeighborList
+        );
+        assert_eq!(
+            SimilarityKind::for_dataset(&dataset(&[])),
+            SimilarityKind::Cosine
+        );
+    }
+}
