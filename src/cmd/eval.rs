@@ -55,7 +55,11 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
             .collect();
         let m = eval_metrics(&computed.dataset, &computed.layout, &leaf_pairs);
         if let Some(out) = &args.out {
-            let json = layout_json(&computed.dataset, &computed.layout, &super::json_extras(&computed));
+            let json = layout_json(
+                &computed.dataset,
+                &computed.layout,
+                &super::json_extras(&computed),
+            );
             store::write_atomic(out, json.as_bytes())
                 .with_context(|| format!("{}: cannot write", out.display()))?;
         }
@@ -78,8 +82,18 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
 fn header() -> String {
     format!(
         "{:<11} {:>6} {:>6} {:>6} {:>11} {:>9} {:>7} {:>9} {:>8} {:>8} {:>7} {:>7}",
-        "method", "levels", "nodes", "leaves", "constraints", "realized", "%", "area_err",
-        "dist_med", "dist_max", "aspect", "w/h"
+        "method",
+        "levels",
+        "nodes",
+        "leaves",
+        "constraints",
+        "realized",
+        "%",
+        "area_err",
+        "dist_med",
+        "dist_max",
+        "aspect",
+        "w/h"
     )
 }
 
@@ -87,7 +101,9 @@ fn row_text(method: Method, m: &EvalMetrics) -> String {
     let med = m
         .graph_distance_median
         .map_or("-".to_string(), |d| format!("{d}"));
-    let max = m.graph_distance_max.map_or("-".to_string(), |d| d.to_string());
+    let max = m
+        .graph_distance_max
+        .map_or("-".to_string(), |d| d.to_string());
     format!(
         "{:<11} {:>6} {:>6} {:>6} {:>11} {:>9} {:>7.2} {:>9.4} {:>8} {:>8} {:>7.3} {:>7.3}",
         method.name(),

@@ -170,8 +170,14 @@ pub(crate) fn json_extras(computed: &nptreemap::layout::Computed) -> nptreemap::
             })
             .collect(),
         metrics: vec![
-            ("area_error_diagram_mean".to_string(), q.area_error_diagram_mean),
-            ("area_error_diagram_max".to_string(), q.area_error_diagram_max),
+            (
+                "area_error_diagram_mean".to_string(),
+                q.area_error_diagram_mean,
+            ),
+            (
+                "area_error_diagram_max".to_string(),
+                q.area_error_diagram_max,
+            ),
             ("aspect_ratio_mean".to_string(), q.aspect_ratio_mean),
         ],
     }

@@ -86,6 +86,9 @@ const PREVENT_PASSES: usize = 3;
 /// is never overtaken by a neighbour's bisector in one step.
 const MAX_BISECTOR_SHIFT: f64 = 1.0;
 
+/// Halvings tried by the line search of [`MapSimulation::settle_weights`].
+const LINE_SEARCH_HALVINGS: usize = 12;
+
 /// Smallest share of the Newton step taken while the error oscillates.
 const MIN_DAMPING: f64 = 1.0 / 16.0;
 
@@ -185,11 +188,33 @@ impl MapSimulation {
     pub fn settle_weights(&mut self) -> f64 {
         // No `prevent_domination` here: with sites fixed, the weights that give
         // the target areas may leave a site outside its own cell, and forcing it
-        // back in stalls the solve.
-        self.newton_weights();
-        self.recompute();
+        // back in stalls the solve. Instead of the step cap, whose worst pair
+        // can stall fixed sites, the full Newton step is tried and halved until
+        // the area error drops (backtracking line search).
         self.iteration += 1;
-        self.error = self.area_error();
+        let Some((x, _)) = self.newton_direction() else {
+            return self.error;
+        };
+        let base: Vec<f64> = self.sites.iter().map(|s| s.weight).collect();
+        let mut alpha = 1.0;
+        for _ in 0..LINE_SEARCH_HALVINGS {
+            for ((site, w), dx) in self.sites.iter_mut().zip(&base).zip(&x) {
+                site.weight = w + alpha * dx;
+            }
+            let diagram = power_diagram(&self.sites, &self.clip);
+            let empty = diagram.cells.iter().any(|c| c.polygon.is_none());
+            let error = area_error_of(&diagram, &self.targets, self.clip_area);
+            if !empty && error < self.error {
+                self.diagram = diagram;
+                self.error = error;
+                return error;
+            }
+            alpha *= 0.5;
+        }
+        // No step helped: keep the previous weights and diagram.
+        for (site, w) in self.sites.iter_mut().zip(&base) {
+            site.weight = *w;
+        }
         self.error
     }
 
@@ -214,6 +239,11 @@ impl MapSimulation {
         self.targets = targets;
         self.error = self.area_error();
         self.ended = false;
+    }
+
+    /// The target areas.
+    pub fn targets(&self) -> &[f64] {
+        &self.targets
     }
 
     /// The stopping rules.
@@ -292,14 +322,7 @@ impl MapSimulation {
     }
 
     fn area_error(&self) -> f64 {
-        let sum: f64 = self
-            .diagram
-            .cells
-            .iter()
-            .zip(&self.targets)
-            .map(|(c, t)| (c.area - t).abs())
-            .sum();
-        sum / self.clip_area
+        area_error_of(&self.diagram, &self.targets, self.clip_area)
     }
 
     /// Lloyd step. A site whose cell is empty cannot move to a centroid; one that
@@ -359,9 +382,20 @@ impl MapSimulation {
     /// Newton step on the power weights: solve `L Δw = A* − A` where `L` is the
     /// Laplacian with edge conductances `l_ij / (2 d_ij)`.
     fn newton_weights(&mut self) {
+        if let Some((x, alpha)) = self.newton_direction() {
+            for (site, dx) in self.sites.iter_mut().zip(&x) {
+                site.weight += alpha * dx;
+            }
+        }
+    }
+
+    /// The Newton step on the weights and the capped step length (see
+    /// `MAX_BISECTOR_SHIFT` and the flicker damping); `None` when there is
+    /// nothing to solve.
+    fn newton_direction(&self) -> Option<(Vec<f64>, f64)> {
         let n = self.sites.len();
         if n < 2 {
-            return;
+            return None;
         }
         // Conductances in compressed rows.
         let mut start = Vec::with_capacity(n + 1);
@@ -398,7 +432,7 @@ impl MapSimulation {
         // nothing); a consistent right-hand side sums to zero.
         let count = active.iter().filter(|a| **a).count();
         if count < 2 {
-            return;
+            return None;
         }
         let mean = b.iter().sum::<f64>() / count as f64;
         for (bi, a) in b.iter_mut().zip(&active) {
@@ -429,10 +463,19 @@ impl MapSimulation {
                 }
             }
         }
-        for (site, dx) in self.sites.iter_mut().zip(&x) {
-            site.weight += alpha * dx;
-        }
+        Some((x, alpha))
     }
+}
+
+/// Σ|A − A*| / A(clip) of a diagram.
+fn area_error_of(diagram: &PowerDiagram, targets: &[f64], clip_area: f64) -> f64 {
+    let sum: f64 = diagram
+        .cells
+        .iter()
+        .zip(targets)
+        .map(|(c, t)| (c.area - t).abs())
+        .sum();
+    sum / clip_area
 }
 
 /// Jacobi-preconditioned conjugate gradients for `L x = b` with `L` symmetric

@@ -98,7 +98,9 @@ pub enum LayoutError {
         reason: String,
     },
     /// A similarity-driven method was asked for data without a similarity.
-    #[error("method `{method}` needs a similarity, and the data has none (give one with --similarity)")]
+    #[error(
+        "method `{method}` needs a similarity, and the data has none (give one with --similarity)"
+    )]
     NoSimilarity {
         /// The method asked for.
         method: &'static str,

@@ -334,7 +334,7 @@ pub fn constraint_lists(prepared: &Dataset, kind: SimilarityKind) -> ConstraintL
         let Some(top) = node_bins.bins.first() else {
             continue;
         };
-        if top.head.first().map_or(true, |c| c.score == 0) {
+        if top.head.first().is_none_or(|c| c.score == 0) {
             continue;
         }
         lists[node] = top
@@ -377,7 +377,7 @@ pub fn constraint_lists(prepared: &Dataset, kind: SimilarityKind) -> ConstraintL
     // node holds at most 3, stopping at the first empty bin. Skipped when the top
     // bin is empty; score-0 links are never created (§3.5, §10 #2).
     for (node, node_bins) in bins.iter().enumerate() {
-        if node_bins.bins.first().map_or(true, |top| top.len == 0) {
+        if node_bins.bins.first().is_none_or(|top| top.len == 0) {
             continue;
         }
         for (b, bin) in node_bins.bins.iter().enumerate() {

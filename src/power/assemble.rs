@@ -140,7 +140,7 @@ impl CellBuilder {
         let d = pj - self.p;
         let d2 = d.length_squared();
         if dominates(j, wj, self.i, self.wi, d2)
-            && self.best.map_or(true, |(bd2, bj)| (d2, j) < (bd2, bj))
+            && self.best.is_none_or(|(bd2, bj)| (d2, j) < (bd2, bj))
         {
             self.best = Some((d2, j));
         }

@@ -186,7 +186,7 @@ impl PowerDiagram {
                     && cell
                         .polygon
                         .as_ref()
-                        .map_or(true, |p| signed_inside(p.points(), s.position) <= tol)
+                        .is_none_or(|p| signed_inside(p.points(), s.position) <= tol)
             }
             None => {
                 let usable = s.position.is_finite() && s.weight.is_finite();

@@ -63,7 +63,7 @@ impl LabelledPolygon {
         self.labels.clear();
         self.verts.extend(clip.iter().map(|p| *p - origin));
         self.labels
-            .extend(std::iter::repeat(CLIP_EDGE).take(clip.len()));
+            .extend(std::iter::repeat_n(CLIP_EDGE, clip.len()));
         self.r2 = max_r2(&self.verts);
         self.cut = false;
     }

@@ -25,8 +25,19 @@ fn realized(file: &str, method: &str, seed: u64, dir: &std::path::Path) -> serde
     let input = support::shared().join("paper-data").join(file);
     let out = dir.join(format!("{method}-{seed}.json"));
     let run = support::bin()
-        .args(["eval", input.to_str().expect("utf8"), "--json", "--method", method])
-        .args(["--seed", &seed.to_string(), "--out", out.to_str().expect("utf8")])
+        .args([
+            "eval",
+            input.to_str().expect("utf8"),
+            "--json",
+            "--method",
+            method,
+        ])
+        .args([
+            "--seed",
+            &seed.to_string(),
+            "--out",
+            out.to_str().expect("utf8"),
+        ])
         .output()
         .expect("run nptreemap eval");
     assert!(
@@ -37,8 +48,14 @@ fn realized(file: &str, method: &str, seed: u64, dir: &std::path::Path) -> serde
     let row: serde_json::Value = serde_json::from_slice(&run.stdout).expect("eval prints JSON");
     let report = support::check_layout(&out);
     // Our own figures agree with the independent checker's.
-    assert_eq!(row["realized"], report["realized_lowest"], "{file} {method} {seed}");
-    assert_eq!(row["leaf_constraints"], report["constraints_lowest"], "{file}");
+    assert_eq!(
+        row["realized"], report["realized_lowest"],
+        "{file} {method} {seed}"
+    );
+    assert_eq!(
+        row["leaf_constraints"], report["constraints_lowest"],
+        "{file}"
+    );
     report
 }
 
@@ -49,12 +66,19 @@ fn neighbor_meets_the_papers_best_on_every_table2_dataset() {
         let mut counts = Vec::new();
         for seed in 1..=5 {
             let report = realized(file, "neighbor", seed, &dir);
-            assert_eq!(report["constraints_lowest"].as_u64(), Some(*constraints), "{file}");
+            assert_eq!(
+                report["constraints_lowest"].as_u64(),
+                Some(*constraints),
+                "{file}"
+            );
             support::assert_area_error(&report, 0.01);
             counts.push(report["realized_lowest"].as_u64().expect("count"));
         }
         let m = median(counts.clone());
-        assert!(m >= *best, "{file}: median realised {m} < paper's {best} (seeds 1-5: {counts:?})");
+        assert!(
+            m >= *best,
+            "{file}: median realised {m} < paper's {best} (seeds 1-5: {counts:?})"
+        );
     }
 }
 
@@ -76,7 +100,10 @@ fn baselines_realise_fewer_than_neighbor() {
         let ours = count("neighbor");
         for baseline in ["plain", "random-cvt", "proj-scale"] {
             let theirs = count(baseline);
-            assert!(theirs < ours, "{file}: {baseline} realises {theirs}, neighbor {ours}");
+            assert!(
+                theirs < ours,
+                "{file}: {baseline} realises {theirs}, neighbor {ours}"
+            );
         }
     }
 }
