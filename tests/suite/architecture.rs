@@ -1,5 +1,6 @@
-//! The pure modules (geometry, power diagrams, layout, rendering, metrics) never
-//! touch files, standard output or the clock (ARCHITECTURE.md). A grep keeps it so.
+//! The pure modules (geometry, power diagrams, layout, neighbourhoods, rendering,
+//! metrics) never touch files, standard output or the clock (ARCHITECTURE.md).
+//! A grep keeps it so.
 
 use std::path::Path;
 
@@ -7,6 +8,7 @@ const PURE: &[&str] = &[
     "src/geom",
     "src/power",
     "src/layout",
+    "src/neighborhood",
     "src/render",
     "src/metrics.rs",
 ];
