@@ -996,3 +996,56 @@ fn boundary_distance(clip: &ConvexPolygon, p: Point) -> f64 {
         })
         .fold(f64::INFINITY, f64::min)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square() -> ConvexPolygon {
+        ConvexPolygon::rectangle(0.0, 0.0, 10.0, 10.0).expect("square")
+    }
+
+    #[test]
+    fn exit_through_finds_the_crossed_edge() {
+        let (d, edge) = exit_through(&square(), Point::new(5.0, 5.0), Point::new(15.0, 5.0));
+        assert!((d - 5.0).abs() < 1e-12);
+        let (a, b) = edge.expect("crosses the right edge");
+        assert_eq!((a.x, b.x), (10.0, 10.0));
+        // A target inside: its distance and no edge.
+        let (d, edge) = exit_through(&square(), Point::new(5.0, 5.0), Point::new(7.0, 5.0));
+        assert!((d - 2.0).abs() < 1e-12 && edge.is_none());
+    }
+
+    #[test]
+    fn slide_aligns_projections_and_stops_when_aligned() {
+        let (a, b) = (Point::new(10.0, 0.0), Point::new(10.0, 10.0));
+        let p = Point::new(8.0, 2.0);
+        let moved = slide_along(p, p, Point::new(12.0, 8.0), a, b, 0.5).expect("not aligned");
+        assert_eq!(moved, Point::new(8.0, 2.5));
+        assert!(slide_along(p, p, Point::new(12.0, 2.2), a, b, 0.5).is_none());
+    }
+
+    #[test]
+    fn boundary_distance_inside_a_square() {
+        assert!((boundary_distance(&square(), Point::new(2.0, 5.0)) - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn project_and_scale_puts_every_point_inside() {
+        let parent = ConvexPolygon::regular(Point::new(50.0, 50.0), 10.0, 6).expect("hexagon");
+        let points: Vec<Point> = (0..12)
+            .map(|k| Point::new((k as f64 * 37.0) % 100.0, (k as f64 * 53.0) % 90.0))
+            .collect();
+        let out = project_and_scale(&parent, &points, &mut Rng::new(1));
+        assert_eq!(out.len(), points.len());
+        assert!(out.iter().all(|p| parent.contains(*p)));
+    }
+
+    #[test]
+    fn small_levels_get_more_starts() {
+        let np = NeighborParams::default();
+        assert_eq!(starts_for(10_000, &np), 1);
+        assert_eq!(starts_for(10, &np), np.max_starts);
+        assert!(starts_for(50, &np) >= 1 && starts_for(50, &np) <= np.max_starts);
+    }
+}
