@@ -11,3 +11,4 @@ mod determinism;
 mod neighborhood;
 mod paper_data;
 mod random_hierarchies;
+mod similarity_paths;
