@@ -17,6 +17,7 @@ pub mod metrics;
 pub mod neighborhood;
 pub mod power;
 pub mod render;
+pub mod rng;
 pub mod store;
 pub mod workspace;
 

@@ -14,9 +14,9 @@
 //! by preconditioned conjugate gradients in near-linear time (Nocaj and Brandes,
 //! "Computing Voronoi treemaps", 2012, motivate the same weight/area coupling).
 
-use super::rng::Rng;
 use crate::geom::{ConvexPolygon, Point};
 use crate::power::{power_diagram, PowerDiagram, Site};
+use crate::rng::Rng;
 
 /// Stopping rules of one diagram.
 #[derive(Clone, Copy, Debug, PartialEq)]

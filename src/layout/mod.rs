@@ -17,8 +17,6 @@ pub mod method;
 pub mod neighbor;
 /// Run parameters and their defaults.
 pub mod params;
-/// Seeded, dependency-free random numbers (SplitMix64).
-pub mod rng;
 /// Start positions and weights for one diagram.
 pub mod seed;
 /// Top-down recursion over the hierarchy.

@@ -18,12 +18,12 @@ use rayon::prelude::*;
 
 use super::map::{MapSettings, MapSimulation};
 use super::method::Method;
-use super::rng::Rng;
-use super::treemap::target_areas;
+use super::treemap::{finish, target_areas};
 use super::{seed, Canvas, Layout, LayoutCell, LayoutError, Params, Report};
 use crate::geom::{cross, ConvexPolygon, Point};
 use crate::neighborhood::adjacency::{level_adjacency, LevelAdjacency};
 use crate::neighborhood::{matching, projection, Constraint};
+use crate::rng::Rng;
 use nptreemap_formats::Dataset;
 
 /// Settings of the similarity-driven methods.
@@ -248,16 +248,7 @@ pub fn layout_similar(
             cells: report.degenerate,
         });
     }
-    let cells = cells
-        .into_iter()
-        .map(|c| c.expect("invariant: every node is reached from the root"))
-        .collect();
-    let layout = Layout {
-        canvas: params.canvas,
-        cells,
-    };
-    debug_assert_eq!(layout.sanity_check(dataset), Ok(()));
-    Ok((layout, report))
+    Ok((finish(dataset, params.canvas, cells), report))
 }
 
 /// Independent starts per level for `neighbor`: a level is cheap when small,

@@ -1,8 +1,8 @@
 //! Start policies for one diagram: where the sites begin. One function each
 //! (style principle 4); the optimiser does not care which was used.
 
-use super::rng::Rng;
 use crate::geom::{ConvexPolygon, Point};
+use crate::rng::Rng;
 
 /// `n` positions uniformly at random inside `clip` (d3-voronoi-map's default
 /// `initialPosition` policy), reproducible from `rng`.

@@ -7,9 +7,9 @@
 use rayon::prelude::*;
 
 use super::map::{MapSettings, MapSimulation};
-use super::rng::Rng;
-use super::{seed, Layout, LayoutCell, LayoutError, Params, Report};
+use super::{seed, Canvas, Layout, LayoutCell, LayoutError, Params, Report};
 use crate::geom::{ConvexPolygon, Point};
+use crate::rng::Rng;
 use nptreemap_formats::Dataset;
 
 /// Outcome of dividing one parent's cell.
@@ -82,16 +82,19 @@ pub fn layout(dataset: &Dataset, params: &Params) -> Result<(Layout, Report), La
     if report.diagrams > 0 {
         report.area_error_mean = error_sum / report.diagrams as f64;
     }
+    Ok((finish(dataset, params.canvas, cells), report))
+}
+
+/// The finished layout from every node's cell (all set by the top-down pass);
+/// checked in debug builds (style principle 11).
+pub(super) fn finish(dataset: &Dataset, canvas: Canvas, cells: Vec<Option<LayoutCell>>) -> Layout {
     let cells = cells
         .into_iter()
         .map(|c| c.expect("invariant: every node is reached from the root"))
         .collect();
-    let layout = Layout {
-        canvas: params.canvas,
-        cells,
-    };
+    let layout = Layout { canvas, cells };
     debug_assert_eq!(layout.sanity_check(dataset), Ok(()));
-    Ok((layout, report))
+    layout
 }
 
 /// Target areas for the children of a cell of area `area` (see [`layout`] for

@@ -620,22 +620,12 @@ mod tests {
         )
     }
 
-    /// SplitMix64, inline so the test does not depend on the layout's RNG.
-    struct SplitMix(u64);
-    impl SplitMix {
-        fn next_f64(&mut self) -> f64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::rng::Rng;
 
     /// Voronoi cells of random points in a `w` × `h` rectangle, by clipping the
     /// rectangle with every bisector (O(n²), fine for a test).
     fn random_voronoi(n: usize, w: f64, h: f64, seed: u64) -> Layout {
-        let mut rng = SplitMix(seed);
+        let mut rng = Rng::new(seed);
         let sites: Vec<Point> = (0..n)
             .map(|_| Point::new(rng.next_f64() * w, rng.next_f64() * h))
             .collect();

@@ -188,22 +188,10 @@ fn pow2_floor(x: f64) -> f64 {
 mod tests {
     use super::*;
 
-    /// SplitMix64: seeded test data without a dependency.
-    struct SplitMix64(u64);
-    impl SplitMix64 {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^ (z >> 31)
-        }
-        fn next_f64(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn below(&mut self, n: u64) -> u64 {
-            self.next_u64() % n
-        }
+    use crate::rng::Rng;
+
+    fn below(rng: &mut Rng, n: u64) -> u64 {
+        rng.next_u64() % n
     }
 
     fn total(cost: &[f64], cols: usize, assignment: &[usize]) -> f64 {
@@ -244,15 +232,15 @@ mod tests {
 
     #[test]
     fn matches_brute_force_on_random_square_matrices() {
-        let mut rng = SplitMix64(2024);
+        let mut rng = Rng::new(2024);
         for case in 0..200 {
-            let n = 1 + rng.below(7) as usize;
+            let n = 1 + below(&mut rng, 7) as usize;
             // Mix continuous costs with small integers, which produce many ties.
             let integer = case % 2 == 0;
             let cost: Vec<f64> = (0..n * n)
                 .map(|_| {
                     if integer {
-                        rng.below(5) as f64
+                        below(&mut rng, 5) as f64
                     } else {
                         rng.next_f64() * 100.0
                     }
@@ -270,10 +258,10 @@ mod tests {
 
     #[test]
     fn matches_brute_force_on_rectangular_matrices() {
-        let mut rng = SplitMix64(7);
+        let mut rng = Rng::new(7);
         for case in 0..100 {
-            let rows = 1 + rng.below(5) as usize;
-            let cols = rows + rng.below(3) as usize;
+            let rows = 1 + below(&mut rng, 5) as usize;
+            let cols = rows + below(&mut rng, 3) as usize;
             let cost: Vec<f64> = (0..rows * cols).map(|_| rng.next_f64()).collect();
             let a = min_cost_assignment(&cost, rows, cols);
             assert_valid(&a, rows, cols);
@@ -355,9 +343,9 @@ mod tests {
 
     #[test]
     fn deterministic_on_a_larger_instance() {
-        let mut rng = SplitMix64(5);
+        let mut rng = Rng::new(5);
         let n = 60;
-        let cost: Vec<f64> = (0..n * n).map(|_| rng.below(4) as f64).collect();
+        let cost: Vec<f64> = (0..n * n).map(|_| below(&mut rng, 4) as f64).collect();
         let a = min_cost_assignment(&cost, n, n);
         assert_valid(&a, n, n);
         assert_eq!(a, min_cost_assignment(&cost, n, n));

@@ -644,17 +644,8 @@ fn orient(v: &mut [f64]) {
 /// A fixed pseudo-random vector in [−1, 1)^m (SplitMix64): generic enough to have a
 /// component along any eigenvector, and the same on every run and platform.
 fn start_vector(m: usize, seed: u64) -> Vec<f64> {
-    let mut state = seed;
-    (0..m)
-        .map(|_| {
-            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^= z >> 31;
-            (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-        })
-        .collect()
+    let mut rng = crate::rng::Rng::new(seed);
+    (0..m).map(|_| 2.0 * rng.next_f64() - 1.0).collect()
 }
 
 /// Copies the upper triangle of the n×n row-major matrix into the lower one.
@@ -704,23 +695,12 @@ fn finite_or_clamped(x: f64) -> f64 {
 mod tests {
     use super::*;
 
-    /// SplitMix64 in [0, 1): seeded test data without a dependency.
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^= z >> 31;
-            (z >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::rng::Rng;
 
     fn random_points(n: usize, seed: u64, sx: f64, sy: f64) -> Vec<Point> {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         (0..n)
-            .map(|_| Point::new(sx * (rng.next() - 0.5), sy * (rng.next() - 0.5)))
+            .map(|_| Point::new(sx * (rng.next_f64() - 0.5), sy * (rng.next_f64() - 0.5)))
             .collect()
     }
 
@@ -821,9 +801,9 @@ mod tests {
 
     #[test]
     fn pca_is_deterministic_and_sign_normalised() {
-        let mut rng = Rng(99);
+        let mut rng = Rng::new(99);
         let vectors: Vec<Vec<f64>> = (0..300)
-            .map(|_| (0..20).map(|_| rng.next()).collect())
+            .map(|_| (0..20).map(|_| rng.next_f64()).collect())
             .collect();
         let a = pca_2d(&vectors);
         let b = pca_2d(&vectors);
@@ -925,11 +905,11 @@ mod tests {
     fn lanczos_matches_dense_on_a_full_spectrum() {
         // A random symmetric matrix with negative and close eigenvalues.
         let m = 150;
-        let mut rng = Rng(21);
+        let mut rng = Rng::new(21);
         let mut a = vec![0.0; m * m];
         for i in 0..m {
             for j in i..m {
-                a[i * m + j] = rng.next() - 0.5;
+                a[i * m + j] = rng.next_f64() - 0.5;
             }
         }
         mirror_upper(&mut a, m);
@@ -952,11 +932,11 @@ mod tests {
     #[test]
     fn dense_eigenpairs_have_small_residuals() {
         let m = 80;
-        let mut rng = Rng(4);
+        let mut rng = Rng::new(4);
         let mut a = vec![0.0; m * m];
         for i in 0..m {
             for j in i..m {
-                a[i * m + j] = rng.next() - 0.5;
+                a[i * m + j] = rng.next_f64() - 0.5;
             }
         }
         mirror_upper(&mut a, m);

@@ -11,6 +11,7 @@ const PURE: &[&str] = &[
     "src/neighborhood",
     "src/render",
     "src/metrics.rs",
+    "src/rng.rs",
 ];
 const FORBIDDEN: &[&str] = &[
     "std::fs",

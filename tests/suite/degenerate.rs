@@ -5,9 +5,9 @@
 
 use nptreemap::geom::{ConvexPolygon, Point};
 use nptreemap::layout::map::{MapSettings, MapSimulation};
-use nptreemap::layout::rng::Rng;
 use nptreemap::layout::{layout, Outline, Params};
 use nptreemap::metrics;
+use nptreemap::rng::Rng;
 use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
 
 fn flat(weights: &[f64]) -> Dataset {
