@@ -45,6 +45,10 @@ pub struct NeighborParams {
     pub start_budget: usize,
     /// Most independent starts per level. Default: 8.
     pub max_starts: usize,
+    /// Hierarchies with at most this many nodes (after preparation) choose
+    /// among each level's best candidates by laying out everything below them.
+    /// Default: 64.
+    pub lookahead_max_nodes: usize,
 }
 
 impl Default for NeighborParams {
@@ -57,6 +61,7 @@ impl Default for NeighborParams {
             settle_iterations: 100,
             start_budget: 200,
             max_starts: 8,
+            lookahead_max_nodes: 64,
         }
     }
 }
@@ -81,6 +86,8 @@ const POLISH_ROUNDS: usize = 4;
 /// Weight of a lifted deeper constraint in a level's score, against 1 for the
 /// level's own: the leaf level is what Table 2 counts.
 const LIFTED_WEIGHT: usize = 2;
+/// Candidates per level followed down the tree when looking ahead.
+const LOOKAHEAD_CANDIDATES: usize = 3;
 /// Levels up to this many cells get the exhaustive swap polish.
 const EXHAUSTIVE_MAX_CELLS: usize = 64;
 /// Most swap evaluations of the exhaustive polish per level and start.
@@ -145,101 +152,28 @@ pub fn layout_similar(
 ) -> Result<(Layout, Report), LayoutError> {
     params.validate()?;
     let root_polygon = params.outline.polygon(params.canvas)?;
-    let (box_lo, box_hi) = root_polygon.bbox();
-    let n = dataset.len();
-    let mut cells: Vec<Option<LayoutCell>> = vec![None; n];
+    let mut cells: Vec<Option<LayoutCell>> = vec![None; dataset.len()];
     cells[dataset.root()] = Some(LayoutCell {
         site: root_polygon.centroid(),
         power_weight: 0.0,
-        polygon: root_polygon,
+        polygon: root_polygon.clone(),
     });
-    let settings = MapSettings {
-        convergence_ratio: params.convergence_ratio,
-        max_iterations: params.max_iterations,
-        min_iterations: params.min_iterations.min(params.max_iterations),
+    let ctx = Context {
+        dataset,
+        constraints,
+        projection,
+        method,
+        params,
+        np,
+        root_box: root_polygon.bbox(),
+        settings: MapSettings {
+            convergence_ratio: params.convergence_ratio,
+            max_iterations: params.max_iterations,
+            min_iterations: params.min_iterations.min(params.max_iterations),
+        },
+        lookahead: method == Method::Neighbor && dataset.len() <= np.lookahead_max_nodes,
     };
-    let mut report = Report::default();
-    let mut error_sum = 0.0;
-    for depth in 0..dataset.max_depth() {
-        let parents: Vec<usize> = (0..n)
-            .filter(|&i| dataset.node(i).depth == depth && !dataset.node(i).children.is_empty())
-            .collect();
-        let level: Vec<usize> = parents
-            .iter()
-            .flat_map(|p| dataset.node(*p).children.iter().copied())
-            .collect();
-        let projected = projection::fit_into(
-            &level.iter().map(|i| projection[*i]).collect::<Vec<_>>(),
-            box_lo,
-            box_hi,
-        );
-        let mut proj_of = vec![Point::ZERO; n];
-        for (i, p) in level.iter().zip(projected) {
-            proj_of[*i] = p;
-        }
-        let links = LevelLinks::new(dataset, &level, constraints, depth + 1);
-        let polygons: Vec<ConvexPolygon> = parents
-            .iter()
-            .map(|&p| {
-                cells[p]
-                    .as_ref()
-                    .map(|c| c.polygon.clone())
-                    .expect("invariant: parents are laid out before their children")
-            })
-            .collect();
-        let starts = if method == Method::Neighbor {
-            starts_for(level.len(), np)
-        } else {
-            1
-        };
-        let mut best: Option<(usize, Vec<Diagram>)> = None;
-        for start in 0..starts {
-            let run = run_level(
-                dataset, &parents, &polygons, &proj_of, &links, method, params, np, settings, start,
-            );
-            // Ties keep the earlier start, so one start gives the plain result.
-            if best.as_ref().is_none_or(|b| run.0 > b.0) {
-                best = Some(run);
-            }
-        }
-        let diagrams = best.map(|b| b.1).unwrap_or_default();
-        for d in diagrams {
-            match d {
-                Diagram::Single { child, polygon } => {
-                    cells[child] = Some(LayoutCell {
-                        site: polygon.centroid(),
-                        power_weight: 0.0,
-                        polygon,
-                    });
-                }
-                Diagram::Sim { children, sim } => {
-                    let state = sim.state();
-                    report.diagrams += 1;
-                    report.iterations += state.iteration_count;
-                    error_sum += state.convergence_ratio;
-                    report.area_error_max = report.area_error_max.max(state.convergence_ratio);
-                    if !sim.converged() {
-                        report.unconverged += 1;
-                    }
-                    let (sites, diagram) = sim.into_parts();
-                    for ((child, site), cell) in children.iter().zip(&sites).zip(diagram.cells) {
-                        let polygon = match cell.polygon {
-                            Some(p) => p,
-                            None => {
-                                report.degenerate += 1;
-                                continue;
-                            }
-                        };
-                        cells[*child] = Some(LayoutCell {
-                            site: site.position,
-                            power_weight: site.weight,
-                            polygon,
-                        });
-                    }
-                }
-            }
-        }
-    }
+    let (_, cells, mut report, error_sum) = descend(&ctx, 0, cells);
     if report.diagrams > 0 {
         report.area_error_mean = error_sum / report.diagrams as f64;
     }
@@ -249,6 +183,174 @@ pub fn layout_similar(
         });
     }
     Ok((finish(dataset, params.canvas, cells), report))
+}
+
+/// Everything a level needs that does not change from level to level.
+struct Context<'a> {
+    dataset: &'a Dataset,
+    constraints: &'a [Constraint],
+    projection: &'a [Point],
+    method: Method,
+    params: &'a Params,
+    np: &'a NeighborParams,
+    root_box: (Point, Point),
+    settings: MapSettings,
+    /// Choose among a level's best candidates by laying out everything below
+    /// each (small hierarchies only).
+    lookahead: bool,
+}
+
+/// Lays out level `depth + 1` and everything below it, given the cells down to
+/// `depth`. Returns the score of the deepest level (realised constraints), the
+/// cells, the report and the sum of per-diagram errors.
+fn descend(
+    ctx: &Context<'_>,
+    depth: usize,
+    cells: Vec<Option<LayoutCell>>,
+) -> (usize, Vec<Option<LayoutCell>>, Report, f64) {
+    let dataset = ctx.dataset;
+    if depth >= dataset.max_depth() {
+        let leaves: Vec<usize> = (0..dataset.len())
+            .filter(|&i| dataset.node(i).depth == depth)
+            .collect();
+        let links = LevelLinks::new(dataset, &leaves, ctx.constraints, depth);
+        let layout_cells: Vec<LayoutCell> =
+            leaves.iter().filter_map(|i| cells[*i].clone()).collect();
+        let score = if layout_cells.len() == leaves.len() {
+            let layout = Layout {
+                canvas: ctx.params.canvas,
+                cells: layout_cells,
+            };
+            let all: Vec<usize> = (0..leaves.len()).collect();
+            links.score_of(&level_adjacency(&layout, &all, MIN_SHARED))
+        } else {
+            0
+        };
+        return (score, cells, Report::default(), 0.0);
+    }
+    let n = dataset.len();
+    let parents: Vec<usize> = (0..n)
+        .filter(|&i| dataset.node(i).depth == depth && !dataset.node(i).children.is_empty())
+        .collect();
+    let level: Vec<usize> = parents
+        .iter()
+        .flat_map(|p| dataset.node(*p).children.iter().copied())
+        .collect();
+    let projected = projection::fit_into(
+        &level.iter().map(|i| ctx.projection[*i]).collect::<Vec<_>>(),
+        ctx.root_box.0,
+        ctx.root_box.1,
+    );
+    let mut proj_of = vec![Point::ZERO; n];
+    for (i, p) in level.iter().zip(projected) {
+        proj_of[*i] = p;
+    }
+    let links = LevelLinks::new(dataset, &level, ctx.constraints, depth + 1);
+    let polygons: Vec<ConvexPolygon> = parents
+        .iter()
+        .map(|&p| {
+            cells[p]
+                .as_ref()
+                .map(|c| c.polygon.clone())
+                .expect("invariant: parents are laid out before their children")
+        })
+        .collect();
+    let starts = if ctx.method == Method::Neighbor {
+        starts_for(level.len(), ctx.np)
+    } else {
+        1
+    };
+    let mut candidates: Vec<(usize, Vec<Diagram>)> = (0..starts)
+        .map(|start| {
+            run_level(
+                dataset,
+                &parents,
+                &polygons,
+                &proj_of,
+                &links,
+                ctx.method,
+                ctx.params,
+                ctx.np,
+                ctx.settings,
+                start,
+            )
+        })
+        .collect();
+    // Best first; the stable sort keeps earlier starts first among equals.
+    candidates.sort_by_key(|c| std::cmp::Reverse(c.0));
+    let keep = if ctx.lookahead {
+        LOOKAHEAD_CANDIDATES
+    } else {
+        1
+    };
+    candidates.truncate(keep);
+    let mut best: Option<(usize, Vec<Option<LayoutCell>>, Report, f64)> = None;
+    for (_, diagrams) in candidates {
+        let mut cells = cells.clone();
+        let (report, error_sum) = apply_level(diagrams, &mut cells);
+        let (score, cells, below, below_sum) = descend(ctx, depth + 1, cells);
+        if best.as_ref().is_none_or(|b| score > b.0) {
+            best = Some((
+                score,
+                cells,
+                add_reports(report, below),
+                error_sum + below_sum,
+            ));
+        }
+    }
+    best.unwrap_or((0, cells, Report::default(), 0.0))
+}
+
+/// Writes a level's diagrams into `cells`; returns its report and error sum.
+fn apply_level(diagrams: Vec<Diagram>, cells: &mut [Option<LayoutCell>]) -> (Report, f64) {
+    let mut report = Report::default();
+    let mut error_sum = 0.0;
+    for d in diagrams {
+        match d {
+            Diagram::Single { child, polygon } => {
+                cells[child] = Some(LayoutCell {
+                    site: polygon.centroid(),
+                    power_weight: 0.0,
+                    polygon,
+                });
+            }
+            Diagram::Sim { children, sim } => {
+                let state = sim.state();
+                report.diagrams += 1;
+                report.iterations += state.iteration_count;
+                error_sum += state.convergence_ratio;
+                report.area_error_max = report.area_error_max.max(state.convergence_ratio);
+                if !sim.converged() {
+                    report.unconverged += 1;
+                }
+                let (sites, diagram) = sim.into_parts();
+                for ((child, site), cell) in children.iter().zip(&sites).zip(diagram.cells) {
+                    match cell.polygon {
+                        Some(polygon) => {
+                            cells[*child] = Some(LayoutCell {
+                                site: site.position,
+                                power_weight: site.weight,
+                                polygon,
+                            });
+                        }
+                        None => report.degenerate += 1,
+                    }
+                }
+            }
+        }
+    }
+    (report, error_sum)
+}
+
+fn add_reports(a: Report, b: Report) -> Report {
+    Report {
+        diagrams: a.diagrams + b.diagrams,
+        iterations: a.iterations + b.iterations,
+        area_error_mean: 0.0,
+        area_error_max: a.area_error_max.max(b.area_error_max),
+        unconverged: a.unconverged + b.unconverged,
+        degenerate: a.degenerate + b.degenerate,
+    }
 }
 
 /// Independent starts per level for `neighbor`: a level is cheap when small,
@@ -721,7 +823,13 @@ fn optimise_level(
                 sim.tick_with_positions(&positions);
             }
         });
-        if (tick + 1) % CHECK_EVERY == 0 || tick + 1 == np.ticks {
+        // Small levels are cheap to score, and their best moment is often brief.
+        let every = if links.nodes.len() <= EXHAUSTIVE_MAX_CELLS {
+            1
+        } else {
+            CHECK_EVERY
+        };
+        if (tick + 1) % every == 0 || tick + 1 == np.ticks {
             let candidate = scored_copy(diagrams, links, canvas, np);
             // Ties go to the later state, which has had more optimisation.
             if candidate.0 >= best.0 {
