@@ -92,7 +92,7 @@ const LOOKAHEAD_CANDIDATES: usize = 3;
 const EXHAUSTIVE_MAX_CELLS: usize = 64;
 /// Most swap evaluations of the exhaustive polish per level and start.
 const EXHAUSTIVE_BUDGET: usize = 400;
-/// Ticks between checkpoints at which a settled copy of the level is scored.
+/// Ticks between checkpoints (every tick on small hierarchies) at which a settled copy of the level is scored.
 const CHECK_EVERY: usize = 10;
 /// Minimum shared boundary, as a share of the canvas diagonal, for two cells
 /// to count as neighbours: the independent checker's default.
@@ -262,6 +262,9 @@ fn descend(
     };
     let mut candidates: Vec<(usize, Vec<Diagram>)> = (0..starts)
         .map(|start| {
+            // Small hierarchies are cheap to score, and a level's best moment
+            // is often brief: they are scored every tick.
+            let every = if ctx.lookahead { 1 } else { CHECK_EVERY };
             run_level(
                 dataset,
                 &parents,
@@ -273,6 +276,7 @@ fn descend(
                 ctx.np,
                 ctx.settings,
                 start,
+                every,
             )
         })
         .collect();
@@ -374,6 +378,7 @@ fn run_level(
     np: &NeighborParams,
     settings: MapSettings,
     start: usize,
+    every: usize,
 ) -> (usize, Vec<Diagram>) {
     let mut run_params = params.clone();
     run_params.seed = params
@@ -410,7 +415,7 @@ fn run_level(
         }
     });
     match method {
-        Method::Neighbor => return optimise_level(&mut diagrams, links, canvas, np),
+        Method::Neighbor => return optimise_level(&mut diagrams, links, canvas, np, every),
         Method::MatchSwap => diagrams.par_iter_mut().for_each(|d| settle(d, np)),
         _ => diagrams.par_iter_mut().for_each(|d| {
             if let Diagram::Sim { sim, .. } = d {
@@ -798,6 +803,7 @@ fn optimise_level(
     links: &LevelLinks,
     canvas: Canvas,
     np: &NeighborParams,
+    every: usize,
 ) -> (usize, Vec<Diagram>) {
     // The unit length of the level: square root of its mean cell area.
     let total: f64 = diagrams
@@ -823,12 +829,6 @@ fn optimise_level(
                 sim.tick_with_positions(&positions);
             }
         });
-        // Small levels are cheap to score, and their best moment is often brief.
-        let every = if links.nodes.len() <= EXHAUSTIVE_MAX_CELLS {
-            1
-        } else {
-            CHECK_EVERY
-        };
         if (tick + 1) % every == 0 || tick + 1 == np.ticks {
             let candidate = scored_copy(diagrams, links, canvas, np);
             // Ties go to the later state, which has had more optimisation.
