@@ -5,7 +5,7 @@ pub(crate) mod eval;
 pub(crate) mod layout;
 
 use clap::{Args, ValueEnum};
-use nptreemap::layout::{Canvas, Method, Outline, Params, Request};
+use nptreemap::layout::{Canvas, Method, NeighborParams, Outline, Params, Request};
 use nptreemap::neighborhood::SimilarityKind;
 use nptreemap::workspace::InputError;
 
@@ -39,6 +39,10 @@ pub(crate) struct LayoutOptions {
     /// Similarity between nodes (default: what the data declares).
     #[arg(long, value_enum)]
     pub(crate) similarity: Option<SimilarityArg>,
+    /// Run the paper prototype's optimiser (its tick schedule, weight growth in
+    /// the last 30% and pixel constants) instead of ours, for comparisons.
+    #[arg(long)]
+    pub(crate) prototype: bool,
 }
 
 /// Layout methods on the command line.
@@ -124,7 +128,10 @@ impl LayoutOptions {
                 SimilarityArg::Neighbors => SimilarityKind::NeighborList,
                 SimilarityArg::Pearson => SimilarityKind::Pearson,
             }),
-            neighbor: Default::default(),
+            neighbor: NeighborParams {
+                prototype: self.prototype,
+                ..NeighborParams::default()
+            },
         }
     }
 

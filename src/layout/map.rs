@@ -182,6 +182,36 @@ impl MapSimulation {
         self.error = self.area_error();
     }
 
+    /// One step of the paper prototype's schedule (method-reference §5.9), for
+    /// the `prototype` switch: the caller's positions, then either the weights
+    /// reset to `reset_to` (before the growth phase) or d3-voronoi-map's
+    /// multiplicative step (area ratio clamped to ±10%), then a diagram.
+    /// Weights stay positive, as d3 keeps them.
+    pub fn tick_prototype(&mut self, positions: &[Point], reset_to: Option<f64>) {
+        for (site, p) in self.sites.iter_mut().zip(positions) {
+            site.position = *p;
+        }
+        match reset_to {
+            Some(w) => self.sites.iter_mut().for_each(|s| s.weight = w),
+            None => {
+                self.recompute();
+                for (site, (cell, target)) in self
+                    .sites
+                    .iter_mut()
+                    .zip(self.diagram.cells.iter().zip(&self.targets))
+                {
+                    if cell.area > 0.0 {
+                        let ratio = (target / cell.area).clamp(0.9, 1.1);
+                        site.weight = (site.weight * ratio).max(f64::MIN_POSITIVE);
+                    }
+                }
+            }
+        }
+        self.recompute();
+        self.iteration += 1;
+        self.error = self.area_error();
+    }
+
     /// One step that moves only weights (sites stay put): the final settling
     /// of a layout whose site arrangement carries meaning, such as realised
     /// neighbourhoods. Returns the new area error.

@@ -49,6 +49,13 @@ pub struct NeighborParams {
     /// among each level's best candidates by laying out everything below them.
     /// Default: 64.
     pub lookahead_max_nodes: usize,
+    /// Run the paper prototype's optimiser instead of ours (method-reference
+    /// §5): 151 ticks, weights held at the CVT's until t = 105 and then grown
+    /// by d3's ±10% steps, a 0.8 Lloyd step for cells without an attraction
+    /// move, pure Lloyd in the last 10 ticks, the prototype's pixel constants
+    /// scaled to the canvas, one start. Areas are not settled afterwards, so the
+    /// area error is the prototype's too. Default: false.
+    pub prototype: bool,
 }
 
 impl Default for NeighborParams {
@@ -62,6 +69,7 @@ impl Default for NeighborParams {
             start_budget: 200,
             max_starts: 8,
             lookahead_max_nodes: 64,
+            prototype: false,
         }
     }
 }
@@ -97,6 +105,57 @@ const CHECK_EVERY: usize = 10;
 /// Minimum shared boundary, as a share of the canvas diagonal, for two cells
 /// to count as neighbours: the independent checker's default.
 const MIN_SHARED: f64 = 1e-6;
+
+/// The distance rules of one level's attraction moves (method-reference
+/// §5.6–5.7).
+#[derive(Clone, Copy, Debug)]
+struct Distances {
+    /// Below this, attraction towards a partner stops (`distance_min`).
+    d_opt: f64,
+    /// Below this, neighbouring cousins slide along the parent edge (`distance_max`).
+    d_max: f64,
+    /// Length of one attraction move.
+    step: f64,
+    /// Closest a moved site may come to another site or the parent's boundary.
+    gap: f64,
+    /// Whether a cell without an attraction move takes a centroid step.
+    centroid_steps: bool,
+    /// Share of the way to the centroid a centroid step goes.
+    centroid_step: f64,
+}
+
+/// Area of the prototype's root, a regular 32-gon of circumradius 192 px, the
+/// size its pixel constants were tuned for (method-reference §10 row 1).
+fn prototype_root_area() -> f64 {
+    0.5 * 32.0 * (std::f64::consts::TAU / 32.0).sin() * 192.0 * 192.0
+}
+
+impl Distances {
+    /// Ours: shares of the level's unit length (see `D_OPT`).
+    fn relative(unit: f64) -> Self {
+        Self {
+            d_opt: D_OPT * unit,
+            d_max: D_MAX * unit,
+            step: STEP * unit,
+            gap: GAP * unit,
+            centroid_steps: CENTROID_STEPS,
+            centroid_step: CENTROID_STEP,
+        }
+    }
+
+    /// The prototype's pixels (40, 80, 5 × 0.8, 10 or 15 below depth 2), scaled
+    /// by `scale` = the root's size against the prototype's 32-gon of radius 192.
+    fn prototype(scale: f64, depth: usize) -> Self {
+        Self {
+            d_opt: 40.0 * scale,
+            d_max: 80.0 * scale,
+            step: 4.0 * scale,
+            gap: if depth > 2 { 15.0 } else { 10.0 } * scale,
+            centroid_steps: true,
+            centroid_step: CENTROID_STEP,
+        }
+    }
+}
 
 /// One parent's diagram on the level being laid out.
 #[derive(Clone)]
@@ -171,7 +230,10 @@ pub fn layout_similar(
             max_iterations: params.max_iterations,
             min_iterations: params.min_iterations.min(params.max_iterations),
         },
-        lookahead: method == Method::Neighbor && dataset.len() <= np.lookahead_max_nodes,
+        lookahead: method == Method::Neighbor
+            && !np.prototype
+            && dataset.len() <= np.lookahead_max_nodes,
+        prototype_scale: (root_polygon.area() / prototype_root_area()).sqrt(),
     };
     let (_, cells, mut report, error_sum) = descend(&ctx, 0, cells);
     if report.diagrams > 0 {
@@ -198,6 +260,8 @@ struct Context<'a> {
     /// Choose among a level's best candidates by laying out everything below
     /// each (small hierarchies only).
     lookahead: bool,
+    /// Root size against the prototype's (for `NeighborParams::prototype`).
+    prototype_scale: f64,
 }
 
 /// Lays out level `depth + 1` and everything below it, given the cells down to
@@ -255,7 +319,7 @@ fn descend(
                 .expect("invariant: parents are laid out before their children")
         })
         .collect();
-    let starts = if ctx.method == Method::Neighbor {
+    let starts = if ctx.method == Method::Neighbor && !ctx.np.prototype {
         starts_for(level.len(), ctx.np)
     } else {
         1
@@ -265,6 +329,10 @@ fn descend(
             // Small hierarchies are cheap to score, and a level's best moment
             // is often brief: they are scored every tick.
             let every = if ctx.lookahead { 1 } else { CHECK_EVERY };
+            let prototype = ctx
+                .np
+                .prototype
+                .then(|| Distances::prototype(ctx.prototype_scale, depth + 1));
             run_level(
                 dataset,
                 &parents,
@@ -277,6 +345,7 @@ fn descend(
                 ctx.settings,
                 start,
                 every,
+                prototype,
             )
         })
         .collect();
@@ -379,6 +448,7 @@ fn run_level(
     settings: MapSettings,
     start: usize,
     every: usize,
+    prototype: Option<Distances>,
 ) -> (usize, Vec<Diagram>) {
     let mut run_params = params.clone();
     run_params.seed = params
@@ -415,7 +485,10 @@ fn run_level(
         }
     });
     match method {
-        Method::Neighbor => return optimise_level(&mut diagrams, links, canvas, np, every),
+        Method::Neighbor => match prototype {
+            Some(limits) => optimise_prototype(&mut diagrams, links, canvas, np, &limits),
+            None => return optimise_level(&mut diagrams, links, canvas, np, every),
+        },
         Method::MatchSwap => diagrams.par_iter_mut().for_each(|d| settle(d, np)),
         _ => diagrams.par_iter_mut().for_each(|d| {
             if let Diagram::Sim { sim, .. } = d {
@@ -825,7 +898,14 @@ fn optimise_level(
         let snap = snapshot(diagrams, links, canvas);
         diagrams.par_iter_mut().for_each(|d| {
             if let Diagram::Sim { children, sim } = d {
-                let positions = attraction_moves(children, sim, links, &snap, unit);
+                let positions = attraction_moves(
+                    children,
+                    sim,
+                    links,
+                    &snap,
+                    &Distances::relative(unit),
+                    true,
+                );
                 sim.tick_with_positions(&positions);
             }
         });
@@ -898,6 +978,38 @@ fn exhaustive_polish(
     best
 }
 
+/// The prototype's optimisation of one level (method-reference §5.2–5.10),
+/// for `NeighborParams::prototype`: ticks 0 to `np.ticks` inclusive; weights
+/// reset to the CVT's equal level (area/2n, d3's `half-average-area`) until
+/// 45 ticks before the end, then grown by d3's clamped multiplicative step;
+/// swap rounds at t = 20, 40, … up to 20 ticks before the end; no attraction
+/// at t = 0 and in the last 10 ticks (pure 0.8 Lloyd there).
+fn optimise_prototype(
+    diagrams: &mut [Diagram],
+    links: &LevelLinks,
+    canvas: Canvas,
+    np: &NeighborParams,
+    limits: &Distances,
+) {
+    let last = np.ticks;
+    let growth_from = last.saturating_sub(45);
+    for tick in 0..=last {
+        if np.swap_every > 0 && tick > 10 && tick % np.swap_every == 0 && tick + 20 < last {
+            swap_round(diagrams, links, canvas);
+        }
+        let snap = snapshot(diagrams, links, canvas);
+        let attract = tick >= 1 && tick + 10 <= last;
+        diagrams.par_iter_mut().for_each(|d| {
+            if let Diagram::Sim { children, sim } = d {
+                let positions = attraction_moves(children, sim, links, &snap, limits, attract);
+                let reset =
+                    (tick < growth_from).then(|| sim.clip().area() / (2.0 * children.len() as f64));
+                sim.tick_prototype(&positions, reset);
+            }
+        });
+    }
+}
+
 /// A copy of the level with its areas settled, and the number of the level's
 /// constraints it realises.
 fn scored_copy(
@@ -919,14 +1031,14 @@ fn attraction_moves(
     sim: &MapSimulation,
     links: &LevelLinks,
     snap: &Snapshot,
-    unit: f64,
+    limits: &Distances,
+    attract: bool,
 ) -> Vec<Point> {
     let state = sim.state();
     let clip = sim.clip();
     let mut pos: Vec<Point> = state.sites.iter().map(|s| s.position).collect();
     let local: Vec<usize> = children.iter().map(|c| links.local[*c]).collect();
-    let gap = GAP * unit;
-    let step = STEP * unit;
+    let (gap, step, d_opt) = (limits.gap, limits.step, limits.d_opt);
     // Order: decreasing distance to the strongest partner, ties by index.
     let mut order: Vec<(f64, usize)> = (0..children.len())
         .map(|j| {
@@ -952,7 +1064,7 @@ fn attraction_moves(
                 && (!cross_parent || boundary_distance(clip, p) >= gap)
         };
         let mut moved = false;
-        if !links.links[me].is_empty() {
+        if attract && !links.links[me].is_empty() {
             // Different parent first, then same parent; each by distance, furthest first (§5.5).
             let mut records: Vec<(bool, f64, usize, u8)> = links.links[me]
                 .iter()
@@ -970,10 +1082,7 @@ fn attraction_moves(
             for (same, dist, t, score) in records {
                 let neighbour = snap.adjacency.are_adjacent(me, t);
                 if same {
-                    if neighbour
-                        || dist < D_OPT * unit
-                        || !has_free_neighbour(links, snap, t, score)
-                    {
+                    if neighbour || dist < d_opt || !has_free_neighbour(links, snap, t, score) {
                         continue;
                     }
                     let target = pos[snap.slot[t]];
@@ -991,7 +1100,7 @@ fn attraction_moves(
                 let slide = edge
                     .and_then(|(a, b)| slide_along(pos[j], centroid, snap.centroid[t], a, b, step));
                 if neighbour {
-                    let candidate = if d <= D_MAX * unit { slide } else { toward };
+                    let candidate = if d <= limits.d_max { slide } else { toward };
                     if let Some(p) = candidate {
                         if accept(p, &pos, true) {
                             pos[j] = p;
@@ -999,7 +1108,7 @@ fn attraction_moves(
                             break;
                         }
                     }
-                } else if d > D_OPT * unit {
+                } else if d > d_opt {
                     if let Some(p) = toward {
                         if accept(p, &pos, true) {
                             pos[j] = p;
@@ -1015,8 +1124,8 @@ fn attraction_moves(
                 }
             }
         }
-        if !moved && CENTROID_STEPS {
-            let p = pos[j] + (centroid - pos[j]) * CENTROID_STEP;
+        if !moved && limits.centroid_steps {
+            let p = pos[j] + (centroid - pos[j]) * limits.centroid_step;
             if clip.contains(p) && state.diagram.cells[j].polygon.is_some() {
                 pos[j] = p;
             }

@@ -144,3 +144,41 @@ fn a_similarity_method_without_similarity_is_a_usage_error() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("needs a similarity"));
 }
+
+/// `--prototype` reproduces the paper's optimised column (Table 2) within two
+/// constraints on small datasets, and its layouts are structurally sound; its
+/// area error is the prototype's own, so it is not held to d3's target.
+#[test]
+fn prototype_switch_reproduces_the_papers_figures() {
+    for (file, paper) in [
+        ("country_pop_50M_AUS.json", 15u64),
+        ("syntheticPoints_10nodes_2components.json", 9),
+    ] {
+        let input = support::shared().join("paper-data").join(file);
+        let dir = support::temp_dir(&format!("prototype_{file}"));
+        let counts: Vec<u64> = (1..=5)
+            .map(|seed| {
+                let out = dir.join(format!("{seed}.json"));
+                support::layout(
+                    &input,
+                    &[&out],
+                    &[
+                        "--prototype",
+                        "--outline",
+                        "ngon",
+                        "--seed",
+                        &seed.to_string(),
+                    ],
+                );
+                support::check_layout(&out)["realized_lowest"]
+                    .as_u64()
+                    .expect("count")
+            })
+            .collect();
+        let m = median(counts.clone());
+        assert!(
+            m.abs_diff(paper) <= 2,
+            "{file}: prototype median {m} vs paper {paper} ({counts:?})"
+        );
+    }
+}
