@@ -25,7 +25,7 @@ pub(crate) struct BenchArgs {
 
 pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
-    let request = args.options.request();
+    let request = args.options.request()?;
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..args.repeat.max(1) {

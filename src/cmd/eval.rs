@@ -20,9 +20,6 @@ pub(crate) struct EvalArgs {
     input: PathBuf,
     #[command(flatten)]
     options: LayoutOptions,
-    /// Evaluate every method, one row each (instead of --method).
-    #[arg(long, conflicts_with = "method")]
-    all: bool,
     /// Print JSON lines instead of a table.
     #[arg(long)]
     json: bool,
@@ -32,19 +29,19 @@ pub(crate) struct EvalArgs {
 }
 
 pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
-    if args.all && args.out.is_some() {
-        return Err(UsageError("--out needs one method, not --all".to_string()).into());
+    let all = args.options.method == Some(MethodArg::All);
+    if all && args.out.is_some() {
+        return Err(UsageError("--out needs one method, not --method all".to_string()).into());
     }
     let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
-    let methods: Vec<Option<Method>> = if args.all {
+    let methods: Vec<Option<Method>> = if all {
         Method::ALL.into_iter().map(Some).collect()
     } else {
-        vec![args.options.method.map(MethodArg::method)]
+        vec![args.options.method.and_then(MethodArg::method)]
     };
     let mut rows = Vec::new();
     for method in methods {
-        let mut request = args.options.request();
-        request.method = method;
+        let request = args.options.request_with(method);
         let computed = compute(&dataset, &request)?;
         let deepest = computed.dataset.max_depth();
         let leaf_pairs: Vec<(usize, usize)> = computed

@@ -41,7 +41,7 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
         })
         .collect::<Result<Vec<_>, _>>()?;
     let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
-    let computed = nptreemap::layout::compute(&dataset, &args.options.request())?;
+    let computed = nptreemap::layout::compute(&dataset, &args.options.request()?)?;
     let report = &computed.report;
     if report.unconverged > 0 {
         tracing::warn!(

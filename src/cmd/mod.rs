@@ -58,16 +58,20 @@ pub(crate) enum MethodArg {
     MatchSwap,
     /// The full neighbourhood-preserving method.
     Neighbor,
+    /// Every method, one after the other (`eval` only).
+    All,
 }
 
 impl MethodArg {
-    pub(crate) fn method(self) -> Method {
+    /// The one method named, or `None` for `all`.
+    pub(crate) fn method(self) -> Option<Method> {
         match self {
-            MethodArg::Plain => Method::Plain,
-            MethodArg::RandomCvt => Method::RandomCvt,
-            MethodArg::ProjScale => Method::ProjScale,
-            MethodArg::MatchSwap => Method::MatchSwap,
-            MethodArg::Neighbor => Method::Neighbor,
+            MethodArg::Plain => Some(Method::Plain),
+            MethodArg::RandomCvt => Some(Method::RandomCvt),
+            MethodArg::ProjScale => Some(Method::ProjScale),
+            MethodArg::MatchSwap => Some(Method::MatchSwap),
+            MethodArg::Neighbor => Some(Method::Neighbor),
+            MethodArg::All => None,
         }
     }
 }
@@ -117,10 +121,21 @@ impl LayoutOptions {
         }
     }
 
-    pub(crate) fn request(&self) -> Request {
+    /// The layout request; `--method all` is refused here (only `eval` takes it).
+    pub(crate) fn request(&self) -> Result<Request, UsageError> {
+        match self.method {
+            Some(MethodArg::All) => Err(UsageError(
+                "--method all is for `nptreemap eval`; pick one method here".to_string(),
+            )),
+            other => Ok(self.request_with(other.and_then(MethodArg::method))),
+        }
+    }
+
+    /// The layout request for one method (`None`: the default for the data).
+    pub(crate) fn request_with(&self, method: Option<Method>) -> Request {
         Request {
             params: self.params(),
-            method: self.method.map(MethodArg::method),
+            method,
             similarity: self.similarity.map(|s| match s {
                 SimilarityArg::Cosine => SimilarityKind::Cosine,
                 SimilarityArg::Jaccard => SimilarityKind::Jaccard,
