@@ -96,6 +96,10 @@ const POLISH_ROUNDS: usize = 4;
 const LIFTED_WEIGHT: usize = 2;
 /// Candidates per level followed down the tree when looking ahead.
 const LOOKAHEAD_CANDIDATES: usize = 3;
+/// Most Lloyd ticks of the final relaxation, and the share of the way to the
+/// centroid each goes.
+const RELAX_TICKS: usize = 30;
+const RELAX_STEP: f64 = 0.5;
 /// Levels up to this many cells get the exhaustive swap polish.
 const EXHAUSTIVE_MAX_CELLS: usize = 64;
 /// Most swap evaluations of the exhaustive polish per level and start.
@@ -247,6 +251,31 @@ pub fn layout_similar(
     Ok((finish(dataset, params.canvas, cells), report))
 }
 
+/// How thoroughly a level is searched: small hierarchies (those that also get
+/// lookahead) are scored every tick and relaxed at the end; on larger ones both
+/// cost more time than they return (Flare: 80 ms for no change).
+#[derive(Clone, Copy, Debug)]
+struct LevelPlan {
+    check_every: usize,
+    relax_ticks: usize,
+}
+
+impl LevelPlan {
+    fn new(small: bool) -> Self {
+        if small {
+            Self {
+                check_every: 1,
+                relax_ticks: RELAX_TICKS,
+            }
+        } else {
+            Self {
+                check_every: CHECK_EVERY,
+                relax_ticks: 0,
+            }
+        }
+    }
+}
+
 /// Everything a level needs that does not change from level to level.
 struct Context<'a> {
     dataset: &'a Dataset,
@@ -327,8 +356,8 @@ fn descend(
     let mut candidates: Vec<(usize, Vec<Diagram>)> = (0..starts)
         .map(|start| {
             // Small hierarchies are cheap to score, and a level's best moment
-            // is often brief: they are scored every tick.
-            let every = if ctx.lookahead { 1 } else { CHECK_EVERY };
+            // is often brief.
+            let plan = LevelPlan::new(ctx.lookahead);
             let prototype = ctx
                 .np
                 .prototype
@@ -344,7 +373,7 @@ fn descend(
                 ctx.np,
                 ctx.settings,
                 start,
-                every,
+                plan,
                 prototype,
             )
         })
@@ -447,7 +476,7 @@ fn run_level(
     np: &NeighborParams,
     settings: MapSettings,
     start: usize,
-    every: usize,
+    plan: LevelPlan,
     prototype: Option<Distances>,
 ) -> (usize, Vec<Diagram>) {
     let mut run_params = params.clone();
@@ -487,7 +516,7 @@ fn run_level(
     match method {
         Method::Neighbor => match prototype {
             Some(limits) => optimise_prototype(&mut diagrams, links, canvas, np, &limits),
-            None => return optimise_level(&mut diagrams, links, canvas, np, every),
+            None => return optimise_level(&mut diagrams, links, canvas, np, plan),
         },
         Method::MatchSwap => diagrams.par_iter_mut().for_each(|d| settle(d, np)),
         _ => diagrams.par_iter_mut().for_each(|d| {
@@ -876,7 +905,7 @@ fn optimise_level(
     links: &LevelLinks,
     canvas: Canvas,
     np: &NeighborParams,
-    every: usize,
+    plan: LevelPlan,
 ) -> (usize, Vec<Diagram>) {
     // The unit length of the level: square root of its mean cell area.
     let total: f64 = diagrams
@@ -909,7 +938,7 @@ fn optimise_level(
                 sim.tick_with_positions(&positions);
             }
         });
-        if (tick + 1) % every == 0 || tick + 1 == np.ticks {
+        if (tick + 1) % plan.check_every == 0 || tick + 1 == np.ticks {
             let candidate = scored_copy(diagrams, links, canvas, np);
             // Ties go to the later state, which has had more optimisation.
             if candidate.0 >= best.0 {
@@ -930,7 +959,49 @@ fn optimise_level(
         }
         best = candidate;
     }
-    exhaustive_polish(best, links, canvas, np)
+    let best = exhaustive_polish(best, links, canvas, np);
+    relax(best, links, canvas, np, plan.relax_ticks)
+}
+
+/// Rounds the cells: damped Lloyd ticks on the chosen state, each kept only
+/// while the level's score does not drop. The attraction phase moves sites
+/// off their centroids (long cells); this takes back what the arrangement
+/// does not need.
+fn relax(
+    mut best: (usize, Vec<Diagram>),
+    links: &LevelLinks,
+    canvas: Canvas,
+    np: &NeighborParams,
+    ticks: usize,
+) -> (usize, Vec<Diagram>) {
+    for _ in 0..ticks {
+        let mut trial = best.1.clone();
+        trial.par_iter_mut().for_each(|d| {
+            if let Diagram::Sim { sim, .. } = d {
+                let state = sim.state();
+                let positions: Vec<Point> = state
+                    .sites
+                    .iter()
+                    .zip(&state.diagram.cells)
+                    .map(|(s, c)| {
+                        let p = s.position + (c.centroid - s.position) * RELAX_STEP;
+                        if c.polygon.is_some() && sim.clip().contains(p) {
+                            p
+                        } else {
+                            s.position
+                        }
+                    })
+                    .collect();
+                sim.tick_with_positions(&positions);
+            }
+        });
+        let candidate = scored_copy(&trial, links, canvas, np);
+        if candidate.0 < best.0 {
+            break;
+        }
+        best = candidate;
+    }
+    best
 }
 
 /// On small levels, try every same-parent swap on the settled geometry, scored
