@@ -11,6 +11,7 @@
 //!
 //! Steps 2 to 5 are pure: no files, no clock, no printing.
 
+pub mod config;
 pub mod geom;
 pub mod layout;
 pub mod metrics;

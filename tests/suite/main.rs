@@ -5,7 +5,6 @@ mod support;
 
 mod architecture;
 mod cli_errors;
-mod config_defaults;
 mod degenerate;
 mod determinism;
 mod neighborhood;

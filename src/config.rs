@@ -1,0 +1,423 @@
+//! The YAML configuration of `nptreemap build` and `watch`: datasets (format,
+//! files, field mapping, similarity), layout settings and outputs. `from_str`
+//! parses text; `from_path` is a thin reader over it. The only module that
+//! names the YAML crate. Unknown keys are rejected with their line and column;
+//! relative paths are resolved against the config file's directory.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::layout::{Canvas, Method, NeighborParams, Outline, Params, Request};
+use crate::neighborhood::SimilarityKind;
+
+/// The built-in defaults, every key documented (`config/default.yaml`).
+pub const DEFAULT_YAML: &str = include_str!("../config/default.yaml");
+
+/// A parsed, path-resolved configuration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Config {
+    /// Layout settings shared by every dataset.
+    pub layout: LayoutConfig,
+    /// The datasets, in file order.
+    pub datasets: Vec<DatasetConfig>,
+}
+
+/// The `layout` section.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LayoutConfig {
+    /// Canvas width. Default: 1000.
+    pub width: f64,
+    /// Canvas height. Default: 1000.
+    pub height: f64,
+    /// Root outline: `rect`, `circle` or `ngon`. Default: `rect`.
+    pub outline: OutlineName,
+    /// Seed for every random choice. Default: 1.
+    pub seed: u64,
+    /// Layout method; `None` = `neighbor` with a similarity, else `plain`.
+    pub method: Option<MethodName>,
+    /// Per-diagram area-error target. Default: 0.01.
+    pub convergence_ratio: f64,
+    /// Iteration cap per diagram. Default: 200.
+    pub max_iterations: usize,
+    /// Relaxation ticks before a diagram may stop. Default: 8.
+    pub min_iterations: usize,
+    /// Lightest sibling share laid out. Default: 0.001.
+    pub min_weight_ratio: f64,
+    /// Run the paper prototype's optimiser. Default: false.
+    pub prototype: bool,
+}
+
+impl Default for LayoutConfig {
+    fn default() -> Self {
+        let p = Params::default();
+        Self {
+            width: p.canvas.width,
+            height: p.canvas.height,
+            outline: OutlineName::Rect,
+            seed: p.seed,
+            method: None,
+            convergence_ratio: p.convergence_ratio,
+            max_iterations: p.max_iterations,
+            min_iterations: p.min_iterations,
+            min_weight_ratio: p.min_weight_ratio,
+            prototype: false,
+        }
+    }
+}
+
+/// Root outline names in the config.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OutlineName {
+    /// The whole canvas.
+    Rect,
+    /// The largest centred circle.
+    Circle,
+    /// The largest centred regular 32-gon.
+    Ngon,
+}
+
+/// Method names in the config.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MethodName {
+    /// See [`Method::Plain`].
+    Plain,
+    /// See [`Method::RandomCvt`].
+    RandomCvt,
+    /// See [`Method::ProjScale`].
+    ProjScale,
+    /// See [`Method::MatchSwap`].
+    MatchSwap,
+    /// See [`Method::Neighbor`].
+    Neighbor,
+}
+
+/// Similarity names in the config.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SimilarityName {
+    /// Cosine of feature vectors.
+    Cosine,
+    /// Jaccard index of non-zero supports.
+    Jaccard,
+    /// Identical vectors.
+    Binary,
+    /// Listed neighbours (shared borders).
+    Neighbors,
+    /// Pearson correlation of rows.
+    Pearson,
+}
+
+/// One dataset: where its files are, how to read them, where its pictures go.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DatasetConfig {
+    /// Name used in messages and status lines.
+    pub name: String,
+    /// Input format, a name from the format registry (e.g. `hierarchy-json`).
+    pub format: String,
+    /// The format's input files by role (e.g. `nodes`, `pairs`), relative to
+    /// the config file.
+    pub files: std::collections::BTreeMap<String, PathBuf>,
+    /// Field mapping: which columns hold the id, label, weight, groups, ….
+    #[serde(default)]
+    pub fields: FieldsConfig,
+    /// Similarity between nodes; default: what the format declares.
+    #[serde(default)]
+    pub similarity: Option<SimilarityName>,
+    /// What to write.
+    #[serde(default)]
+    pub outputs: Vec<OutputConfig>,
+}
+
+/// The `fields` mapping of a dataset (the format's column names).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FieldsConfig {
+    /// Column with the node id.
+    pub id: Option<String>,
+    /// Column with the label shown to people.
+    pub label: Option<String>,
+    /// Column (or hierarchy JSON field) with the weight.
+    pub weight: Option<String>,
+    /// Column with a `#rrggbb` colour.
+    pub color: Option<String>,
+    /// Column with the parent's id.
+    pub parent: Option<String>,
+    /// Column with a path such as `Asia/China`.
+    pub path: Option<String>,
+    /// Grouping columns, outermost first.
+    pub groups: Vec<String>,
+    /// Pair-list column with the link strength.
+    pub strength: Option<String>,
+}
+
+/// One output file.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputConfig {
+    /// Where to write, relative to the config file.
+    pub path: PathBuf,
+    /// `svg`, `png`, `json` or `html`; default: the path's extension.
+    #[serde(default)]
+    pub kind: Option<OutputKind>,
+    /// Pixel scale for PNG. Default: 1.
+    #[serde(default = "one")]
+    pub scale: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// Kinds of output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OutputKind {
+    /// A picture as SVG.
+    Svg,
+    /// A picture as PNG.
+    Png,
+    /// The layout JSON.
+    Json,
+    /// An interactive HTML page.
+    Html,
+}
+
+/// What the raw file holds (before paths are resolved).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawConfig {
+    #[serde(default)]
+    layout: LayoutConfig,
+    #[serde(default)]
+    datasets: Vec<DatasetConfig>,
+}
+
+/// A configuration that cannot be used.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConfigError {
+    /// The YAML is malformed or does not fit the schema (unknown key, wrong type).
+    #[error("{}{message}", position(*.line, *.column))]
+    Yaml {
+        /// 1-based line, when known.
+        line: Option<usize>,
+        /// 1-based column, when known.
+        column: Option<usize>,
+        /// What is wrong.
+        message: String,
+    },
+    /// The YAML fits the schema but a value is unusable.
+    #[error("{field}: {message}")]
+    Value {
+        /// Where, as a path such as `datasets[0].outputs[1].path`.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+fn position(line: Option<usize>, column: Option<usize>) -> String {
+    match (line, column) {
+        (Some(l), Some(c)) => format!("line {l}, column {c}: "),
+        (Some(l), None) => format!("line {l}: "),
+        _ => String::new(),
+    }
+}
+
+impl Config {
+    /// Parses config text; relative paths are taken against `base`.
+    pub fn from_str(text: &str, base: &Path) -> Result<Config, ConfigError> {
+        let raw: RawConfig = if text.trim().is_empty() {
+            RawConfig {
+                layout: LayoutConfig::default(),
+                datasets: Vec::new(),
+            }
+        } else {
+            serde_yaml::from_str(text).map_err(|e| {
+                let loc = e.location();
+                ConfigError::Yaml {
+                    line: loc.as_ref().map(|l| l.line()),
+                    column: loc.as_ref().map(|l| l.column()),
+                    message: strip_location(&e.to_string()),
+                }
+            })?
+        };
+        let mut datasets = raw.datasets;
+        let mut seen = std::collections::BTreeSet::new();
+        for (i, d) in datasets.iter_mut().enumerate() {
+            if !seen.insert(d.name.clone()) {
+                return Err(ConfigError::Value {
+                    field: format!("datasets[{i}].name"),
+                    message: format!("dataset name {:?} is used twice", d.name),
+                });
+            }
+            for path in d.files.values_mut() {
+                *path = base.join(&*path);
+            }
+            for (k, out) in d.outputs.iter_mut().enumerate() {
+                out.path = base.join(&out.path);
+                if out.kind.is_none() {
+                    out.kind = kind_of(&out.path);
+                }
+                if out.kind.is_none() {
+                    return Err(ConfigError::Value {
+                        field: format!("datasets[{i}].outputs[{k}].path"),
+                        message: format!(
+                            "{}: cannot tell the kind from the extension; add `kind: svg|png|json|html`",
+                            out.path.display()
+                        ),
+                    });
+                }
+                if !(out.scale.is_finite() && out.scale > 0.0) {
+                    return Err(ConfigError::Value {
+                        field: format!("datasets[{i}].outputs[{k}].scale"),
+                        message: "must be a positive number".to_string(),
+                    });
+                }
+            }
+        }
+        let config = Config {
+            layout: raw.layout,
+            datasets,
+        };
+        config.params().validate().map_err(|e| ConfigError::Value {
+            field: "layout".to_string(),
+            message: e.to_string(),
+        })?;
+        Ok(config)
+    }
+
+    /// The layout parameters of the `layout` section.
+    pub fn params(&self) -> Params {
+        let l = &self.layout;
+        Params {
+            canvas: Canvas {
+                width: l.width,
+                height: l.height,
+            },
+            outline: match l.outline {
+                OutlineName::Rect => Outline::Rectangle,
+                OutlineName::Circle => Outline::Circle,
+                OutlineName::Ngon => Outline::Regular(32),
+            },
+            seed: l.seed,
+            convergence_ratio: l.convergence_ratio,
+            max_iterations: l.max_iterations,
+            min_iterations: l.min_iterations,
+            min_weight_ratio: l.min_weight_ratio,
+        }
+    }
+
+    /// The layout request for one dataset.
+    pub fn request(&self, dataset: &DatasetConfig) -> Request {
+        Request {
+            params: self.params(),
+            method: self.layout.method.map(|m| match m {
+                MethodName::Plain => Method::Plain,
+                MethodName::RandomCvt => Method::RandomCvt,
+                MethodName::ProjScale => Method::ProjScale,
+                MethodName::MatchSwap => Method::MatchSwap,
+                MethodName::Neighbor => Method::Neighbor,
+            }),
+            similarity: dataset.similarity.map(|s| match s {
+                SimilarityName::Cosine => SimilarityKind::Cosine,
+                SimilarityName::Jaccard => SimilarityKind::Jaccard,
+                SimilarityName::Binary => SimilarityKind::Binary,
+                SimilarityName::Neighbors => SimilarityKind::NeighborList,
+                SimilarityName::Pearson => SimilarityKind::Pearson,
+            }),
+            neighbor: NeighborParams {
+                prototype: self.layout.prototype,
+                ..NeighborParams::default()
+            },
+        }
+    }
+}
+
+/// The output kind a path's extension names.
+pub fn kind_of(path: &Path) -> Option<OutputKind> {
+    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+    match ext.as_str() {
+        "svg" => Some(OutputKind::Svg),
+        "png" => Some(OutputKind::Png),
+        "json" => Some(OutputKind::Json),
+        "html" | "htm" => Some(OutputKind::Html),
+        _ => None,
+    }
+}
+
+/// serde_yaml appends " at line L column C" to its messages; the position is
+/// reported separately, so drop it from the text.
+fn strip_location(message: &str) -> String {
+    match message.find(" at line ") {
+        Some(i) => message[..i].to_string(),
+        None => message.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Config, ConfigError> {
+        Config::from_str(text, Path::new("/base"))
+    }
+
+    #[test]
+    fn default_yaml_is_the_code_default() {
+        let c = parse(DEFAULT_YAML).expect("default.yaml parses");
+        assert_eq!(c.layout, LayoutConfig::default());
+        assert_eq!(c.params(), Params::default());
+        assert!(c.datasets.is_empty());
+    }
+
+    #[test]
+    fn paths_are_relative_to_the_config_and_kinds_come_from_extensions() {
+        let c = parse(
+            "datasets:\n  - name: world\n    format: hierarchy-json\n    files: {hierarchy: data/w.json}\n    outputs:\n      - path: out/w.svg\n      - {path: out/w.png, scale: 2}\n",
+        )
+        .expect("valid");
+        let d = &c.datasets[0];
+        assert_eq!(d.files["hierarchy"], Path::new("/base/data/w.json"));
+        assert_eq!(d.outputs[0].path, Path::new("/base/out/w.svg"));
+        assert_eq!(d.outputs[0].kind, Some(OutputKind::Svg));
+        assert_eq!(d.outputs[1].kind, Some(OutputKind::Png));
+        assert_eq!(d.outputs[1].scale, 2.0);
+    }
+
+    #[test]
+    fn unknown_keys_are_rejected_with_line_and_column() {
+        let err = parse("layout:\n  width: 800\n  colour: red\n").expect_err("unknown key");
+        let text = err.to_string();
+        assert!(text.starts_with("line 3, column 3: "), "{text}");
+        assert!(text.contains("colour"), "{text}");
+    }
+
+    #[test]
+    fn type_errors_name_their_position() {
+        let err = parse("layout:\n  seed: many\n").expect_err("bad type");
+        assert!(err.to_string().starts_with("line 2, column 9: "), "{err}");
+    }
+
+    #[test]
+    fn bad_values_name_the_field() {
+        let err = parse("layout:\n  width: -5\n").expect_err("negative width");
+        assert!(err.to_string().contains("width"), "{err}");
+        let err = parse("datasets:\n  - name: a\n    format: x\n    files: {}\n    outputs: [{path: out/a.bmp}]\n")
+            .expect_err("unknown kind");
+        assert!(
+            err.to_string().contains("datasets[0].outputs[0].path"),
+            "{err}"
+        );
+        let twice =
+            "datasets:\n  - {name: a, format: x, files: {}}\n  - {name: a, format: x, files: {}}\n";
+        assert!(parse(twice)
+            .expect_err("duplicate")
+            .to_string()
+            .contains("used twice"));
+    }
+}
