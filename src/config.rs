@@ -220,6 +220,16 @@ pub enum ConfigError {
     },
 }
 
+/// A config file that cannot be read or used, naming the file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}: {message}", .path.display())]
+pub struct ConfigFileError {
+    /// The config file.
+    pub path: PathBuf,
+    /// What is wrong, with line and column where known.
+    pub message: String,
+}
+
 fn position(line: Option<usize>, column: Option<usize>) -> String {
     match (line, column) {
         (Some(l), Some(c)) => format!("line {l}, column {c}: "),
@@ -289,6 +299,19 @@ impl Config {
             message: e.to_string(),
         })?;
         Ok(config)
+    }
+
+    /// Reads and parses a config file; paths in it are relative to its folder.
+    pub fn from_path(path: &Path) -> Result<Config, ConfigFileError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ConfigFileError {
+            path: path.to_path_buf(),
+            message: format!("cannot read: {e}"),
+        })?;
+        let base = path.parent().unwrap_or(Path::new("."));
+        Config::from_str(&text, base).map_err(|e| ConfigFileError {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })
     }
 
     /// The layout parameters of the `layout` section.

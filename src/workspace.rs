@@ -33,6 +33,14 @@ pub struct ReadOptions {
     pub weight_field: Option<String>,
 }
 
+/// Reads a file's bytes, naming it in the error.
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, InputError> {
+    std::fs::read(path).map_err(|source| InputError::Read {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
 /// Reads and validates a hierarchy JSON file.
 pub fn read_dataset(path: &Path, options: &ReadOptions) -> Result<Dataset, InputError> {
     let bytes = std::fs::read(path).map_err(|source| InputError::Read {

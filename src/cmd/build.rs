@@ -1,0 +1,59 @@
+//! `nptreemap build [CONFIG]` and `nptreemap check [CONFIG]`: every output of a
+//! config, or only the validation of config and data. All datasets are built in
+//! memory before anything is written, so a bad input leaves every output as it was.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+
+use nptreemap::config::Config;
+use super::progress::Progress;
+use nptreemap::pipeline;
+
+/// Arguments of `nptreemap build` and `nptreemap check`.
+#[derive(Debug, Args)]
+pub(crate) struct BuildArgs {
+    /// The config file.
+    #[arg(default_value = "nptreemap.yaml")]
+    config: PathBuf,
+}
+
+pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
+    let config = Config::from_path(&args.config)?;
+    let progress = Progress::new(config.datasets.len());
+    let mut built = Vec::new();
+    for (i, d) in config.datasets.iter().enumerate() {
+        progress.step(i, &d.name);
+        let result = pipeline::build(&config, d);
+        if result.is_err() {
+            progress.finish();
+        }
+        built.push(result?);
+    }
+    progress.finish();
+    for b in &built {
+        let written = pipeline::write_outputs(b)
+            .with_context(|| format!("dataset {:?}: cannot write its outputs", b.name))?;
+        for (path, bytes) in &b.outputs {
+            let state = if written.contains(path) { "wrote" } else { "unchanged" };
+            println!("{state} {} ({} bytes, dataset {})", path.display(), bytes.len(), b.name);
+        }
+    }
+    Ok(())
+}
+
+pub(crate) fn check(args: &BuildArgs) -> anyhow::Result<()> {
+    let config = Config::from_path(&args.config)?;
+    for d in &config.datasets {
+        let dataset = pipeline::load(d)?;
+        println!(
+            "ok {}: {} nodes, {} leaves, {} outputs",
+            d.name,
+            dataset.len(),
+            dataset.leaves().count(),
+            d.outputs.len()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,208 @@
+//! One build of a configured dataset: read its files, parse them with its
+//! format, lay it out, render every output in memory. Writing is a separate
+//! step (`write_outputs`), so a failure anywhere leaves every existing output
+//! untouched. No loop, no watcher, no printing.
+
+use std::path::PathBuf;
+
+use crate::config::{Config, DatasetConfig, OutputKind};
+use crate::layout::{compute, Computed, LayoutError};
+use crate::render::{layout_json, svg, ConstraintOut, JsonExtras, SvgStyle};
+use crate::{metrics, store, workspace};
+use nptreemap_formats::{registry, Dataset, FormatOptions, Inputs};
+
+/// Why a dataset could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum BuildError {
+    /// The config names a format that is not registered.
+    #[error("dataset {dataset:?}: unknown format {format:?} (known: {known})")]
+    UnknownFormat {
+        /// The dataset's name.
+        dataset: String,
+        /// The format named.
+        format: String,
+        /// The registered names.
+        known: String,
+    },
+    /// The format needs an input the config does not give.
+    #[error("dataset {dataset:?}: format {format:?} needs `files: {{{role}: ...}}`")]
+    MissingFile {
+        /// The dataset's name.
+        dataset: String,
+        /// The format.
+        format: String,
+        /// The missing role.
+        role: String,
+    },
+    /// The config gives an input the format does not read.
+    #[error("dataset {dataset:?}: format {format:?} reads no file called {role:?} (it reads: {roles})")]
+    UnknownRole {
+        /// The dataset's name.
+        dataset: String,
+        /// The format.
+        format: String,
+        /// The extra role.
+        role: String,
+        /// The roles it reads.
+        roles: String,
+    },
+    /// An input file could not be read or parsed.
+    #[error(transparent)]
+    Input(#[from] workspace::InputError),
+    /// The layout could not be made.
+    #[error("dataset {dataset:?}: {source}")]
+    Layout {
+        /// The dataset's name.
+        dataset: String,
+        /// Why.
+        source: LayoutError,
+    },
+    /// An output kind this version cannot write yet.
+    #[error("{}: {kind} output is not available yet", .path.display())]
+    Unsupported {
+        /// The output.
+        path: PathBuf,
+        /// The kind.
+        kind: &'static str,
+    },
+}
+
+/// A dataset laid out and rendered, not yet written.
+#[derive(Debug)]
+pub struct Built {
+    /// The dataset's name.
+    pub name: String,
+    /// The layout and its constraints.
+    pub computed: Computed,
+    /// Every output's path and bytes.
+    pub outputs: Vec<(PathBuf, Vec<u8>)>,
+}
+
+/// Reads and parses one configured dataset.
+pub fn load(d: &DatasetConfig) -> Result<Dataset, BuildError> {
+    let format = registry::find(&d.format).ok_or_else(|| BuildError::UnknownFormat {
+        dataset: d.name.clone(),
+        format: d.format.clone(),
+        known: registry::names().join(", "),
+    })?;
+    let roles = format.roles();
+    for role in d.files.keys() {
+        if !roles.iter().any(|r| r.name == role) {
+            return Err(BuildError::UnknownRole {
+                dataset: d.name.clone(),
+                format: d.format.clone(),
+                role: role.clone(),
+                roles: roles.iter().map(|r| r.name).collect::<Vec<_>>().join(", "),
+            });
+        }
+    }
+    if let Some(r) = roles.iter().find(|r| r.required && !d.files.contains_key(r.name)) {
+        return Err(BuildError::MissingFile {
+            dataset: d.name.clone(),
+            format: d.format.clone(),
+            role: r.name.to_string(),
+        });
+    }
+    let mut bytes = Vec::new();
+    for (role, path) in &d.files {
+        bytes.push((role.as_str(), path, workspace::read_bytes(path)?));
+    }
+    let mut inputs = Inputs::new();
+    for (role, _, b) in &bytes {
+        inputs = inputs.with(role, b);
+    }
+    let f = &d.fields;
+    let options = FormatOptions {
+        id: f.id.clone(),
+        label: f.label.clone(),
+        weight: f.weight.clone(),
+        color: f.color.clone(),
+        parent: f.parent.clone(),
+        path: f.path.clone(),
+        groups: f.groups.clone(),
+        strength: f.strength.clone(),
+        ..FormatOptions::default()
+    };
+    format.parse(&inputs, &options).map_err(|e| {
+        let path = bytes
+            .iter()
+            .find(|(role, _, _)| *role == e.role)
+            .map(|(_, p, _)| (*p).clone())
+            .unwrap_or_else(|| PathBuf::from(&e.role));
+        BuildError::Input(workspace::InputError::Parse {
+            path,
+            source: Box::new(e.error),
+        })
+    })
+}
+
+/// Loads, lays out and renders one dataset, writing nothing.
+pub fn build(config: &Config, d: &DatasetConfig) -> Result<Built, BuildError> {
+    let dataset = load(d)?;
+    let computed = compute(&dataset, &config.request(d)).map_err(|source| BuildError::Layout {
+        dataset: d.name.clone(),
+        source,
+    })?;
+    let mut outputs = Vec::new();
+    for out in &d.outputs {
+        let bytes = match out.kind {
+            Some(OutputKind::Json) => layout_json(&computed.dataset, &computed.layout, &json_extras(&computed)).into_bytes(),
+            Some(OutputKind::Svg) => svg(&computed.dataset, &computed.layout, &SvgStyle::default()).into_bytes(),
+            Some(OutputKind::Png) => {
+                return Err(BuildError::Unsupported {
+                    path: out.path.clone(),
+                    kind: "PNG",
+                })
+            }
+            Some(OutputKind::Html) | None => {
+                return Err(BuildError::Unsupported {
+                    path: out.path.clone(),
+                    kind: "HTML",
+                })
+            }
+        };
+        outputs.push((out.path.clone(), bytes));
+    }
+    Ok(Built {
+        name: d.name.clone(),
+        computed,
+        outputs,
+    })
+}
+
+/// Writes a built dataset's outputs atomically; an output whose bytes would
+/// not change is left alone. Returns the paths written.
+pub fn write_outputs(built: &Built) -> std::io::Result<Vec<PathBuf>> {
+    let mut written = Vec::new();
+    for (path, bytes) in &built.outputs {
+        if store::write_if_changed(path, bytes)? {
+            written.push(path.clone());
+        }
+    }
+    Ok(written)
+}
+
+/// The layout JSON's constraints and metrics for a computed layout.
+pub fn json_extras(computed: &Computed) -> JsonExtras {
+    let ds = &computed.dataset;
+    let q = metrics::quality(ds, &computed.layout);
+    JsonExtras {
+        constraints: computed
+            .constraints
+            .iter()
+            .zip(&computed.realized)
+            .map(|(c, r)| ConstraintOut {
+                a: ds.node(c.a).id.clone(),
+                b: ds.node(c.b).id.clone(),
+                similarity: c.similarity,
+                strength: c.strength,
+                realized: *r,
+            })
+            .collect(),
+        metrics: vec![
+            ("area_error_diagram_mean".to_string(), q.area_error_diagram_mean),
+            ("area_error_diagram_max".to_string(), q.area_error_diagram_max),
+            ("aspect_ratio_mean".to_string(), q.aspect_ratio_mean),
+        ],
+    }
+}
