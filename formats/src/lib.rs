@@ -23,9 +23,16 @@
 pub mod dataset;
 /// [`FormatError`]: reader errors with line and column.
 pub mod error;
+/// The [`Format`] trait, its inputs, options and errors.
+pub mod format;
 /// The paper's hierarchy JSON and d3-hierarchy style JSON.
 pub mod hierarchy_json;
+/// The list of formats, looked up by name.
+pub mod registry;
+/// CSV/TSV rows with positions, and node tables → hierarchies.
+pub mod table;
 
 pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, SimilarityHint};
 pub use error::FormatError;
-pub use hierarchy_json::{parse_hierarchy_json, HierarchyJsonOptions};
+pub use format::{Format, FormatOptions, InputError, Inputs, Role};
+pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};
