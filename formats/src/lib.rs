@@ -19,6 +19,8 @@
 //! # Ok::<(), nptreemap_formats::FormatError>(())
 //! ```
 
+/// Border lists: a node table plus a pair list.
+pub mod border_list;
 /// The model: [`Dataset`], [`Node`], and [`DatasetBuilder`] with its checks.
 pub mod dataset;
 /// [`FormatError`]: reader errors with line and column.
@@ -32,6 +34,7 @@ pub mod registry;
 /// CSV/TSV rows with positions, and node tables → hierarchies.
 pub mod table;
 
+pub use border_list::BorderList;
 pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, SimilarityHint};
 pub use error::FormatError;
 pub use format::{Format, FormatOptions, InputError, Inputs, Role};

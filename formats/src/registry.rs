@@ -1,6 +1,7 @@
 //! The list of input formats, by name. Adding a format is one line here (see
 //! `formats/README.md`).
 
+use crate::border_list::BorderList;
 use crate::format::Format;
 use crate::hierarchy_json::HierarchyJson;
 
@@ -9,6 +10,7 @@ use crate::hierarchy_json::HierarchyJson;
 #[rustfmt::skip]
 static FORMATS: &[&dyn Format] = &[
     &HierarchyJson,
+    &BorderList,
 ];
 
 /// Every known format.
@@ -33,7 +35,7 @@ mod tests {
     #[test]
     fn names_are_unique_and_found() {
         let names = names();
-        assert_eq!(names, ["hierarchy-json"]);
+        assert_eq!(names, ["hierarchy-json", "border-list"]);
         for name in &names {
             assert_eq!(find(name).map(|f| f.name()), Some(*name));
         }
