@@ -23,6 +23,8 @@
 pub mod border_list;
 /// The model: [`Dataset`], [`Node`], and [`DatasetBuilder`] with its checks.
 pub mod dataset;
+/// Embedding matrices: a node table plus one vector per leaf.
+pub mod embedding;
 /// [`FormatError`]: reader errors with line and column.
 pub mod error;
 /// The [`Format`] trait, its inputs, options and errors.
@@ -36,6 +38,7 @@ pub mod table;
 
 pub use border_list::BorderList;
 pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, SimilarityHint};
+pub use embedding::EmbeddingMatrix;
 pub use error::FormatError;
 pub use format::{Format, FormatOptions, InputError, Inputs, Role};
 pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};

@@ -2,6 +2,7 @@
 //! `formats/README.md`).
 
 use crate::border_list::BorderList;
+use crate::embedding::EmbeddingMatrix;
 use crate::format::Format;
 use crate::hierarchy_json::HierarchyJson;
 
@@ -11,6 +12,7 @@ use crate::hierarchy_json::HierarchyJson;
 static FORMATS: &[&dyn Format] = &[
     &HierarchyJson,
     &BorderList,
+    &EmbeddingMatrix,
 ];
 
 /// Every known format.
@@ -35,7 +37,7 @@ mod tests {
     #[test]
     fn names_are_unique_and_found() {
         let names = names();
-        assert_eq!(names, ["hierarchy-json", "border-list"]);
+        assert_eq!(names, ["hierarchy-json", "border-list", "embedding-matrix"]);
         for name in &names {
             assert_eq!(find(name).map(|f| f.name()), Some(*name));
         }
