@@ -455,7 +455,7 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
         table
             .rows
             .iter()
-            .filter(|row| row.fields[column].is_empty())
+            .filter(|row| row.fields.get(column).is_none_or(String::is_empty))
             .count()
     });
     let synthetic_root = parentless != Some(1);
@@ -464,7 +464,8 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
     }
 
     for row in &table.rows {
-        let field = |column: usize| row.fields[column].as_str();
+        // `get`, not indexing: a hand-made Table may have short rows; read as empty.
+        let field = |column: usize| row.fields.get(column).map_or("", String::as_str);
         // Groups of this row, outermost first, as (value, column).
         let mut groups: Vec<(String, usize)> = group_columns
             .iter()
