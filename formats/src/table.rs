@@ -143,6 +143,7 @@ pub fn read_rows(bytes: &[u8], delimiter: Option<u8>) -> Result<Vec<Row>, Format
         .from_reader(bytes);
     let mut rows = Vec::new();
     let mut record = csv::ByteRecord::new();
+    let (mut line_at, mut counted_to) = (1, 0);
     loop {
         match reader.read_byte_record(&mut record) {
             Ok(true) => {}
@@ -158,7 +159,25 @@ pub fn read_rows(bytes: &[u8], delimiter: Option<u8>) -> Result<Vec<Row>, Format
                 });
             }
         }
-        let line = record.position().map_or(1, |p| p.line() as usize);
+        // Lines from the byte offset, not csv's own line count, which goes wrong after
+        // CRLF (it reports the record after `\r\n` at the `\n`, on the line before).
+        // For the same reason skip line-end bytes at the reported offset: a record never
+        // starts with one. Offsets only grow, so this visits every byte once.
+        let mut start = record
+            .position()
+            .map_or(0, |p| usize::try_from(p.byte()).unwrap_or(usize::MAX))
+            .min(bytes.len());
+        while matches!(bytes.get(start), Some(b'\r' | b'\n')) {
+            start += 1;
+        }
+        if start > counted_to {
+            line_at += bytes[counted_to..start]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count();
+            counted_to = start;
+        }
+        let line = line_at;
         let mut fields = Vec::with_capacity(record.len());
         for (index, field) in record.iter().enumerate() {
             let text = std::str::from_utf8(field).map_err(|_| FormatError::Syntax {

@@ -374,3 +374,23 @@ fn binary_blob_is_an_error() {
     // Rows alone, too.
     assert!(read_rows(&blob, None).is_err());
 }
+
+#[test]
+fn positions_survive_bom_crlf_and_quoted_newlines() {
+    for csv in [
+        &b"id,label,weight\na,\"two\nlines\",1\nb,B,x\n"[..],
+        b"\xEF\xBB\xBFid,label,weight\r\na,\"two\r\nlines\",1\r\n\r\nb,B,x\r\n",
+    ] {
+        let (error, text) = error_text(csv, &FormatOptions::default());
+        let expected = if csv.starts_with(b"\xEF") { 5 } else { 4 };
+        assert_eq!(
+            (error.line(), error.column()),
+            (Some(expected), Some(3)),
+            "{text}"
+        );
+        assert!(text.contains("node \"b\""), "{text}");
+    }
+    let tsv = b"id\tlabel\r\na\t\"A\r\nb\tB\r\n";
+    let (error, _) = error_text(tsv, &FormatOptions::default());
+    assert_eq!((error.line(), error.column()), (Some(2), Some(2)));
+}
