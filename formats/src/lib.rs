@@ -6,6 +6,11 @@
 //! Readers take bytes, never paths, and report problems as [`FormatError`]s with the
 //! line and column of the offending value; the caller adds the file name.
 //!
+//! Each input format implements [`Format`] (its name, the inputs it reads, and
+//! bytes + [`FormatOptions`] → [`Dataset`], errors as [`InputError`] naming the input);
+//! [`registry::formats`] lists them and [`registry::find`] looks one up by name. See
+//! `formats/README.md` for adding one.
+//!
 //! ```
 //! use nptreemap_formats::{parse_hierarchy_json, HierarchyJsonOptions};
 //!
