@@ -47,6 +47,7 @@ use crate::dataset::{
     is_hex_color, is_valid_weight, Dataset, DatasetBuilder, ModelError, NodeSpec, SimilarityHint,
 };
 use crate::error::FormatError;
+use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
 
 /// Options for [`parse_hierarchy_json`]. The defaults honour the file's own flags.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -740,6 +741,38 @@ fn key_text(quoted: &[u8]) -> Option<Cow<'_, str>> {
     } else {
         let inner = quoted.get(1..quoted.len().checked_sub(1)?)?;
         std::str::from_utf8(inner).ok().map(Cow::Borrowed)
+    }
+}
+
+/// The hierarchy JSON [`Format`] (name `hierarchy-json`, one input `hierarchy`):
+/// [`parse_hierarchy_json`] with [`FormatOptions::weight`] as the weight field.
+/// Other options do not apply and are ignored.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct HierarchyJson;
+
+/// The one input of [`HierarchyJson`].
+const HIERARCHY_ROLES: &[Role] = &[Role {
+    name: "hierarchy",
+    required: true,
+    description: "the hierarchy JSON document (paper prototype or d3-hierarchy style)",
+}];
+
+impl Format for HierarchyJson {
+    fn name(&self) -> &'static str {
+        "hierarchy-json"
+    }
+
+    fn roles(&self) -> &'static [Role] {
+        HIERARCHY_ROLES
+    }
+
+    fn parse(&self, inputs: &Inputs<'_>, options: &FormatOptions) -> Result<Dataset, InputError> {
+        let bytes = inputs.require("hierarchy")?;
+        let json_options = HierarchyJsonOptions {
+            weight_field: options.weight.clone(),
+        };
+        parse_hierarchy_json(bytes, &json_options)
+            .map_err(|error| InputError::new("hierarchy", error))
     }
 }
 

@@ -6,6 +6,11 @@
 //! Readers take bytes, never paths, and report problems as [`FormatError`]s with the
 //! line and column of the offending value; the caller adds the file name.
 //!
+//! Each input format implements [`Format`] (its name, the inputs it reads, and
+//! bytes + [`FormatOptions`] → [`Dataset`], errors as [`InputError`] naming the input);
+//! [`registry::formats`] lists them and [`registry::find`] looks one up by name. See
+//! `formats/README.md` for adding one.
+//!
 //! ```
 //! use nptreemap_formats::{parse_hierarchy_json, HierarchyJsonOptions};
 //!
@@ -19,13 +24,26 @@
 //! # Ok::<(), nptreemap_formats::FormatError>(())
 //! ```
 
+/// Border lists: a node table plus a pair list.
+pub mod border_list;
 /// The model: [`Dataset`], [`Node`], and [`DatasetBuilder`] with its checks.
 pub mod dataset;
+/// Embedding matrices: a node table plus one vector per leaf.
+pub mod embedding;
 /// [`FormatError`]: reader errors with line and column.
 pub mod error;
+/// The [`Format`] trait, its inputs, options and errors.
+pub mod format;
 /// The paper's hierarchy JSON and d3-hierarchy style JSON.
 pub mod hierarchy_json;
+/// The list of formats, looked up by name.
+pub mod registry;
+/// CSV/TSV rows with positions, and node tables → hierarchies.
+pub mod table;
 
+pub use border_list::BorderList;
 pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, SimilarityHint};
+pub use embedding::EmbeddingMatrix;
 pub use error::FormatError;
-pub use hierarchy_json::{parse_hierarchy_json, HierarchyJsonOptions};
+pub use format::{Format, FormatOptions, InputError, Inputs, Role};
+pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};

@@ -689,3 +689,31 @@ fn a_label_of_the_wrong_type_is_an_error() {
         "line 1, column 48: node \"a\": field \"name\": expected a string or a number, found an object"
     );
 }
+
+#[test]
+fn hierarchy_json_as_a_format() {
+    use nptreemap_formats::{registry, FormatOptions, Inputs};
+    let format = registry::find("hierarchy-json").expect("registered");
+    assert_eq!(format.roles()[0].name, "hierarchy");
+    let json = br#"{"name": "r", "children": [{"name": "a", "size": 2, "pop": 7}]}"#;
+    let options = FormatOptions {
+        weight: Some("pop".into()),
+        ..FormatOptions::default()
+    };
+    let dataset = format
+        .parse(&Inputs::new().with("hierarchy", json), &options)
+        .expect("valid");
+    assert_eq!(
+        dataset.node(0).value,
+        7.0,
+        "options.weight is the weight field"
+    );
+    let error = format
+        .parse(&Inputs::new().with("hierarchy", b"{"), &options)
+        .expect_err("cut short");
+    assert_eq!(error.role, "hierarchy");
+    assert!(
+        error.to_string().starts_with("hierarchy: line 1"),
+        "{error}"
+    );
+}

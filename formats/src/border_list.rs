@@ -1,0 +1,128 @@
+//! The border-list format: a node table (see [`crate::table`]) plus a pair list
+//! saying which nodes are neighbours, e.g. countries that share a land border.
+//! Owns the pair-list columns and how pairs become symmetric relations.
+//!
+//! # Pair list
+//!
+//! CSV or TSV with a header. The two node columns are `a` and `b` when the header has
+//! them, else the first two columns. An optional strength column
+//! ([`FormatOptions::strength`], else `strength` when present) holds a finite number
+//! `>= 0`; a pair with strength 0 is dropped. The model keeps no per-pair weight, so
+//! any other strength just means "related". Pairs are symmetric: `a,b` relates `b` to
+//! `a` too, and repeats collapse. A pair of a node with itself is ignored. Every id
+//! must be a node of the table (a row or a group id).
+//!
+//! The dataset's similarity hint is [`SimilarityHint::NeighborList`].
+
+use crate::dataset::{Dataset, SimilarityHint};
+use crate::error::FormatError;
+use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
+use crate::table::{read_table, tree_from_table, Table, TableTree};
+
+/// The border-list [`Format`] (name `border-list`, inputs `nodes` and `pairs`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BorderList;
+
+/// The inputs of [`BorderList`].
+const ROLES: &[Role] = &[
+    Role {
+        name: "nodes",
+        required: true,
+        description: "node table CSV/TSV: id, label, weight and the hierarchy columns",
+    },
+    Role {
+        name: "pairs",
+        required: true,
+        description: "pair list CSV/TSV with a header: a,b and an optional strength",
+    },
+];
+
+impl Format for BorderList {
+    fn name(&self) -> &'static str {
+        "border-list"
+    }
+
+    fn roles(&self) -> &'static [Role] {
+        ROLES
+    }
+
+    fn parse(&self, inputs: &Inputs<'_>, options: &FormatOptions) -> Result<Dataset, InputError> {
+        let nodes = inputs.require("nodes")?;
+        let pairs = inputs.require("pairs")?;
+        let in_nodes = |error| InputError::new("nodes", error);
+        let in_pairs = |error| InputError::new("pairs", error);
+        let node_table = read_table(nodes, options.delimiter).map_err(in_nodes)?;
+        let mut tree = tree_from_table(&node_table, options).map_err(in_nodes)?;
+        let pair_table = read_table(pairs, options.delimiter).map_err(in_pairs)?;
+        add_pairs(&mut tree, &pair_table, options).map_err(in_pairs)?;
+        tree.build(Some(SimilarityHint::NeighborList))
+            .map_err(in_nodes)
+    }
+}
+
+/// Adds each pair of the pair list as a relation on both of its nodes.
+fn add_pairs(
+    tree: &mut TableTree,
+    pairs: &Table,
+    options: &FormatOptions,
+) -> Result<(), FormatError> {
+    let (a, b) = match (pairs.column("a"), pairs.column("b")) {
+        (Some(a), Some(b)) => (a, b),
+        _ if pairs.header.len() >= 2 => (0, 1),
+        _ => {
+            return Err(FormatError::Structure {
+                line: Some(pairs.header_line),
+                column: None,
+                message: format!(
+                    "a pair list needs two id columns (a,b); the header has: {}",
+                    pairs.header.join(", ")
+                ),
+            })
+        }
+    };
+    let strength = pairs.optional_column(
+        options.strength.as_deref(),
+        "the strength column",
+        &["strength"],
+    )?;
+    for row in &pairs.rows {
+        let node = |column: usize| -> Result<usize, FormatError> {
+            let id = &row.fields[column];
+            tree.find(id).ok_or_else(|| FormatError::Field {
+                line: Some(row.line),
+                column: Some(column + 1),
+                node: None,
+                field: pairs.header[column].clone(),
+                message: format!("unknown id {id:?}: no node of the node table has it"),
+            })
+        };
+        let (first, second) = (node(a)?, node(b)?);
+        if let Some(column) = strength {
+            let text = &row.fields[column];
+            let value: Option<f64> = text
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite() && *v >= 0.0);
+            let Some(value) = value else {
+                return Err(FormatError::Field {
+                    line: Some(row.line),
+                    column: Some(column + 1),
+                    node: None,
+                    field: pairs.header[column].clone(),
+                    message: format!("expected a finite number >= 0, found {text:?}"),
+                });
+            };
+            if value == 0.0 {
+                continue;
+            }
+        }
+        // A self pair is ignored (the model would drop it anyway).
+        if first == second {
+            continue;
+        }
+        let (first_id, second_id) = (tree.specs[first].id.clone(), tree.specs[second].id.clone());
+        tree.specs[first].relations.push(second_id);
+        tree.specs[second].relations.push(first_id);
+    }
+    Ok(())
+}
