@@ -16,6 +16,7 @@ pub mod geom;
 pub mod layout;
 pub mod metrics;
 pub mod neighborhood;
+pub mod pipeline;
 pub mod power;
 pub mod render;
 pub mod rng;

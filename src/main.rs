@@ -17,6 +17,10 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Build every output of a YAML config (default: ./nptreemap.yaml).
+    Build(cmd::build::BuildArgs),
+    /// Validate a YAML config and its data without writing anything.
+    Check(cmd::build::BuildArgs),
     /// Lay out one hierarchy file and write JSON and/or SVG.
     Layout(cmd::layout::LayoutArgs),
     /// Print the paper's Table 2 row (constraints realised, area error, graph
@@ -33,6 +37,8 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Build(args) => cmd::build::build(&args),
+        Command::Check(args) => cmd::build::check(&args),
         Command::Layout(args) => cmd::layout::run(&args),
         Command::Eval(args) => cmd::eval::run(&args),
         Command::Bench(args) => cmd::bench::run(&args),
@@ -40,7 +46,16 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            // Our error types already quote their causes; add only what a
+            // context message (e.g. "cannot write") leaves out.
+            let mut message = err.to_string();
+            for cause in err.chain().skip(1) {
+                let text = cause.to_string();
+                if !message.contains(&text) {
+                    message = format!("{message}: {text}");
+                }
+            }
+            eprintln!("error: {message}");
             ExitCode::from(cmd::exit_code(&err))
         }
     }

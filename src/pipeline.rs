@@ -35,7 +35,9 @@ pub enum BuildError {
         role: String,
     },
     /// The config gives an input the format does not read.
-    #[error("dataset {dataset:?}: format {format:?} reads no file called {role:?} (it reads: {roles})")]
+    #[error(
+        "dataset {dataset:?}: format {format:?} reads no file called {role:?} (it reads: {roles})"
+    )]
     UnknownRole {
         /// The dataset's name.
         dataset: String,
@@ -96,7 +98,10 @@ pub fn load(d: &DatasetConfig) -> Result<Dataset, BuildError> {
             });
         }
     }
-    if let Some(r) = roles.iter().find(|r| r.required && !d.files.contains_key(r.name)) {
+    if let Some(r) = roles
+        .iter()
+        .find(|r| r.required && !d.files.contains_key(r.name))
+    {
         return Err(BuildError::MissingFile {
             dataset: d.name.clone(),
             format: d.format.clone(),
@@ -146,8 +151,13 @@ pub fn build(config: &Config, d: &DatasetConfig) -> Result<Built, BuildError> {
     let mut outputs = Vec::new();
     for out in &d.outputs {
         let bytes = match out.kind {
-            Some(OutputKind::Json) => layout_json(&computed.dataset, &computed.layout, &json_extras(&computed)).into_bytes(),
-            Some(OutputKind::Svg) => svg(&computed.dataset, &computed.layout, &SvgStyle::default()).into_bytes(),
+            Some(OutputKind::Json) => {
+                layout_json(&computed.dataset, &computed.layout, &json_extras(&computed))
+                    .into_bytes()
+            }
+            Some(OutputKind::Svg) => {
+                svg(&computed.dataset, &computed.layout, &SvgStyle::default()).into_bytes()
+            }
             Some(OutputKind::Png) => {
                 return Err(BuildError::Unsupported {
                     path: out.path.clone(),
@@ -200,8 +210,14 @@ pub fn json_extras(computed: &Computed) -> JsonExtras {
             })
             .collect(),
         metrics: vec![
-            ("area_error_diagram_mean".to_string(), q.area_error_diagram_mean),
-            ("area_error_diagram_max".to_string(), q.area_error_diagram_max),
+            (
+                "area_error_diagram_mean".to_string(),
+                q.area_error_diagram_mean,
+            ),
+            (
+                "area_error_diagram_max".to_string(),
+                q.area_error_diagram_max,
+            ),
             ("aspect_ratio_mean".to_string(), q.aspect_ratio_mean),
         ],
     }

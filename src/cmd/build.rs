@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 
-use nptreemap::config::Config;
 use super::progress::Progress;
+use nptreemap::config::Config;
 use nptreemap::pipeline;
 
 /// Arguments of `nptreemap build` and `nptreemap check`.
@@ -36,8 +36,17 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
         let written = pipeline::write_outputs(b)
             .with_context(|| format!("dataset {:?}: cannot write its outputs", b.name))?;
         for (path, bytes) in &b.outputs {
-            let state = if written.contains(path) { "wrote" } else { "unchanged" };
-            println!("{state} {} ({} bytes, dataset {})", path.display(), bytes.len(), b.name);
+            let state = if written.contains(path) {
+                "wrote"
+            } else {
+                "unchanged"
+            };
+            println!(
+                "{state} {} ({} bytes, dataset {})",
+                path.display(),
+                bytes.len(),
+                b.name
+            );
         }
     }
     Ok(())

@@ -55,7 +55,7 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
             let json = layout_json(
                 &computed.dataset,
                 &computed.layout,
-                &super::json_extras(&computed),
+                &nptreemap::pipeline::json_extras(&computed),
             );
             store::write_atomic(out, json.as_bytes())
                 .with_context(|| format!("{}: cannot write", out.display()))?;

@@ -50,7 +50,7 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
             "some diagrams stopped at the iteration cap above the area-error target"
         );
     }
-    let extras = super::json_extras(&computed);
+    let extras = nptreemap::pipeline::json_extras(&computed);
     let (dataset, layout) = (&computed.dataset, &computed.layout);
     // Render everything first: a failure leaves every existing output untouched.
     let rendered: Vec<(PathBuf, Vec<u8>)> = args

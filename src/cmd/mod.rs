@@ -1,8 +1,10 @@
 //! Subcommands of the binary, one file each, plus the options they share.
 
 pub(crate) mod bench;
+pub(crate) mod build;
 pub(crate) mod eval;
 pub(crate) mod layout;
+mod progress;
 
 use clap::{Args, ValueEnum};
 use nptreemap::layout::{Canvas, Method, NeighborParams, Outline, Params, Request};
@@ -164,43 +166,17 @@ pub(crate) struct UsageError(pub(crate) String);
 
 /// Exit code for an error: 2 when the input or the arguments are at fault.
 pub(crate) fn exit_code(err: &anyhow::Error) -> u8 {
+    // A failure to write is the machine's, not the input's: it keeps code 1.
     let user = err.chain().any(|e| {
-        e.is::<InputError>() || e.is::<UsageError>() || e.is::<nptreemap::layout::LayoutError>()
+        e.is::<InputError>()
+            || e.is::<UsageError>()
+            || e.is::<nptreemap::layout::LayoutError>()
+            || e.is::<nptreemap::config::ConfigFileError>()
+            || e.is::<nptreemap::pipeline::BuildError>()
     });
     if user {
         2
     } else {
         1
-    }
-}
-
-/// The layout JSON's constraints and metrics for a computed layout.
-pub(crate) fn json_extras(computed: &nptreemap::layout::Computed) -> nptreemap::render::JsonExtras {
-    let ds = &computed.dataset;
-    let q = nptreemap::metrics::quality(ds, &computed.layout);
-    nptreemap::render::JsonExtras {
-        constraints: computed
-            .constraints
-            .iter()
-            .zip(&computed.realized)
-            .map(|(c, r)| nptreemap::render::ConstraintOut {
-                a: ds.node(c.a).id.clone(),
-                b: ds.node(c.b).id.clone(),
-                similarity: c.similarity,
-                strength: c.strength,
-                realized: *r,
-            })
-            .collect(),
-        metrics: vec![
-            (
-                "area_error_diagram_mean".to_string(),
-                q.area_error_diagram_mean,
-            ),
-            (
-                "area_error_diagram_max".to_string(),
-                q.area_error_diagram_max,
-            ),
-            ("aspect_ratio_mean".to_string(), q.aspect_ratio_mean),
-        ],
     }
 }
