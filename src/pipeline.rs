@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use crate::config::{Config, DatasetConfig, OutputKind};
 use crate::layout::{compute, Computed, LayoutError};
-use crate::render::{layout_json, svg, ConstraintOut, JsonExtras, SvgStyle};
+use crate::render::{layout_json, png, svg, ConstraintOut, JsonExtras, PngError, SvgStyle};
 use crate::{metrics, store, workspace};
 use nptreemap_formats::{registry, Dataset, FormatOptions, Inputs};
 
@@ -58,6 +58,14 @@ pub enum BuildError {
         dataset: String,
         /// Why.
         source: LayoutError,
+    },
+    /// The PNG renderer refused the picture (see [`PngError`]).
+    #[error("{}: {source}", .path.display())]
+    Png {
+        /// The output.
+        path: PathBuf,
+        /// Why.
+        source: PngError,
     },
     /// An output kind this version cannot write yet.
     #[error("{}: {kind} output is not available yet", .path.display())]
@@ -150,33 +158,43 @@ pub fn build(config: &Config, d: &DatasetConfig) -> Result<Built, BuildError> {
     })?;
     let mut outputs = Vec::new();
     for out in &d.outputs {
-        let bytes = match out.kind {
-            Some(OutputKind::Json) => {
-                layout_json(&computed.dataset, &computed.layout, &json_extras(&computed))
-                    .into_bytes()
-            }
-            Some(OutputKind::Svg) => {
-                svg(&computed.dataset, &computed.layout, &SvgStyle::default()).into_bytes()
-            }
-            Some(OutputKind::Png) => {
-                return Err(BuildError::Unsupported {
-                    path: out.path.clone(),
-                    kind: "PNG",
-                })
-            }
-            Some(OutputKind::Html) | None => {
-                return Err(BuildError::Unsupported {
-                    path: out.path.clone(),
-                    kind: "HTML",
-                })
-            }
-        };
-        outputs.push((out.path.clone(), bytes));
+        let kind = out.kind.unwrap_or(OutputKind::Svg);
+        outputs.push((
+            out.path.clone(),
+            render(&computed, kind, out.scale, &out.path)?,
+        ));
     }
     Ok(Built {
         name: d.name.clone(),
         computed,
         outputs,
+    })
+}
+
+/// One output's bytes for a computed layout (`path` only names it in errors).
+pub fn render(
+    computed: &Computed,
+    kind: OutputKind,
+    scale: f64,
+    path: &std::path::Path,
+) -> Result<Vec<u8>, BuildError> {
+    let (dataset, layout) = (&computed.dataset, &computed.layout);
+    Ok(match kind {
+        OutputKind::Json => layout_json(dataset, layout, &json_extras(computed)).into_bytes(),
+        OutputKind::Svg => svg(dataset, layout, &SvgStyle::default()).into_bytes(),
+        OutputKind::Png => {
+            let text = svg(dataset, layout, &SvgStyle::default());
+            png(&text, scale).map_err(|source| BuildError::Png {
+                path: path.to_path_buf(),
+                source,
+            })?
+        }
+        OutputKind::Html => {
+            return Err(BuildError::Unsupported {
+                path: path.to_path_buf(),
+                kind: "HTML",
+            })
+        }
     })
 }
 

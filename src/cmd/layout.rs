@@ -6,8 +6,8 @@ use anyhow::Context;
 use clap::Args;
 
 use super::{LayoutOptions, UsageError};
-use nptreemap::render::{layout_json, svg, SvgStyle};
-use nptreemap::{store, workspace};
+use nptreemap::config::kind_of;
+use nptreemap::{pipeline, store, workspace};
 
 /// Arguments of `nptreemap layout`.
 #[derive(Debug, Args)]
@@ -21,23 +21,18 @@ pub(crate) struct LayoutArgs {
     out: Vec<PathBuf>,
 }
 
-enum Kind {
-    Json,
-    Svg,
-}
-
 pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
     // Check every output's kind before doing any work, so a typo costs nothing.
     let kinds = args
         .out
         .iter()
-        .map(|p| match p.extension().and_then(|e| e.to_str()) {
-            Some(e) if e.eq_ignore_ascii_case("json") => Ok(Kind::Json),
-            Some(e) if e.eq_ignore_ascii_case("svg") => Ok(Kind::Svg),
-            _ => Err(UsageError(format!(
-                "{}: unknown output kind (use a .json or .svg extension)",
-                p.display()
-            ))),
+        .map(|p| {
+            kind_of(p).ok_or_else(|| {
+                UsageError(format!(
+                    "{}: unknown output kind (use a .json, .svg, .png or .html extension)",
+                    p.display()
+                ))
+            })
         })
         .collect::<Result<Vec<_>, _>>()?;
     let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
@@ -50,21 +45,13 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
             "some diagrams stopped at the iteration cap above the area-error target"
         );
     }
-    let extras = nptreemap::pipeline::json_extras(&computed);
-    let (dataset, layout) = (&computed.dataset, &computed.layout);
     // Render everything first: a failure leaves every existing output untouched.
-    let rendered: Vec<(PathBuf, Vec<u8>)> = args
+    let rendered = args
         .out
         .iter()
         .zip(&kinds)
-        .map(|(path, kind)| {
-            let bytes = match kind {
-                Kind::Json => layout_json(dataset, layout, &extras).into_bytes(),
-                Kind::Svg => svg(dataset, layout, &SvgStyle::default()).into_bytes(),
-            };
-            (path.clone(), bytes)
-        })
-        .collect();
+        .map(|(path, kind)| Ok((path.clone(), pipeline::render(&computed, *kind, 1.0, path)?)))
+        .collect::<Result<Vec<(PathBuf, Vec<u8>)>, pipeline::BuildError>>()?;
     for (path, bytes) in &rendered {
         store::write_atomic(path, bytes)
             .with_context(|| format!("{}: cannot write", path.display()))?;

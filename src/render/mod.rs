@@ -1,12 +1,15 @@
 //! Rendering: a finished [`Layout`](crate::layout::Layout) and a style become
-//! bytes (layout JSON or SVG text). PURE: may not run or alter a layout, read or
-//! write files, or fail; every renderer is a total function of finished data and
-//! gives identical bytes for identical input.
+//! bytes (layout JSON, SVG text, PNG). PURE: may not run or alter a layout, read
+//! or write files; every renderer is a function of finished data and gives
+//! identical bytes for identical input. Only PNG can fail, and then on a bug
+//! (its input is our own SVG) or an absurd pixel size.
 
 /// Layout JSON in the `nptreemap-layout/1` format of `shared/spec/layout-json.md`.
 pub mod json;
 /// Colours: hex parsing, the Tableau palettes, lightness variations for children.
 pub mod palette;
+/// PNG from the SVG text through usvg and resvg, with a built-in font.
+pub mod png;
 /// The SVG picture: filled cells, level-weighted outlines, fitted labels.
 pub mod svg;
 
@@ -15,4 +18,5 @@ mod test_support;
 
 pub use json::{layout_json, ConstraintOut, JsonExtras};
 pub use palette::Rgb;
+pub use png::{png, PngError};
 pub use svg::{svg, SvgStyle};
