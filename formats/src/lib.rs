@@ -34,6 +34,8 @@ pub mod embedding;
 pub mod error;
 /// The [`Format`] trait, its inputs, options and errors.
 pub mod format;
+/// Genre tables: a node table whose rows list genres, compared by Jaccard.
+pub mod genre_table;
 /// The paper's hierarchy JSON and d3-hierarchy style JSON.
 pub mod hierarchy_json;
 /// The list of formats, looked up by name.
@@ -46,4 +48,5 @@ pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, Similarit
 pub use embedding::EmbeddingMatrix;
 pub use error::FormatError;
 pub use format::{Format, FormatOptions, InputError, Inputs, Role};
+pub use genre_table::GenreTable;
 pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};

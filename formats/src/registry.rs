@@ -13,6 +13,7 @@ static FORMATS: &[&dyn Format] = &[
     &HierarchyJson,
     &BorderList,
     &EmbeddingMatrix,
+    &crate::genre_table::GenreTable,
 ];
 
 /// Every known format.
@@ -37,7 +38,15 @@ mod tests {
     #[test]
     fn names_are_unique_and_found() {
         let names = names();
-        assert_eq!(names, ["hierarchy-json", "border-list", "embedding-matrix"]);
+        assert_eq!(
+            names,
+            [
+                "hierarchy-json",
+                "border-list",
+                "embedding-matrix",
+                "genre-table"
+            ]
+        );
         for name in &names {
             assert_eq!(find(name).map(|f| f.name()), Some(*name));
         }
