@@ -42,6 +42,8 @@ pub mod hierarchy_json;
 pub mod registry;
 /// CSV/TSV rows with positions, and node tables → hierarchies.
 pub mod table;
+/// Time series: a node table plus values by date, compared by Pearson correlation.
+pub mod time_series;
 
 pub use border_list::BorderList;
 pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, SimilarityHint};
@@ -50,3 +52,4 @@ pub use error::FormatError;
 pub use format::{Format, FormatOptions, InputError, Inputs, Role};
 pub use genre_table::GenreTable;
 pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};
+pub use time_series::TimeSeries;

@@ -14,6 +14,7 @@ static FORMATS: &[&dyn Format] = &[
     &BorderList,
     &EmbeddingMatrix,
     &crate::genre_table::GenreTable,
+    &crate::time_series::TimeSeries,
 ];
 
 /// Every known format.
@@ -44,7 +45,8 @@ mod tests {
                 "hierarchy-json",
                 "border-list",
                 "embedding-matrix",
-                "genre-table"
+                "genre-table",
+                "time-series"
             ]
         );
         for name in &names {
