@@ -63,6 +63,9 @@ pub enum SimilarityHint {
     Binary,
     /// 1 when the other node is in this node's relation list, else 0.
     NeighborList,
+    /// Pearson correlation of the feature vectors (for example the values of a time
+    /// series), rescaled from [-1, 1] to [0, 1]; 0 when either vector is constant.
+    Pearson,
 }
 
 /// Why a set of [`NodeSpec`]s does not form a valid [`Dataset`].

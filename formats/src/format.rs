@@ -92,6 +92,18 @@ pub struct FormatOptions {
     pub delimiter: Option<u8>,
     /// Label of the synthetic root of a table (default `root`).
     pub root_label: Option<String>,
+    /// Genre tables: the multi-valued genres column (`Drama|Crime`); default
+    /// `genres` when present and no [`FormatOptions::genre_columns`] are given.
+    pub genres: Option<String>,
+    /// Genre tables: separator of the values in the genres column; default `|`.
+    pub separator: Option<char>,
+    /// Genre tables: one-hot genre columns (cells 0/1, true/false, yes/no or empty),
+    /// each column's header being the genre's name. Not together with
+    /// [`FormatOptions::genres`].
+    pub genre_columns: Vec<String>,
+    /// Time series: fill a missing value with the previous date's value (and leading
+    /// missing values with the first value given) instead of failing.
+    pub fill_missing: bool,
 }
 
 /// An input format: reads the bytes of its inputs into a validated [`Dataset`].

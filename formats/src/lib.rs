@@ -34,16 +34,22 @@ pub mod embedding;
 pub mod error;
 /// The [`Format`] trait, its inputs, options and errors.
 pub mod format;
+/// Genre tables: a node table whose rows list genres, compared by Jaccard.
+pub mod genre_table;
 /// The paper's hierarchy JSON and d3-hierarchy style JSON.
 pub mod hierarchy_json;
 /// The list of formats, looked up by name.
 pub mod registry;
 /// CSV/TSV rows with positions, and node tables → hierarchies.
 pub mod table;
+/// Time series: a node table plus values by date, compared by Pearson correlation.
+pub mod time_series;
 
 pub use border_list::BorderList;
 pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, SimilarityHint};
 pub use embedding::EmbeddingMatrix;
 pub use error::FormatError;
 pub use format::{Format, FormatOptions, InputError, Inputs, Role};
+pub use genre_table::GenreTable;
 pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};
+pub use time_series::TimeSeries;

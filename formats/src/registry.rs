@@ -13,6 +13,8 @@ static FORMATS: &[&dyn Format] = &[
     &HierarchyJson,
     &BorderList,
     &EmbeddingMatrix,
+    &crate::genre_table::GenreTable,
+    &crate::time_series::TimeSeries,
 ];
 
 /// Every known format.
@@ -37,7 +39,16 @@ mod tests {
     #[test]
     fn names_are_unique_and_found() {
         let names = names();
-        assert_eq!(names, ["hierarchy-json", "border-list", "embedding-matrix"]);
+        assert_eq!(
+            names,
+            [
+                "hierarchy-json",
+                "border-list",
+                "embedding-matrix",
+                "genre-table",
+                "time-series"
+            ]
+        );
         for name in &names {
             assert_eq!(find(name).map(|f| f.name()), Some(*name));
         }
