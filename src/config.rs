@@ -153,6 +153,14 @@ pub struct FieldsConfig {
     pub groups: Vec<String>,
     /// Pair-list column with the link strength.
     pub strength: Option<String>,
+    /// Genre table: the multi-valued genres column (`Drama|Crime`).
+    pub genres: Option<String>,
+    /// Genre table: the separator inside that column (default `|`).
+    pub separator: Option<char>,
+    /// Genre table: one-hot genre columns instead of a multi-valued one.
+    pub genre_columns: Vec<String>,
+    /// Time series: fill missing values from the previous date instead of failing.
+    pub fill_missing: bool,
 }
 
 /// One output file.

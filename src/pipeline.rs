@@ -134,6 +134,10 @@ pub fn load(d: &DatasetConfig) -> Result<Dataset, BuildError> {
         path: f.path.clone(),
         groups: f.groups.clone(),
         strength: f.strength.clone(),
+        genres: f.genres.clone(),
+        separator: f.separator,
+        genre_columns: f.genre_columns.clone(),
+        fill_missing: f.fill_missing,
         ..FormatOptions::default()
     };
     format.parse(&inputs, &options).map_err(|e| {

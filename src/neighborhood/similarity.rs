@@ -32,6 +32,7 @@ impl SimilarityKind {
             SimilarityHint::Jaccard => SimilarityKind::Jaccard,
             SimilarityHint::Binary => SimilarityKind::Binary,
             SimilarityHint::NeighborList => SimilarityKind::NeighborList,
+            SimilarityHint::Pearson => SimilarityKind::Pearson,
         }
     }
 
