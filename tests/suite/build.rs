@@ -111,3 +111,61 @@ fn check_validates_without_writing() {
     assert!(String::from_utf8_lossy(&out.stdout).contains("ok countries: 36 nodes, 29 leaves"));
     assert!(!config.parent().expect("dir").join("out").exists());
 }
+
+/// Copies a folder tree (the examples) into `to`.
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).expect("mkdir");
+    for entry in std::fs::read_dir(from).expect("read dir") {
+        let path = entry.expect("entry").path();
+        let name = path.file_name().expect("name");
+        if name == "out" {
+            continue;
+        }
+        if path.is_dir() {
+            copy_tree(&path, &to.join(name));
+        } else {
+            std::fs::copy(&path, to.join(name)).expect("copy");
+        }
+    }
+}
+
+/// The README's main job: every example builds to SVG, PNG and JSON, every JSON
+/// passes the checker, and a second build changes no byte.
+#[test]
+fn readme_main_job_builds_every_example() {
+    let dir = support::temp_dir("all_examples");
+    copy_tree(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("examples"),
+        &dir,
+    );
+    let config = dir.join("nptreemap.yaml");
+    let cfg = config.to_str().expect("utf8");
+    let first = run(&["build", cfg]);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let out = dir.join("out");
+    let names = ["countries", "movies", "foods", "stocks", "world"];
+    let mut snapshot = Vec::new();
+    for name in names {
+        let report = support::check_layout(&out.join(format!("{name}.json")));
+        support::assert_area_error(&report, 0.01);
+        let png = std::fs::read(out.join(format!("{name}.png"))).expect("png written");
+        let image = resvg::tiny_skia::Pixmap::decode_png(&png).expect("a valid PNG");
+        assert_eq!((image.width(), image.height()), (1000, 1000), "{name}");
+        for ext in ["svg", "png", "json"] {
+            snapshot.push(std::fs::read(out.join(format!("{name}.{ext}"))).expect("output"));
+        }
+    }
+    let second = run(&["build", cfg]);
+    assert!(second.status.success());
+    let mut again = Vec::new();
+    for name in names {
+        for ext in ["svg", "png", "json"] {
+            again.push(std::fs::read(out.join(format!("{name}.{ext}"))).expect("output"));
+        }
+    }
+    assert!(snapshot == again, "a second build changed an output");
+}
