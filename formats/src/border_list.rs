@@ -17,7 +17,7 @@
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
-use crate::table::{read_table, tree_from_table, Table, TableTree};
+use crate::table::{node_tree, read_table, Table, TableTree, NODES_ROLE};
 
 /// The border-list [`Format`] (name `border-list`, inputs `nodes` and `pairs`).
 #[derive(Clone, Copy, Debug, Default)]
@@ -25,11 +25,7 @@ pub struct BorderList;
 
 /// The inputs of [`BorderList`].
 const ROLES: &[Role] = &[
-    Role {
-        name: "nodes",
-        required: true,
-        description: "node table CSV/TSV: id, label, weight and the hierarchy columns",
-    },
+    NODES_ROLE,
     Role {
         name: "pairs",
         required: true,
@@ -47,12 +43,10 @@ impl Format for BorderList {
     }
 
     fn parse(&self, inputs: &Inputs<'_>, options: &FormatOptions) -> Result<Dataset, InputError> {
-        let nodes = inputs.require("nodes")?;
         let pairs = inputs.require("pairs")?;
         let in_nodes = |error| InputError::new("nodes", error);
         let in_pairs = |error| InputError::new("pairs", error);
-        let node_table = read_table(nodes, options.delimiter).map_err(in_nodes)?;
-        let mut tree = tree_from_table(&node_table, options).map_err(in_nodes)?;
+        let mut tree = node_tree(inputs, options)?;
         let pair_table = read_table(pairs, options.delimiter).map_err(in_pairs)?;
         add_pairs(&mut tree, &pair_table, options).map_err(in_pairs)?;
         tree.build(Some(SimilarityHint::NeighborList))

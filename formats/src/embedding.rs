@@ -16,7 +16,7 @@
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
-use crate::table::{read_rows, read_table, tree_from_table, Row, TableTree};
+use crate::table::{node_tree, read_rows, Row, TableTree, NODES_ROLE};
 
 /// The embedding-matrix [`Format`] (name `embedding-matrix`, inputs `nodes` and
 /// `vectors`).
@@ -25,11 +25,7 @@ pub struct EmbeddingMatrix;
 
 /// The inputs of [`EmbeddingMatrix`].
 const ROLES: &[Role] = &[
-    Role {
-        name: "nodes",
-        required: true,
-        description: "node table CSV/TSV: id, label, weight and the hierarchy columns",
-    },
+    NODES_ROLE,
     Role {
         name: "vectors",
         required: true,
@@ -47,12 +43,10 @@ impl Format for EmbeddingMatrix {
     }
 
     fn parse(&self, inputs: &Inputs<'_>, options: &FormatOptions) -> Result<Dataset, InputError> {
-        let nodes = inputs.require("nodes")?;
         let vectors = inputs.require("vectors")?;
         let in_nodes = |error| InputError::new("nodes", error);
         let in_vectors = |error| InputError::new("vectors", error);
-        let table = read_table(nodes, options.delimiter).map_err(in_nodes)?;
-        let mut tree = tree_from_table(&table, options).map_err(in_nodes)?;
+        let mut tree = node_tree(inputs, options)?;
         let rows = read_rows(vectors, options.delimiter).map_err(in_vectors)?;
         add_vectors(&mut tree, &rows).map_err(in_vectors)?;
         tree.build(Some(SimilarityHint::Cosine)).map_err(in_nodes)

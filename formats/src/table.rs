@@ -49,7 +49,7 @@ use std::collections::HashMap;
 
 use crate::dataset::{is_valid_weight, Dataset, DatasetBuilder, NodeSpec, SimilarityHint};
 use crate::error::FormatError;
-use crate::format::FormatOptions;
+use crate::format::{FormatOptions, InputError, Inputs, Role};
 
 /// One record of a CSV/TSV input, fields trimmed.
 #[derive(Clone, Debug, PartialEq)]
@@ -651,4 +651,21 @@ fn check_parent_cycles(tree: &TableTree) -> Result<(), FormatError> {
         }
     }
     Ok(())
+}
+
+/// The node table every table format reads: ids, labels, weights and the
+/// hierarchy columns.
+pub const NODES_ROLE: Role = Role {
+    name: "nodes",
+    required: true,
+    description: "node table CSV/TSV: id, label, weight and the hierarchy columns",
+};
+
+/// Reads the `nodes` input and builds its hierarchy; errors name the role.
+#[allow(clippy::result_large_err)] // InputError's shape is the Format API's
+pub fn node_tree(inputs: &Inputs<'_>, options: &FormatOptions) -> Result<TableTree, InputError> {
+    let in_nodes = |error| InputError::new(NODES_ROLE.name, error);
+    let table =
+        read_table(inputs.require(NODES_ROLE.name)?, options.delimiter).map_err(in_nodes)?;
+    tree_from_table(&table, options).map_err(in_nodes)
 }

@@ -25,7 +25,7 @@
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
-use crate::table::{read_table, tree_from_table, Table, TableTree};
+use crate::table::{node_tree, read_table, Table, TableTree, NODES_ROLE};
 
 /// The time-series [`Format`] (name `time-series`, inputs `nodes` and `series`).
 #[derive(Clone, Copy, Debug, Default)]
@@ -33,11 +33,7 @@ pub struct TimeSeries;
 
 /// The inputs of [`TimeSeries`].
 const ROLES: &[Role] = &[
-    Role {
-        name: "nodes",
-        required: true,
-        description: "node table CSV/TSV: id, label, weight and the hierarchy columns",
-    },
+    NODES_ROLE,
     Role {
         name: "series",
         required: true,
@@ -58,12 +54,10 @@ impl Format for TimeSeries {
     }
 
     fn parse(&self, inputs: &Inputs<'_>, options: &FormatOptions) -> Result<Dataset, InputError> {
-        let nodes = inputs.require("nodes")?;
         let series = inputs.require("series")?;
         let in_nodes = |error| InputError::new("nodes", error);
         let in_series = |error| InputError::new("series", error);
-        let table = read_table(nodes, options.delimiter).map_err(in_nodes)?;
-        let mut tree = tree_from_table(&table, options).map_err(in_nodes)?;
+        let mut tree = node_tree(inputs, options)?;
         let series = read_table(series, options.delimiter).map_err(in_series)?;
         add_series(&mut tree, &series, options.fill_missing).map_err(in_series)?;
         tree.build(Some(SimilarityHint::Pearson)).map_err(in_nodes)
