@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use crate::config::{Config, DatasetConfig, OutputKind};
 use crate::layout::{compute, Computed, LayoutError};
+use crate::render::overlay::{overlay, with_overlay, Link, OverlayStyle};
 use crate::render::{layout_json, png, svg, ConstraintOut, JsonExtras, PngError, SvgStyle};
 use crate::{metrics, store, workspace};
 use nptreemap_formats::{registry, Dataset, FormatOptions, Inputs};
@@ -185,14 +186,11 @@ pub fn render(
     let (dataset, layout) = (&computed.dataset, &computed.layout);
     Ok(match kind {
         OutputKind::Json => layout_json(dataset, layout, &json_extras(computed)).into_bytes(),
-        OutputKind::Svg => svg(dataset, layout, &SvgStyle::default()).into_bytes(),
-        OutputKind::Png => {
-            let text = svg(dataset, layout, &SvgStyle::default());
-            png(&text, scale).map_err(|source| BuildError::Png {
-                path: path.to_path_buf(),
-                source,
-            })?
-        }
+        OutputKind::Svg => picture(computed).into_bytes(),
+        OutputKind::Png => png(&picture(computed), scale).map_err(|source| BuildError::Png {
+            path: path.to_path_buf(),
+            source,
+        })?,
         OutputKind::Html => {
             return Err(BuildError::Unsupported {
                 path: path.to_path_buf(),
@@ -200,6 +198,34 @@ pub fn render(
             })
         }
     })
+}
+
+/// The SVG picture: the treemap with, when there are constraints, the
+/// interlocking tabs and unrealised-link markers of its deepest level (where the
+/// paper draws them, method-reference §8.2–8.4) on top.
+pub fn picture(computed: &Computed) -> String {
+    let (dataset, layout) = (&computed.dataset, &computed.layout);
+    let base = svg(dataset, layout, &SvgStyle::default());
+    if computed.constraints.is_empty() {
+        return base;
+    }
+    let deepest = dataset.max_depth();
+    let links: Vec<Link> = computed
+        .constraints
+        .iter()
+        .zip(&computed.realized)
+        .filter(|(c, _)| dataset.node(c.a).depth == deepest)
+        .map(|(c, r)| Link {
+            a: c.a,
+            b: c.b,
+            similarity: c.similarity,
+            realized: *r,
+        })
+        .collect();
+    with_overlay(
+        &base,
+        &overlay(dataset, layout, &links, &OverlayStyle::default()),
+    )
 }
 
 /// Writes a built dataset's outputs atomically; an output whose bytes would

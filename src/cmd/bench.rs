@@ -57,6 +57,6 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         "constraints": computed.constraints.len(),
         "realized": computed.realized.iter().filter(|r| **r).count(),
     });
-    println!("{line}");
+    super::say(format_args!("{line}"));
     Ok(())
 }

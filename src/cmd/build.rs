@@ -41,12 +41,12 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
             } else {
                 "unchanged"
             };
-            println!(
+            super::say(format_args!(
                 "{state} {} ({} bytes, dataset {})",
                 path.display(),
                 bytes.len(),
                 b.name
-            );
+            ));
         }
     }
     Ok(())
@@ -56,13 +56,13 @@ pub(crate) fn check(args: &BuildArgs) -> anyhow::Result<()> {
     let config = Config::from_path(&args.config)?;
     for d in &config.datasets {
         let dataset = pipeline::load(d)?;
-        println!(
+        super::say(format_args!(
             "ok {}: {} nodes, {} leaves, {} outputs",
             d.name,
             dataset.len(),
             dataset.leaves().count(),
             d.outputs.len()
-        );
+        ));
     }
     Ok(())
 }

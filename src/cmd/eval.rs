@@ -65,12 +65,12 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
     let file = args.input.display().to_string();
     if args.json {
         for (method, m) in &rows {
-            println!("{}", row_json(&file, *method, m));
+            super::say(format_args!("{}", row_json(&file, *method, m)));
         }
     } else {
-        println!("{}", header());
+        super::say(format_args!("{}", header()));
         for (method, m) in &rows {
-            println!("{}", row_text(*method, m));
+            super::say(format_args!("{}", row_text(*method, m)));
         }
     }
     Ok(())

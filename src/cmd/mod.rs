@@ -180,3 +180,10 @@ pub(crate) fn exit_code(err: &anyhow::Error) -> u8 {
         1
     }
 }
+
+/// Prints one line on stdout. A closed pipe (`nptreemap build | head`) is not
+/// an error worth a panic: the line is dropped.
+pub(crate) fn say(line: impl std::fmt::Display) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stdout().lock(), "{line}");
+}

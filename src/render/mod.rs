@@ -6,6 +6,8 @@
 
 /// Layout JSON in the `nptreemap-layout/1` format of `shared/spec/layout-json.md`.
 pub mod json;
+/// Interlocking tabs and unrealised-link markers drawn over the treemap.
+pub mod overlay;
 /// Colours: hex parsing, the Tableau palettes, lightness variations for children.
 pub mod palette;
 /// PNG from the SVG text through usvg and resvg, with a built-in font.

@@ -174,7 +174,7 @@ fn stroke_width(top: f64, depth: usize) -> f64 {
 /// `color` always wins; otherwise top-level groups take the categorical palette
 /// by sibling index and deeper nodes a lightness variation of their parent's
 /// colour ([`palette::child_shade`]). The root has none unless it is a leaf.
-fn cell_colors(dataset: &Dataset) -> Vec<Option<Rgb>> {
+pub(crate) fn cell_colors(dataset: &Dataset) -> Vec<Option<Rgb>> {
     let own = |i: usize| dataset.node(i).color.as_deref().and_then(Rgb::from_hex);
     let mut colors: Vec<Option<Rgb>> = vec![None; dataset.len()];
     let root = dataset.root();
@@ -300,7 +300,7 @@ fn fit_font_size(polygon: &ConvexPolygon, center: Point, chars: usize) -> f64 {
 }
 
 /// A number with exactly two decimals; never `-0.00`, never non-finite.
-fn num(v: f64) -> String {
+pub(crate) fn num(v: f64) -> String {
     debug_assert!(v.is_finite(), "non-finite number reached the SVG: {v}");
     let v = if v.is_finite() { v } else { 0.0 };
     let s = format!("{v:.2}");
@@ -314,7 +314,7 @@ fn num(v: f64) -> String {
 /// XML-escapes user text for both element content and quoted attributes, and
 /// drops characters XML 1.0 forbids (C0 controls other than tab, LF and CR;
 /// U+FFFE, U+FFFF), which would otherwise make the whole document unparseable.
-fn escape(text: &str) -> String {
+pub(crate) fn escape(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
         match c {
