@@ -7,6 +7,8 @@ use std::path::PathBuf;
 
 use crate::config::{Config, DatasetConfig, OutputKind};
 use crate::layout::{compute, Computed, LayoutError};
+use crate::neighborhood::adjacency::level_adjacency;
+use crate::render::html::{html, HtmlData, HtmlNode};
 use crate::render::overlay::{overlay, with_overlay, Link, OverlayStyle};
 use crate::render::{layout_json, png, svg, ConstraintOut, JsonExtras, PngError, SvgStyle};
 use crate::{metrics, store, workspace};
@@ -67,14 +69,6 @@ pub enum BuildError {
         path: PathBuf,
         /// Why.
         source: PngError,
-    },
-    /// An output kind this version cannot write yet.
-    #[error("{}: {kind} output is not available yet", .path.display())]
-    Unsupported {
-        /// The output.
-        path: PathBuf,
-        /// The kind.
-        kind: &'static str,
     },
 }
 
@@ -191,19 +185,73 @@ pub fn render(
             path: path.to_path_buf(),
             source,
         })?,
-        OutputKind::Html => {
-            return Err(BuildError::Unsupported {
-                path: path.to_path_buf(),
-                kind: "HTML",
-            })
-        }
+        OutputKind::Html => html_page(computed).into_bytes(),
     })
+}
+
+/// The interactive page: the picture (its unrealised links drawn, for the
+/// page's checkbox to show or hide), and per cell its path from the root,
+/// weight, neighbours and constraint partners for the hover highlight.
+pub fn html_page(computed: &Computed) -> String {
+    let (dataset, layout) = (&computed.dataset, &computed.layout);
+    let style = OverlayStyle {
+        show_unrealized: true,
+        ..OverlayStyle::default()
+    };
+    let svg_text = picture_with(computed, &style);
+    let mut by_depth: Vec<Vec<usize>> = vec![Vec::new(); dataset.max_depth() + 1];
+    for (i, node) in dataset.nodes().iter().enumerate() {
+        by_depth[node.depth].push(i);
+    }
+    let adjacency: Vec<_> = by_depth
+        .iter()
+        .map(|nodes| level_adjacency(layout, nodes, 1e-6))
+        .collect();
+    let mut partners: Vec<Vec<(String, bool)>> = vec![Vec::new(); dataset.len()];
+    for (c, r) in computed.constraints.iter().zip(&computed.realized) {
+        partners[c.a].push((dataset.node(c.b).id.clone(), *r));
+        partners[c.b].push((dataset.node(c.a).id.clone(), *r));
+    }
+    let nodes = dataset
+        .nodes()
+        .iter()
+        .enumerate()
+        .map(|(i, node)| {
+            let mut path = Vec::new();
+            let mut at = Some(i);
+            while let Some(k) = at {
+                path.push(dataset.node(k).label.clone());
+                at = dataset.node(k).parent;
+            }
+            path.reverse();
+            HtmlNode {
+                id: node.id.clone(),
+                label: node.label.clone(),
+                path,
+                weight: node.value,
+                depth: node.depth,
+                leaf: node.children.is_empty(),
+                neighbours: adjacency[node.depth]
+                    .neighbours(i)
+                    .iter()
+                    .map(|j| dataset.node(*j).id.clone())
+                    .collect(),
+                partners: std::mem::take(&mut partners[i]),
+            }
+        })
+        .collect();
+    let title = dataset.node(dataset.root()).label.clone();
+    html(&svg_text, &HtmlData { title, nodes })
 }
 
 /// The SVG picture: the treemap with, when there are constraints, the
 /// interlocking tabs and unrealised-link markers of its deepest level (where the
 /// paper draws them, method-reference §8.2–8.4) on top.
 pub fn picture(computed: &Computed) -> String {
+    picture_with(computed, &OverlayStyle::default())
+}
+
+fn picture_with(computed: &Computed, style: &OverlayStyle) -> String {
     let (dataset, layout) = (&computed.dataset, &computed.layout);
     let base = svg(dataset, layout, &SvgStyle::default());
     if computed.constraints.is_empty() {
@@ -222,10 +270,7 @@ pub fn picture(computed: &Computed) -> String {
             realized: *r,
         })
         .collect();
-    with_overlay(
-        &base,
-        &overlay(dataset, layout, &links, &OverlayStyle::default()),
-    )
+    with_overlay(&base, &overlay(dataset, layout, &links, style))
 }
 
 /// Writes a built dataset's outputs atomically; an output whose bytes would

@@ -4,6 +4,8 @@
 //! identical bytes for identical input. Only PNG can fail, and then on a bug
 //! (its input is our own SVG) or an absurd pixel size.
 
+/// Interactive HTML page: the SVG with inline hover script, style and node data.
+pub mod html;
 /// Layout JSON in the `nptreemap-layout/1` format of `shared/spec/layout-json.md`.
 pub mod json;
 /// Interlocking tabs and unrealised-link markers drawn over the treemap.
@@ -18,6 +20,7 @@ pub mod svg;
 #[cfg(test)]
 mod test_support;
 
+pub use html::{html, HtmlData, HtmlNode};
 pub use json::{layout_json, ConstraintOut, JsonExtras};
 pub use palette::Rgb;
 pub use png::{png, PngError};

@@ -137,7 +137,9 @@ pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
             } else {
                 "none".to_owned()
             };
-            out.push_str("<path d=\"");
+            out.push_str("<path data-id=\"");
+            out.push_str(&escape(&node.id));
+            out.push_str("\" d=\"");
             path_data(&mut out, &layout.cells[i].polygon);
             out.push_str(&format!("\" fill=\"{fill}\"><title>"));
             out.push_str(&escape(&node.label));
@@ -314,6 +316,7 @@ pub(crate) fn num(v: f64) -> String {
 /// XML-escapes user text for both element content and quoted attributes, and
 /// drops characters XML 1.0 forbids (C0 controls other than tab, LF and CR;
 /// U+FFFE, U+FFFF), which would otherwise make the whole document unparseable.
+/// Also valid for HTML text and attributes (used by [`super::html`]).
 pub(crate) fn escape(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
@@ -450,6 +453,15 @@ mod tests {
         assert_eq!(colors[idx("A2")], Some(palette::child_shade(a, 1, 3)));
         let text = svg(&dataset, &layout, &SvgStyle::default());
         assert!(text.contains("fill=\"#ff0000\""));
+    }
+
+    #[test]
+    fn every_path_carries_its_escaped_id() {
+        let (dataset, layout) = sample();
+        let text = svg(&dataset, &layout, &SvgStyle::default());
+        assert_eq!(count(&text, "<path data-id=\""), count(&text, "<path"));
+        assert!(text.contains("<path data-id=\"A3\" d=\""));
+        assert!(!text.contains("data-id=\"root\""));
     }
 
     #[test]

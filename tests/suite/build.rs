@@ -159,6 +159,14 @@ fn readme_main_job_builds_every_example() {
             snapshot.push(std::fs::read(out.join(format!("{name}.{ext}"))).expect("output"));
         }
     }
+    let page = std::fs::read_to_string(out.join("countries.html")).expect("html written");
+    assert!(page.contains("data-id=\"CN\"") && page.contains("id=\"nptreemap-data\""));
+    let external =
+        page.matches("http").count() - page.matches("http://www.w3.org/2000/svg").count();
+    assert_eq!(
+        external, 0,
+        "the page must not load anything from the network"
+    );
     let second = run(&["build", cfg]);
     assert!(second.status.success());
     let mut again = Vec::new();

@@ -1,0 +1,323 @@
+//! The interactive HTML page: one self-contained HTML5 file wrapping a finished
+//! SVG with inline style, inline script and the node data as JSON, for the hover
+//! behaviour of the paper's prototype (method reference §8.5). Owns the page's
+//! structure, its style and script and the escaping of the data block; may not
+//! build the SVG or the node data, do I/O, or reference anything over the network.
+//! Output is deterministic: identical input gives identical bytes.
+
+use serde::Serialize;
+
+use super::svg::escape;
+
+/// What the page knows about the map beyond its picture.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct HtmlData {
+    /// Page title, shown in the browser tab (escaped; any text is safe).
+    pub title: String,
+    /// Every node the script may look up, in the caller's order (written so).
+    pub nodes: Vec<HtmlNode>,
+}
+
+/// One node of the map as the page's script sees it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct HtmlNode {
+    /// Node id; equals the `data-id` of its cell `<path>` in the SVG.
+    pub id: String,
+    /// Display label.
+    pub label: String,
+    /// Labels from the root to this node, both included; the tooltip text.
+    pub path: Vec<String>,
+    /// The node's weight, shown in the tooltip.
+    pub weight: f64,
+    /// Depth in the hierarchy; the root has depth 0.
+    pub depth: usize,
+    /// Whether the node is a leaf (only leaves react to hovering).
+    pub leaf: bool,
+    /// Ids of the cells at the same depth sharing an edge with this one.
+    pub neighbours: Vec<String>,
+    /// Ids of the node's constraint partners, each with whether the constraint
+    /// is realised (the two cells share an edge).
+    pub partners: Vec<(String, bool)>,
+}
+
+/// Id of the JSON data block, which the script reads.
+const DATA_ID: &str = "nptreemap-data";
+
+/// Inline style: the hover classes, the tooltip and a responsive picture.
+const STYLE: &str = r#"body { margin: 1em; font: 14px Helvetica, Arial, sans-serif; color: #1a1a1a; }
+#np-map svg { max-width: 100%; height: auto; display: block; }
+#np-map path { transition: opacity .1s; }
+#np-map path.np-dim { opacity: .25; }
+#np-map path.np-partner { stroke: #000; stroke-width: 4px; }
+#np-map path.np-partner-unrealized { stroke-dasharray: 6 3; }
+body.np-hide-unrealized .np-unrealized { display: none; }
+#np-tooltip { position: fixed; pointer-events: none; background: #fff; border: 1px solid #888;
+  padding: .3em .5em; max-width: 40em; box-shadow: 0 1px 4px rgba(0,0,0,.3); }
+#np-tooltip[hidden] { display: none; }
+"#;
+
+/// Inline script: hover highlighting, tooltip, and the unrealised-links toggle.
+/// User text reaches the page only through `textContent`.
+const SCRIPT: &str = r#"(function () {
+  "use strict";
+  var data = JSON.parse(document.getElementById("nptreemap-data").textContent);
+  var nodes = {};
+  data.nodes.forEach(function (n) { nodes[n.id] = n; });
+  var map = document.getElementById("np-map");
+  var tip = document.getElementById("np-tooltip");
+  var cells = {};
+  var leaves = [];
+  Array.prototype.forEach.call(map.querySelectorAll("path[data-id]"), function (el) {
+    var id = el.getAttribute("data-id");
+    cells[id] = el;
+    if (nodes[id] && nodes[id].leaf) { leaves.push(el); }
+  });
+  var current = null;
+
+  function clear() {
+    current = null;
+    leaves.forEach(function (el) { el.classList.remove("np-dim"); });
+    Array.prototype.forEach.call(map.querySelectorAll(".np-partner"), function (el) {
+      el.classList.remove("np-partner", "np-partner-unrealized");
+    });
+    tip.hidden = true;
+  }
+
+  function show(el) {
+    var n = nodes[el.getAttribute("data-id")];
+    current = el;
+    var near = {};
+    n.neighbours.forEach(function (id) { near[id] = true; });
+    leaves.forEach(function (c) {
+      if (!near[c.getAttribute("data-id")]) { c.classList.add("np-dim"); }
+    });
+    n.partners.forEach(function (p) {
+      var c = cells[p[0]];
+      if (c) {
+        c.classList.add("np-partner");
+        if (!p[1]) { c.classList.add("np-partner-unrealized"); }
+      }
+    });
+    tip.textContent = n.path.join(" \u203a ") + " \u2014 weight " + n.weight.toLocaleString();
+    tip.hidden = false;
+  }
+
+  map.addEventListener("mouseover", function (e) {
+    var el = e.target.closest ? e.target.closest("path[data-id]") : null;
+    if (el === current) { return; }
+    clear();
+    var n = el && nodes[el.getAttribute("data-id")];
+    if (n && n.leaf) { show(el); }
+  });
+  map.addEventListener("mouseleave", clear);
+  map.addEventListener("mousemove", function (e) {
+    tip.style.left = (e.clientX + 14) + "px";
+    tip.style.top = (e.clientY + 14) + "px";
+  });
+
+  var box = document.getElementById("np-unrealized");
+  function toggle() { document.body.classList.toggle("np-hide-unrealized", !box.checked); }
+  box.addEventListener("change", toggle);
+  toggle();
+})();
+"#;
+
+/// Writes one self-contained HTML5 page showing `svg` (inserted verbatim, so it
+/// must be our own SVG text, whose cell `<path>`s carry `data-id`) with `data`.
+///
+/// The page has no network references: style, script and data are inline. The
+/// data is JSON in `<script type="application/json" id="nptreemap-data">`, with
+/// every `<` written as `\u003c` so no label can close the block. Hovering a
+/// leaf dims every leaf cell outside its neighbour set (itself included, as in
+/// the prototype), outlines its constraint partners (dashed where unrealised)
+/// and shows its root-to-leaf path and weight in a tooltip; a checkbox "Show
+/// unrealized links" (on by default) shows or hides SVG elements of class
+/// `np-unrealized`. Identical input gives identical bytes.
+pub fn html(svg: &str, data: &HtmlData) -> String {
+    let mut out = String::with_capacity(svg.len() + STYLE.len() + SCRIPT.len() + 1024);
+    out.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
+    out.push_str(
+        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>",
+    );
+    out.push_str(&escape(&data.title));
+    out.push_str("</title>\n<style>\n");
+    out.push_str(STYLE);
+    out.push_str("</style>\n</head>\n<body>\n");
+    out.push_str(
+        "<label><input type=\"checkbox\" id=\"np-unrealized\"> \
+         Show unrealized links</label>\n",
+    );
+    out.push_str("<div id=\"np-map\">\n");
+    out.push_str(svg);
+    if !svg.ends_with('\n') {
+        out.push('\n');
+    }
+    out.push_str("</div>\n<div id=\"np-tooltip\" hidden></div>\n");
+    out.push_str(&format!(
+        "<script type=\"application/json\" id=\"{DATA_ID}\">\n"
+    ));
+    out.push_str(&data_json(data));
+    out.push_str("\n</script>\n<script>\n");
+    out.push_str(SCRIPT);
+    out.push_str("</script>\n</body>\n</html>\n");
+    out
+}
+
+/// `data` as JSON safe inside a `<script>` element: every `<` becomes the JSON
+/// escape `\u003c`, so neither `</script` nor `<!--` can appear, and the text
+/// still parses to the same value.
+fn data_json(data: &HtmlData) -> String {
+    // Serialising strings, numbers and bools cannot fail (non-finite numbers
+    // become `null`); the fallback only keeps the page well-formed.
+    let json = serde_json::to_string(data).unwrap_or_else(|_| "{\"nodes\":[]}".to_owned());
+    json.replace('<', "\\u003c")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::svg::{svg, SvgStyle};
+    use crate::render::test_support::sample;
+    use nptreemap_formats::Dataset;
+
+    /// Page data for the sample: every node, neighbours and partners made up.
+    fn sample_data(dataset: &Dataset, title: &str) -> HtmlData {
+        let nodes = dataset
+            .nodes()
+            .iter()
+            .enumerate()
+            .map(|(i, node)| {
+                let mut path = Vec::new();
+                let mut at = Some(i);
+                while let Some(k) = at {
+                    path.push(dataset.node(k).label.clone());
+                    at = dataset.node(k).parent;
+                }
+                path.reverse();
+                let (neighbours, partners) = match node.id.as_str() {
+                    "A1" => (vec!["A2".into(), "B".into()], vec![("B".into(), true)]),
+                    "A3" => (vec!["A2".into()], vec![("A1".into(), false)]),
+                    _ => (Vec::new(), Vec::new()),
+                };
+                HtmlNode {
+                    id: node.id.clone(),
+                    label: node.label.clone(),
+                    path,
+                    weight: node.value,
+                    depth: node.depth,
+                    leaf: dataset.is_leaf(i),
+                    neighbours,
+                    partners,
+                }
+            })
+            .collect();
+        HtmlData {
+            title: title.to_owned(),
+            nodes,
+        }
+    }
+
+    const HOSTILE: &str = "<script>alert(1)</script>";
+
+    fn page() -> (String, HtmlData) {
+        let (dataset, layout) = sample();
+        let data = sample_data(&dataset, &format!("Map {HOSTILE}"));
+        (
+            html(&svg(&dataset, &layout, &SvgStyle::default()), &data),
+            data,
+        )
+    }
+
+    /// The text of the JSON data block.
+    fn data_block(page: &str) -> &str {
+        let open = format!("<script type=\"application/json\" id=\"{DATA_ID}\">");
+        let start = page.find(&open).expect("data block") + open.len();
+        let len = page[start..].find("</script>").expect("block end");
+        &page[start..start + len]
+    }
+
+    #[test]
+    fn no_network_references() {
+        let (page, _) = page();
+        let without_ns = page.replace("xmlns=\"http://www.w3.org/2000/svg\"", "");
+        assert!(!without_ns.contains("http://"));
+        assert!(!without_ns.contains("https://"));
+        assert!(!page.contains(" src="));
+        assert!(!page.contains("<link"));
+        assert!(!page.contains("@import"));
+        assert!(!page.contains("url("));
+    }
+
+    #[test]
+    fn data_block_round_trips() {
+        let (page, data) = page();
+        let parsed: serde_json::Value =
+            serde_json::from_str(data_block(&page)).expect("valid JSON");
+        assert_eq!(parsed, serde_json::to_value(&data).expect("serialisable"));
+        assert_eq!(
+            parsed["nodes"][2]["label"],
+            "<script>alert(1)</script> \"q\""
+        );
+        assert_eq!(parsed["nodes"][5]["partners"][0][1], false);
+    }
+
+    #[test]
+    fn hostile_text_appears_only_escaped() {
+        let (page, _) = page();
+        assert!(!page.contains("<script>alert"));
+        assert!(!page.to_lowercase().contains("</script><script>alert"));
+        assert!(page.contains("<title>Map &lt;script&gt;alert(1)&lt;/script&gt;</title>"));
+        assert!(page.contains("<title>&lt;script&gt;alert(1)&lt;/script&gt; &quot;q&quot; (B)"));
+        let block = data_block(&page);
+        assert!(block.contains("\\u003cscript>alert(1)\\u003c/script>"));
+        assert!(!block.contains('<'));
+        // Exactly the two scripts of the page, plus none smuggled in.
+        assert_eq!(page.matches("<script").count(), 2);
+        assert_eq!(page.matches("</script>").count(), 2);
+    }
+
+    #[test]
+    fn identical_input_identical_bytes() {
+        assert_eq!(page().0, page().0);
+    }
+
+    #[test]
+    fn every_data_id_is_a_node() {
+        let (page, data) = page();
+        let unescape = |s: &str| {
+            s.replace("&lt;", "<")
+                .replace("&gt;", ">")
+                .replace("&quot;", "\"")
+                .replace("&apos;", "'")
+                .replace("&amp;", "&")
+        };
+        let ids: Vec<String> = page
+            .split("data-id=\"")
+            .skip(1)
+            .map(|rest| unescape(&rest[..rest.find('"').expect("closing quote")]))
+            .collect();
+        assert_eq!(ids.len(), 5, "every node but the root");
+        for id in &ids {
+            assert!(data.nodes.iter().any(|n| &n.id == id), "{id} has data");
+        }
+    }
+
+    #[test]
+    fn page_has_its_parts() {
+        let (page, _) = page();
+        assert!(page.starts_with("<!DOCTYPE html>\n"));
+        assert!(page.ends_with("</html>\n"));
+        for part in [
+            "<div id=\"np-tooltip\" hidden></div>",
+            "<input type=\"checkbox\" id=\"np-unrealized\">",
+            "Show unrealized links",
+            ".np-dim",
+            ".np-partner",
+            "<svg xmlns=",
+        ] {
+            assert!(page.contains(part), "{part}");
+        }
+        assert!(!SCRIPT.contains("innerHTML"));
+        assert!(SCRIPT.contains(DATA_ID));
+    }
+}
