@@ -217,13 +217,11 @@ pub fn html_page(computed: &Computed) -> String {
         .iter()
         .enumerate()
         .map(|(i, node)| {
-            let mut path = Vec::new();
-            let mut at = Some(i);
-            while let Some(k) = at {
-                path.push(dataset.node(k).label.clone());
-                at = dataset.node(k).parent;
-            }
-            path.reverse();
+            let path: Vec<String> = dataset
+                .path(i)
+                .iter()
+                .map(|k| dataset.node(*k).label.clone())
+                .collect();
             HtmlNode {
                 id: node.id.clone(),
                 label: node.label.clone(),

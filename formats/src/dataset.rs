@@ -228,6 +228,18 @@ impl Dataset {
         self.nodes[index].children.is_empty()
     }
 
+    /// The nodes from the root down to `index`, both included.
+    pub fn path(&self, index: usize) -> Vec<usize> {
+        let mut path = Vec::new();
+        let mut at = Some(index);
+        while let Some(k) = at {
+            path.push(k);
+            at = self.nodes[k].parent;
+        }
+        path.reverse();
+        path
+    }
+
     /// The largest depth of any node (0 when the root is the only node).
     pub fn max_depth(&self) -> usize {
         self.max_depth
@@ -556,6 +568,22 @@ fn node_on_cycle(start: usize, parent_of: &[Option<usize>]) -> usize {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn path_runs_from_the_root_to_the_node() {
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("r"));
+        b.add(NodeSpec::new("a").parent("r"));
+        b.add(NodeSpec::new("a1").parent("a").weight(1.0));
+        b.add(NodeSpec::new("b").parent("r").weight(1.0));
+        let ds = b.build().expect("valid");
+        let ids = |i: usize| -> Vec<String> {
+            ds.path(i).iter().map(|k| ds.node(*k).id.clone()).collect()
+        };
+        assert_eq!(ids(ds.find("a1").expect("a1")), ["r", "a", "a1"]);
+        assert_eq!(ids(ds.root()), ["r"]);
+    }
+
     use super::*;
 
     fn build(specs: Vec<NodeSpec>) -> Result<Dataset, ModelError> {

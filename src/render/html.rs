@@ -187,13 +187,11 @@ mod tests {
             .iter()
             .enumerate()
             .map(|(i, node)| {
-                let mut path = Vec::new();
-                let mut at = Some(i);
-                while let Some(k) = at {
-                    path.push(dataset.node(k).label.clone());
-                    at = dataset.node(k).parent;
-                }
-                path.reverse();
+                let path: Vec<String> = dataset
+                    .path(i)
+                    .iter()
+                    .map(|k| dataset.node(*k).label.clone())
+                    .collect();
                 let (neighbours, partners) = match node.id.as_str() {
                     "A1" => (vec!["A2".into(), "B".into()], vec![("B".into(), true)]),
                     "A3" => (vec!["A2".into()], vec![("A1".into(), false)]),
