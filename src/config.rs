@@ -10,6 +10,8 @@ use serde::Deserialize;
 
 use crate::layout::{Canvas, Method, NeighborParams, Outline, Params, Request};
 use crate::neighborhood::SimilarityKind;
+use crate::render::overlay::OverlayStyle;
+use crate::render::{Border, Rgb, Style, SvgStyle};
 
 /// The built-in defaults, every key documented (`config/default.yaml`).
 pub const DEFAULT_YAML: &str = include_str!("../config/default.yaml");
@@ -19,6 +21,8 @@ pub const DEFAULT_YAML: &str = include_str!("../config/default.yaml");
 pub struct Config {
     /// Layout settings shared by every dataset.
     pub layout: LayoutConfig,
+    /// How the pictures look, for every dataset.
+    pub render: RenderConfig,
     /// The datasets, in file order.
     pub datasets: Vec<DatasetConfig>,
 }
@@ -64,6 +68,109 @@ impl Default for LayoutConfig {
             min_weight_ratio: p.min_weight_ratio,
             prototype: false,
         }
+    }
+}
+
+/// The `render` section: how SVG, PNG and HTML pictures look. Colours are
+/// `#rrggbb` or `#rgb`; checked when the config is read.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RenderConfig {
+    /// Title above every picture; a dataset's own `title` wins. Default: none.
+    pub title: Option<String>,
+    /// Legend band under the map (top-level groups, tab and marker keys). Default: true.
+    pub legend: bool,
+    /// Canvas background colour, or `none` for transparent. Default: `#ffffff`.
+    pub background: String,
+    /// Colour of the line around the root outline. Default: `#4d4d4d`.
+    pub border_color: String,
+    /// Width of that line; 0 draws none. Default: 0.
+    pub border_width: f64,
+    /// Colour of cell outlines and label halos. Default: `#ffffff`.
+    pub stroke: String,
+    /// Outline width between top-level groups; each level down halves it. Default: 3.
+    pub stroke_width: f64,
+    /// Leaf labels. Default: true.
+    pub labels: bool,
+    /// Labels needing a smaller font are left out. Default: 6.
+    pub min_font_size: f64,
+    /// Largest label font size. Default: 24.
+    pub max_font_size: f64,
+    /// Interlocking tabs on the shared edges of similar neighbours. Default: true.
+    pub tabs: bool,
+    /// Dashed red links between similar cells that are not neighbours. Default: false.
+    pub unrealized_links: bool,
+    /// Count markers on cells with similar cells that are not neighbours. Default: true.
+    pub unlinked_markers: bool,
+}
+
+impl Default for RenderConfig {
+    fn default() -> Self {
+        let style = Style::default();
+        let cells = &style.cells;
+        Self {
+            title: None,
+            legend: style.legend,
+            background: cells
+                .background
+                .map_or("none".to_string(), |c| c.to_string()),
+            border_color: "#4d4d4d".to_string(),
+            border_width: 0.0,
+            stroke: cells.stroke.to_string(),
+            stroke_width: cells.stroke_width,
+            labels: cells.labels,
+            min_font_size: cells.min_font_size,
+            max_font_size: cells.max_font_size,
+            tabs: style.tabs,
+            unrealized_links: style.overlay.show_unrealized,
+            unlinked_markers: style.overlay.unlinked_markers,
+        }
+    }
+}
+
+impl RenderConfig {
+    /// Checks colours and sizes; the error names the key.
+    fn validate(&self) -> Result<(), ConfigError> {
+        let bad = |key: &str, message: String| ConfigError::Value {
+            field: format!("render.{key}"),
+            message,
+        };
+        let color = |key: &str, value: &str| {
+            Rgb::from_hex(value)
+                .map(|_| ())
+                .ok_or_else(|| bad(key, format!("{value:?} is not a colour (#rrggbb or #rgb)")))
+        };
+        if self.background != "none" {
+            color("background", &self.background)?;
+        }
+        color("border_color", &self.border_color)?;
+        color("stroke", &self.stroke)?;
+        for (key, v) in [
+            ("border_width", self.border_width),
+            ("stroke_width", self.stroke_width),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(bad(key, format!("{v} must be a number >= 0")));
+            }
+        }
+        for (key, v) in [
+            ("min_font_size", self.min_font_size),
+            ("max_font_size", self.max_font_size),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(key, format!("{v} must be a positive number")));
+            }
+        }
+        if self.min_font_size > self.max_font_size {
+            return Err(bad(
+                "min_font_size",
+                format!(
+                    "{} is larger than max_font_size {}",
+                    self.min_font_size, self.max_font_size
+                ),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -128,6 +235,9 @@ pub struct DatasetConfig {
     /// Similarity between nodes; default: what the format declares.
     #[serde(default)]
     pub similarity: Option<SimilarityName>,
+    /// Title above this dataset's pictures; default: `render.title`.
+    #[serde(default)]
+    pub title: Option<String>,
     /// What to write.
     #[serde(default)]
     pub outputs: Vec<OutputConfig>,
@@ -202,6 +312,8 @@ struct RawConfig {
     #[serde(default)]
     layout: LayoutConfig,
     #[serde(default)]
+    render: RenderConfig,
+    #[serde(default)]
     datasets: Vec<DatasetConfig>,
 }
 
@@ -252,6 +364,7 @@ impl Config {
         let raw: RawConfig = if text.trim().is_empty() {
             RawConfig {
                 layout: LayoutConfig::default(),
+                render: RenderConfig::default(),
                 datasets: Vec::new(),
             }
         } else {
@@ -298,8 +411,10 @@ impl Config {
                 }
             }
         }
+        raw.render.validate()?;
         let config = Config {
             layout: raw.layout,
+            render: raw.render,
             datasets,
         };
         config.params().validate().map_err(|e| ConfigError::Value {
@@ -340,6 +455,37 @@ impl Config {
             max_iterations: l.max_iterations,
             min_iterations: l.min_iterations,
             min_weight_ratio: l.min_weight_ratio,
+        }
+    }
+
+    /// The picture style for one dataset (its own title, else `render.title`).
+    pub fn style(&self, dataset: &DatasetConfig) -> Style {
+        let r = &self.render;
+        // Colours were checked in `from_str`; the fallbacks only serve a
+        // hand-built Config.
+        let color = |s: &str, fallback: Rgb| Rgb::from_hex(s).unwrap_or(fallback);
+        let defaults = Style::default();
+        Style {
+            title: dataset.title.clone().or_else(|| r.title.clone()),
+            legend: r.legend,
+            tabs: r.tabs,
+            border: (r.border_width > 0.0).then(|| Border {
+                color: color(&r.border_color, Rgb::new(0x4d, 0x4d, 0x4d)),
+                width: r.border_width,
+            }),
+            cells: SvgStyle {
+                background: Rgb::from_hex(&r.background),
+                stroke: color(&r.stroke, defaults.cells.stroke),
+                stroke_width: r.stroke_width,
+                labels: r.labels,
+                min_font_size: r.min_font_size,
+                max_font_size: r.max_font_size,
+                ..defaults.cells
+            },
+            overlay: OverlayStyle {
+                show_unrealized: r.unrealized_links,
+                unlinked_markers: r.unlinked_markers,
+            },
         }
     }
 
@@ -402,6 +548,17 @@ mod tests {
     fn default_yaml_is_the_code_default() {
         let c = parse(DEFAULT_YAML).expect("default.yaml parses");
         assert_eq!(c.layout, LayoutConfig::default());
+        assert_eq!(c.render, RenderConfig::default());
+        let d = DatasetConfig {
+            name: "d".to_string(),
+            format: "f".to_string(),
+            files: Default::default(),
+            fields: Default::default(),
+            similarity: None,
+            title: None,
+            outputs: Vec::new(),
+        };
+        assert_eq!(c.style(&d), Style::default());
         assert_eq!(c.params(), Params::default());
         assert!(c.datasets.is_empty());
     }
@@ -426,6 +583,34 @@ mod tests {
         let text = err.to_string();
         assert!(text.starts_with("line 3, column 3: "), "{text}");
         assert!(text.contains("colour"), "{text}");
+    }
+
+    #[test]
+    fn render_section_reaches_the_style() {
+        let c = parse(
+            "render:\n  title: All\n  background: none\n  border_width: 2\n  tabs: false\n\
+             datasets:\n  - {name: a, format: x, files: {}, title: Mine}\n  - {name: b, format: x, files: {}}\n",
+        )
+        .expect("valid");
+        let a = c.style(&c.datasets[0]);
+        assert_eq!(a.title.as_deref(), Some("Mine"));
+        assert_eq!(c.style(&c.datasets[1]).title.as_deref(), Some("All"));
+        assert_eq!(a.cells.background, None);
+        assert!(!a.tabs);
+        assert_eq!(a.border.map(|b| b.width), Some(2.0));
+    }
+
+    #[test]
+    fn bad_render_values_name_the_key() {
+        for (text, key) in [
+            ("render: {background: blue}\n", "render.background"),
+            ("render: {stroke: \"#12\"}\n", "render.stroke"),
+            ("render: {border_width: -1}\n", "render.border_width"),
+            ("render: {min_font_size: 30}\n", "render.min_font_size"),
+        ] {
+            let err = parse(text).expect_err(text).to_string();
+            assert!(err.starts_with(key), "{text}: {err}");
+        }
     }
 
     #[test]

@@ -9,9 +9,9 @@ use crate::config::{Config, DatasetConfig, OutputKind};
 use crate::layout::{compute, Computed, LayoutError};
 use crate::neighborhood::adjacency::level_adjacency;
 use crate::render::html::{html, HtmlData, HtmlNode};
-use crate::render::overlay::{overlay, with_overlay, Link, OverlayStyle};
-use crate::render::{layout_json, png, svg, ConstraintOut, JsonExtras, PngError, SvgStyle};
-use crate::{metrics, store, workspace};
+use crate::render::overlay::Link;
+use crate::render::{layout_json, png, ConstraintOut, JsonExtras, PngError, Style};
+use crate::{metrics, render, store, workspace};
 use nptreemap_formats::{registry, Dataset, FormatOptions, Inputs};
 
 /// Why a dataset could not be built.
@@ -155,12 +155,13 @@ pub fn build(config: &Config, d: &DatasetConfig) -> Result<Built, BuildError> {
         dataset: d.name.clone(),
         source,
     })?;
+    let style = config.style(d);
     let mut outputs = Vec::new();
     for out in &d.outputs {
         let kind = out.kind.unwrap_or(OutputKind::Svg);
         outputs.push((
             out.path.clone(),
-            render(&computed, kind, out.scale, &out.path)?,
+            render(&computed, &style, kind, out.scale, &out.path)?,
         ));
     }
     Ok(Built {
@@ -173,6 +174,7 @@ pub fn build(config: &Config, d: &DatasetConfig) -> Result<Built, BuildError> {
 /// One output's bytes for a computed layout (`path` only names it in errors).
 pub fn render(
     computed: &Computed,
+    style: &Style,
     kind: OutputKind,
     scale: f64,
     path: &std::path::Path,
@@ -180,25 +182,26 @@ pub fn render(
     let (dataset, layout) = (&computed.dataset, &computed.layout);
     Ok(match kind {
         OutputKind::Json => layout_json(dataset, layout, &json_extras(computed)).into_bytes(),
-        OutputKind::Svg => picture(computed).into_bytes(),
-        OutputKind::Png => png(&picture(computed), scale).map_err(|source| BuildError::Png {
-            path: path.to_path_buf(),
-            source,
-        })?,
-        OutputKind::Html => html_page(computed).into_bytes(),
+        OutputKind::Svg => picture(computed, style).into_bytes(),
+        OutputKind::Png => {
+            png(&picture(computed, style), scale).map_err(|source| BuildError::Png {
+                path: path.to_path_buf(),
+                source,
+            })?
+        }
+        OutputKind::Html => html_page(computed, style).into_bytes(),
     })
 }
 
 /// The interactive page: the picture (its unrealised links drawn, for the
 /// page's checkbox to show or hide), and per cell its path from the root,
 /// weight, neighbours and constraint partners for the hover highlight.
-pub fn html_page(computed: &Computed) -> String {
+pub fn html_page(computed: &Computed, style: &Style) -> String {
     let (dataset, layout) = (&computed.dataset, &computed.layout);
-    let style = OverlayStyle {
-        show_unrealized: true,
-        ..OverlayStyle::default()
-    };
-    let svg_text = picture_with(computed, &style);
+    // The links are always drawn on the page; its checkbox shows or hides them.
+    let mut page_style = style.clone();
+    page_style.overlay.show_unrealized = true;
+    let svg_text = picture(computed, &page_style);
     let mut by_depth: Vec<Vec<usize>> = vec![Vec::new(); dataset.max_depth() + 1];
     for (i, node) in dataset.nodes().iter().enumerate() {
         by_depth[node.depth].push(i);
@@ -238,23 +241,18 @@ pub fn html_page(computed: &Computed) -> String {
             }
         })
         .collect();
-    let title = dataset.node(dataset.root()).label.clone();
+    let title = style
+        .title
+        .clone()
+        .unwrap_or_else(|| dataset.node(dataset.root()).label.clone());
     html(&svg_text, &HtmlData { title, nodes })
 }
 
 /// The SVG picture: the treemap with, when there are constraints, the
 /// interlocking tabs and unrealised-link markers of its deepest level (where the
-/// paper draws them, method-reference §8.2–8.4) on top.
-pub fn picture(computed: &Computed) -> String {
-    picture_with(computed, &OverlayStyle::default())
-}
-
-fn picture_with(computed: &Computed, style: &OverlayStyle) -> String {
+/// paper draws them, method-reference §8.2–8.4) on top, framed as `style` says.
+pub fn picture(computed: &Computed, style: &Style) -> String {
     let (dataset, layout) = (&computed.dataset, &computed.layout);
-    let base = svg(dataset, layout, &SvgStyle::default());
-    if computed.constraints.is_empty() {
-        return base;
-    }
     let deepest = dataset.max_depth();
     let links: Vec<Link> = computed
         .constraints
@@ -268,7 +266,7 @@ fn picture_with(computed: &Computed, style: &OverlayStyle) -> String {
             realized: *r,
         })
         .collect();
-    with_overlay(&base, &overlay(dataset, layout, &links, style))
+    render::picture(dataset, layout, &links, style)
 }
 
 /// Writes a built dataset's outputs atomically; an output whose bytes would

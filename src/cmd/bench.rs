@@ -1,7 +1,7 @@
 //! `nptreemap bench`: lays one input out several times in one process and prints
 //! one JSON line with the median time of the whole layout step (preparation,
 //! constraints and layout; parsing excluded) and the layout's quality, for
-//! `benches/peers.py`.
+//! `benches/peers.py`; with `--render`, also the SVG and PNG rendering times.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -9,7 +9,8 @@ use std::time::Instant;
 use clap::Args;
 
 use super::LayoutOptions;
-use nptreemap::{metrics, workspace};
+use nptreemap::render::Style;
+use nptreemap::{metrics, pipeline, workspace};
 
 /// Arguments of `nptreemap bench`.
 #[derive(Debug, Args)]
@@ -21,6 +22,10 @@ pub(crate) struct BenchArgs {
     /// Layouts to time; the median is reported.
     #[arg(long, default_value_t = 3)]
     repeat: usize,
+    /// Also time rendering the last layout to SVG text and to PNG pixels
+    /// (median of `--repeat` runs each; the PNG time includes parsing the SVG).
+    #[arg(long)]
+    render: bool,
 }
 
 pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
@@ -41,7 +46,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let q = metrics::quality(&computed.dataset, &computed.layout);
     let mut sorted = times.clone();
     sorted.sort_by(f64::total_cmp);
-    let line = serde_json::json!({
+    let mut line = serde_json::json!({
         "tool": "nptreemap",
         "version": env!("CARGO_PKG_VERSION"),
         "leaves": dataset.leaves().count(),
@@ -57,6 +62,30 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         "constraints": computed.constraints.len(),
         "realized": computed.realized.iter().filter(|r| **r).count(),
     });
+    if args.render {
+        let style = Style::default();
+        let (mut svg_ms, mut png_ms) = (Vec::new(), Vec::new());
+        let mut sizes = (0, 0);
+        for _ in 0..args.repeat.max(1) {
+            let t = Instant::now();
+            let svg = pipeline::picture(&computed, &style);
+            svg_ms.push(t.elapsed().as_secs_f64() * 1000.0);
+            let t = Instant::now();
+            let png = nptreemap::render::png(&svg, 1.0)?;
+            png_ms.push(t.elapsed().as_secs_f64() * 1000.0);
+            sizes = (svg.len(), png.len());
+        }
+        line["render_svg_ms"] = median(&svg_ms).into();
+        line["render_png_ms"] = median(&png_ms).into();
+        line["svg_bytes"] = sizes.0.into();
+        line["png_bytes"] = sizes.1.into();
+    }
     super::say(format_args!("{line}"));
     Ok(())
+}
+
+fn median(values: &[f64]) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
 }

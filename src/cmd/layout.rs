@@ -1,4 +1,4 @@
-//! `nptreemap layout`: one input file to layout JSON and/or SVG files.
+//! `nptreemap layout`: one input file to layout JSON, SVG, PNG and/or HTML files.
 
 use std::path::PathBuf;
 
@@ -7,6 +7,7 @@ use clap::Args;
 
 use super::{LayoutOptions, UsageError};
 use nptreemap::config::kind_of;
+use nptreemap::render::Style;
 use nptreemap::{pipeline, store, workspace};
 
 /// Arguments of `nptreemap layout`.
@@ -16,12 +17,27 @@ pub(crate) struct LayoutArgs {
     input: PathBuf,
     #[command(flatten)]
     options: LayoutOptions,
-    /// Output file; the extension picks the kind (.json layout, .svg picture). Repeatable.
+    /// Output file; the extension picks the kind (.json layout, .svg or .png
+    /// picture, .html interactive page). Repeatable.
     #[arg(long, required = true, value_name = "FILE")]
     out: Vec<PathBuf>,
+    /// Title above the picture (SVG, PNG, HTML).
+    #[arg(long)]
+    title: Option<String>,
+    /// Leave out the legend band under the map.
+    #[arg(long)]
+    no_legend: bool,
+    /// Pixel scale of PNG outputs.
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    scale: f64,
 }
 
 pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
+    if !(args.scale.is_finite() && args.scale > 0.0) {
+        return Err(
+            UsageError(format!("--scale {}: must be a positive number", args.scale)).into(),
+        );
+    }
     // Check every output's kind before doing any work, so a typo costs nothing.
     let kinds = args
         .out
@@ -45,12 +61,22 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
             "some diagrams stopped at the iteration cap above the area-error target"
         );
     }
+    let style = Style {
+        title: args.title.clone(),
+        legend: !args.no_legend,
+        ..Style::default()
+    };
     // Render everything first: a failure leaves every existing output untouched.
     let rendered = args
         .out
         .iter()
         .zip(&kinds)
-        .map(|(path, kind)| Ok((path.clone(), pipeline::render(&computed, *kind, 1.0, path)?)))
+        .map(|(path, kind)| {
+            Ok((
+                path.clone(),
+                pipeline::render(&computed, &style, *kind, args.scale, path)?,
+            ))
+        })
         .collect::<Result<Vec<(PathBuf, Vec<u8>)>, pipeline::BuildError>>()?;
     for (path, bytes) in &rendered {
         store::write_atomic(path, bytes)

@@ -8,10 +8,14 @@
 pub mod html;
 /// Layout JSON in the `nptreemap-layout/1` format of `shared/spec/layout-json.md`.
 pub mod json;
+/// The legend band: top-level groups and the overlay's glyphs.
+pub mod legend;
 /// Interlocking tabs and unrealised-link markers drawn over the treemap.
 pub mod overlay;
 /// Colours: hex parsing, the Tableau palettes, lightness variations for children.
 pub mod palette;
+/// The framed picture: map, overlay, title, legend, border; its [`Style`].
+pub mod picture;
 /// PNG from the SVG text through usvg and resvg, with a built-in font.
 pub mod png;
 /// The SVG picture: filled cells, level-weighted outlines, fitted labels.
@@ -23,5 +27,6 @@ mod test_support;
 pub use html::{html, HtmlData, HtmlNode};
 pub use json::{layout_json, ConstraintOut, JsonExtras};
 pub use palette::Rgb;
+pub use picture::{picture, Border, Style};
 pub use png::{png, PngError};
 pub use svg::{svg, SvgStyle};

@@ -173,13 +173,24 @@ pub fn overlay(dataset: &Dataset, layout: &Layout, links: &[Link], style: &Overl
     }
     out.push_str("</g>\n");
     if style.unlinked_markers {
-        let r = 7.0 * s;
+        // Radius 4.5 prototype px: a marker as big as the glyph's box in the
+        // prototype (scale 0.5 of a ~18 px icon), readable at 1,000 px.
+        let r = 4.5 * s;
         out.push_str(&format!(
             "<g class=\"np-unlinked\" font-family=\"DejaVu Sans, sans-serif\" font-size=\"{}\" text-anchor=\"middle\">\n",
             num(r * 1.2)
         ));
         for (i, &count) in missing.iter().enumerate().filter(|(_, c)| **c > 0) {
-            let c = layout.cells[i].polygon.centroid() + Point::new(-10.0 * s, 10.0 * s);
+            // Below the centred label rather than on it (the prototype's
+            // (-10, +10) offset sits on the label at our label sizes); back to
+            // the centroid when the cell is too small to hold it there.
+            let polygon = &layout.cells[i].polygon;
+            let below = polygon.centroid() + Point::new(0.0, 2.8 * r);
+            let c = if polygon.contains(below + Point::new(0.0, r)) {
+                below
+            } else {
+                polygon.centroid()
+            };
             out.push_str(&format!(
                 "<g><title>{} unrealized link(s)</title><circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#ffffff\" stroke=\"#d62728\" stroke-width=\"{}\"/><text x=\"{}\" y=\"{}\" fill=\"#d62728\">{count}</text></g>\n",
                 count,

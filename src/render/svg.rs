@@ -89,7 +89,6 @@ impl Default for SvgStyle {
 pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
     debug_assert_eq!(dataset.len(), layout.cells.len(), "one cell per node");
     let count = dataset.len().min(layout.cells.len());
-    let colors = cell_colors(dataset);
     let (cw, ch) = (layout.canvas.width, layout.canvas.height);
 
     let mut out = String::with_capacity(512 + 160 * count);
@@ -108,6 +107,17 @@ pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
         ));
     }
 
+    push_cells(&mut out, dataset, layout, style);
+    push_labels(&mut out, dataset, layout, style);
+    out.push_str("</svg>\n");
+    out
+}
+
+/// Appends every drawn cell, deepest level first, each level in its own group
+/// with its outline width (see [`svg`]).
+pub(crate) fn push_cells(out: &mut String, dataset: &Dataset, layout: &Layout, style: &SvgStyle) {
+    let count = dataset.len().min(layout.cells.len());
+    let colors = cell_colors(dataset);
     // Node indices per depth, each list in dataset order.
     let mut by_depth: Vec<Vec<usize>> = vec![Vec::new(); dataset.max_depth() + 1];
     for i in (0..count).filter(|&i| is_drawn(dataset, i)) {
@@ -140,7 +150,7 @@ pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
             out.push_str("<path data-id=\"");
             out.push_str(&escape(&node.id));
             out.push_str("\" d=\"");
-            path_data(&mut out, &layout.cells[i].polygon);
+            path_data(out, &layout.cells[i].polygon);
             out.push_str(&format!("\" fill=\"{fill}\"><title>"));
             out.push_str(&escape(&node.label));
             if node.id != node.label {
@@ -153,12 +163,6 @@ pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
         out.push_str("</g>\n");
     }
     out.push_str("</g>\n");
-
-    if style.labels {
-        push_labels(&mut out, dataset, layout, style, count);
-    }
-    out.push_str("</svg>\n");
-    out
 }
 
 /// Every non-root node is drawn; the root only when it is the whole dataset.
@@ -215,14 +219,13 @@ fn path_data(out: &mut String, polygon: &ConvexPolygon) {
     out.push('Z');
 }
 
-/// Appends the label group: one `<text>` per leaf whose label fits.
-fn push_labels(
-    out: &mut String,
-    dataset: &Dataset,
-    layout: &Layout,
-    style: &SvgStyle,
-    count: usize,
-) {
+/// Appends the label group: one `<text>` per leaf whose label fits (nothing
+/// when labels are off).
+pub(crate) fn push_labels(out: &mut String, dataset: &Dataset, layout: &Layout, style: &SvgStyle) {
+    if !style.labels {
+        return;
+    }
+    let count = dataset.len().min(layout.cells.len());
     let mut group_open = false;
     for i in (0..count).filter(|&i| dataset.is_leaf(i) && is_drawn(dataset, i)) {
         let label = &dataset.node(i).label;

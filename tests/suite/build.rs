@@ -154,7 +154,21 @@ fn readme_main_job_builds_every_example() {
         support::assert_area_error(&report, 0.01);
         let png = std::fs::read(out.join(format!("{name}.png"))).expect("png written");
         let image = resvg::tiny_skia::Pixmap::decode_png(&png).expect("a valid PNG");
-        assert_eq!((image.width(), image.height()), (1000, 1000), "{name}");
+        // One pixel per canvas unit: 1,000 wide, and as tall as the SVG's view
+        // (the canvas plus the title band the example config asks for and the
+        // legend band).
+        let svg = std::fs::read_to_string(out.join(format!("{name}.svg"))).expect("svg");
+        let view: Vec<f64> = svg
+            .split("viewBox=\"")
+            .nth(1)
+            .and_then(|s| s.split('"').next())
+            .expect("viewBox")
+            .split(' ')
+            .map(|v| v.parse().expect("number"))
+            .collect();
+        assert!(view[1] < 0.0 && view[3] > 1000.0, "{name}: title band {view:?}");
+        assert_eq!(image.width(), 1000, "{name}");
+        assert_eq!(f64::from(image.height()), view[3].round(), "{name}");
         for ext in ["svg", "png", "json"] {
             snapshot.push(std::fs::read(out.join(format!("{name}.{ext}"))).expect("output"));
         }
