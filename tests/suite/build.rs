@@ -166,7 +166,10 @@ fn readme_main_job_builds_every_example() {
             .split(' ')
             .map(|v| v.parse().expect("number"))
             .collect();
-        assert!(view[1] < 0.0 && view[3] > 1000.0, "{name}: title band {view:?}");
+        assert!(
+            view[1] < 0.0 && view[3] > 1000.0,
+            "{name}: title band {view:?}"
+        );
         assert_eq!(image.width(), 1000, "{name}");
         assert_eq!(f64::from(image.height()), view[3].round(), "{name}");
         for ext in ["svg", "png", "json"] {
