@@ -7,11 +7,16 @@
 //!    with each cell's neighbours and shared edges.
 //! 4. **Layout** ([`layout`]): a one-level optimiser (Lloyd steps plus weight
 //!    adaptation towards target areas) run top-down over the hierarchy.
-//! 5. **Render** ([`render`]): a finished [`Layout`] becomes layout JSON or SVG.
+//! 5. **Render** ([`render`]): a finished [`Layout`] becomes layout JSON, SVG,
+//!    PNG or an interactive HTML page.
 //!
-//! Steps 2 to 5 are pure: no files, no clock, no printing.
+//! Steps 2 to 5 are pure: no files, no clock, no printing. Around them:
+//! [`config`] (the YAML file), [`workspace`] (reading inputs), [`pipeline`]
+//! (one dataset from files to output bytes), [`store`] (atomic writes) and
+//! [`daemon`] (`nptreemap watch`: rebuild on change, warm-started).
 
 pub mod config;
+pub mod daemon;
 pub mod geom;
 pub mod layout;
 pub mod metrics;

@@ -19,9 +19,12 @@ struct Cli {
 enum Command {
     /// Build every output of a YAML config (default: ./nptreemap.yaml).
     Build(cmd::build::BuildArgs),
+    /// Keep a config's outputs current: rebuild what changes, warm-started,
+    /// until SIGINT or SIGTERM.
+    Watch(cmd::watch::WatchArgs),
     /// Validate a YAML config and its data without writing anything.
     Check(cmd::build::BuildArgs),
-    /// Lay out one hierarchy file and write JSON and/or SVG.
+    /// Lay out one hierarchy file and write JSON, SVG, PNG and/or HTML.
     Layout(cmd::layout::LayoutArgs),
     /// Print the paper's Table 2 row (constraints realised, area error, graph
     /// distance, aspect ratio) for one file and one method or all of them.
@@ -39,6 +42,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Build(args) => cmd::build::build(&args),
         Command::Check(args) => cmd::build::check(&args),
+        Command::Watch(args) => cmd::watch::run(&args),
         Command::Layout(args) => cmd::layout::run(&args),
         Command::Eval(args) => cmd::eval::run(&args),
         Command::Bench(args) => cmd::bench::run(&args),

@@ -83,13 +83,26 @@ pub struct Built {
     pub outputs: Vec<(PathBuf, Vec<u8>)>,
 }
 
+/// One input file of a dataset, read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InputFile {
+    /// The format's name for it (`nodes`, `pairs`, ...).
+    pub role: String,
+    /// Where it was read from.
+    pub path: PathBuf,
+    /// Its content.
+    pub bytes: Vec<u8>,
+}
+
 /// Reads and parses one configured dataset.
 pub fn load(d: &DatasetConfig) -> Result<Dataset, BuildError> {
-    let format = registry::find(&d.format).ok_or_else(|| BuildError::UnknownFormat {
-        dataset: d.name.clone(),
-        format: d.format.clone(),
-        known: registry::names().join(", "),
-    })?;
+    parse_inputs(d, &read_inputs(d)?)
+}
+
+/// Reads a dataset's input files (after checking the config names the roles
+/// its format reads), without parsing them.
+pub fn read_inputs(d: &DatasetConfig) -> Result<Vec<InputFile>, BuildError> {
+    let format = format_of(d)?;
     let roles = format.roles();
     for role in d.files.keys() {
         if !roles.iter().any(|r| r.name == role) {
@@ -111,13 +124,32 @@ pub fn load(d: &DatasetConfig) -> Result<Dataset, BuildError> {
             role: r.name.to_string(),
         });
     }
-    let mut bytes = Vec::new();
-    for (role, path) in &d.files {
-        bytes.push((role.as_str(), path, workspace::read_bytes(path)?));
-    }
+    d.files
+        .iter()
+        .map(|(role, path)| {
+            Ok(InputFile {
+                role: role.clone(),
+                path: path.clone(),
+                bytes: workspace::read_bytes(path)?,
+            })
+        })
+        .collect()
+}
+
+fn format_of(d: &DatasetConfig) -> Result<&'static dyn nptreemap_formats::Format, BuildError> {
+    registry::find(&d.format).ok_or_else(|| BuildError::UnknownFormat {
+        dataset: d.name.clone(),
+        format: d.format.clone(),
+        known: registry::names().join(", "),
+    })
+}
+
+/// Parses a dataset from its read input files with its format and field mapping.
+pub fn parse_inputs(d: &DatasetConfig, files: &[InputFile]) -> Result<Dataset, BuildError> {
+    let format = format_of(d)?;
     let mut inputs = Inputs::new();
-    for (role, _, b) in &bytes {
-        inputs = inputs.with(role, b);
+    for f in files {
+        inputs = inputs.with(&f.role, &f.bytes);
     }
     let f = &d.fields;
     let options = FormatOptions {
@@ -136,10 +168,10 @@ pub fn load(d: &DatasetConfig) -> Result<Dataset, BuildError> {
         ..FormatOptions::default()
     };
     format.parse(&inputs, &options).map_err(|e| {
-        let path = bytes
+        let path = files
             .iter()
-            .find(|(role, _, _)| *role == e.role)
-            .map(|(_, p, _)| (*p).clone())
+            .find(|f| f.role == e.role)
+            .map(|f| f.path.clone())
             .unwrap_or_else(|| PathBuf::from(&e.role));
         BuildError::Input(workspace::InputError::Parse {
             path,
@@ -155,20 +187,87 @@ pub fn build(config: &Config, d: &DatasetConfig) -> Result<Built, BuildError> {
         dataset: d.name.clone(),
         source,
     })?;
-    let style = config.style(d);
-    let mut outputs = Vec::new();
-    for out in &d.outputs {
-        let kind = out.kind.unwrap_or(OutputKind::Svg);
-        outputs.push((
-            out.path.clone(),
-            render(&computed, &style, kind, out.scale, &out.path)?,
-        ));
-    }
+    let outputs = render_all(config, d, &computed)?;
     Ok(Built {
         name: d.name.clone(),
         computed,
         outputs,
     })
+}
+
+/// How a layout was started.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Start {
+    /// From scratch.
+    Cold,
+    /// From a previous layout of the same dataset.
+    Warm,
+}
+
+/// Lays a parsed dataset out, warm from `previous` when given.
+pub fn lay_out(
+    config: &Config,
+    d: &DatasetConfig,
+    dataset: &Dataset,
+    previous: Option<&Computed>,
+) -> Result<(Computed, Start), BuildError> {
+    let _ = previous;
+    let computed = compute(dataset, &config.request(d)).map_err(|source| BuildError::Layout {
+        dataset: d.name.clone(),
+        source,
+    })?;
+    Ok((computed, Start::Cold))
+}
+
+/// Where a dataset's last layout is kept between runs: a hidden folder beside
+/// its first output (`out/.nptreemap/<name>.layout.json`), so it travels
+/// with the outputs and a restarted daemon or `build` starts warm. `None` for
+/// a dataset without outputs.
+pub fn state_path(d: &DatasetConfig) -> Option<PathBuf> {
+    let first = d.outputs.first()?;
+    let dir = first.path.parent().unwrap_or(std::path::Path::new("."));
+    // The dataset name is free text; keep the file name portable.
+    let safe: String = d
+        .name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    Some(dir.join(".nptreemap").join(format!("{safe}.layout.json")))
+}
+
+/// Stores a dataset's layout at its [`state_path`] (atomically; unchanged
+/// bytes are not rewritten).
+pub fn store_layout(d: &DatasetConfig, computed: &Computed) -> std::io::Result<()> {
+    let Some(path) = state_path(d) else {
+        return Ok(());
+    };
+    let json = layout_json(&computed.dataset, &computed.layout, &json_extras(computed));
+    store::write_if_changed(&path, json.as_bytes()).map(|_| ())
+}
+
+/// Every output of a dataset for a computed layout, in config order.
+pub fn render_all(
+    config: &Config,
+    d: &DatasetConfig,
+    computed: &Computed,
+) -> Result<Vec<(PathBuf, Vec<u8>)>, BuildError> {
+    let style = config.style(d);
+    d.outputs
+        .iter()
+        .map(|out| {
+            let kind = out.kind.unwrap_or(OutputKind::Svg);
+            Ok((
+                out.path.clone(),
+                render(computed, &style, kind, out.scale, &out.path)?,
+            ))
+        })
+        .collect()
 }
 
 /// One output's bytes for a computed layout (`path` only names it in errors).

@@ -5,6 +5,7 @@ pub(crate) mod build;
 pub(crate) mod eval;
 pub(crate) mod layout;
 mod progress;
+pub(crate) mod watch;
 
 use clap::{Args, ValueEnum};
 use nptreemap::layout::{Canvas, Method, NeighborParams, Outline, Params, Request};
@@ -173,6 +174,10 @@ pub(crate) fn exit_code(err: &anyhow::Error) -> u8 {
             || e.is::<nptreemap::layout::LayoutError>()
             || e.is::<nptreemap::config::ConfigFileError>()
             || e.is::<nptreemap::pipeline::BuildError>()
+            || matches!(
+                e.downcast_ref::<nptreemap::daemon::DaemonError>(),
+                Some(nptreemap::daemon::DaemonError::Config(_))
+            )
     });
     if user {
         2

@@ -1,0 +1,249 @@
+//! The file-system side of `watch`: a notify watcher over a set of
+//! directories (not files: editors save atomically by writing a temp file and
+//! renaming it over the original, which replaces the inode a file watch would
+//! follow), and the batching of its events into one rebuild (100 ms of quiet,
+//! 500 ms at most, as typst's watcher does, so a burst of saves is one rebuild
+//! and a steady stream of them cannot postpone it forever). Owns event
+//! filtering and batching; may not know about datasets or configs.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender};
+use std::time::{Duration, Instant};
+
+use notify::event::{EventKind, ModifyKind};
+use notify::{RecursiveMode, Watcher as _};
+
+/// What reaches the daemon's loop.
+#[derive(Debug)]
+pub enum Message {
+    /// A file-system event (or a watcher error).
+    Fs(notify::Result<notify::Event>),
+    /// SIGINT / SIGTERM: finish cleanly.
+    Stop,
+}
+
+/// The result of waiting for the next batch.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Batch {
+    /// Paths touched by relevant events, each once, sorted.
+    Paths(BTreeSet<PathBuf>),
+    /// Stop was asked for (or every sender is gone).
+    Stop,
+}
+
+/// Batching windows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Timing {
+    /// A batch closes after this long without a relevant event. Default: 100 ms.
+    pub quiet: Duration,
+    /// A batch closes at the latest this long after its first event. Default: 500 ms.
+    pub cap: Duration,
+}
+
+impl Default for Timing {
+    fn default() -> Self {
+        Self {
+            quiet: Duration::from_millis(100),
+            cap: Duration::from_millis(500),
+        }
+    }
+}
+
+/// A notify watcher over directories, updated by mark-and-sweep.
+pub struct DirWatcher {
+    inner: notify::RecommendedWatcher,
+    watched: BTreeSet<PathBuf>,
+}
+
+impl DirWatcher {
+    /// A watcher whose events go to `tx`.
+    pub fn new(tx: Sender<Message>) -> notify::Result<Self> {
+        let inner = notify::recommended_watcher(move |event| {
+            // The loop may have ended; a lost event then does not matter.
+            let _ = tx.send(Message::Fs(event));
+        })?;
+        Ok(Self {
+            inner,
+            watched: BTreeSet::new(),
+        })
+    }
+
+    /// Watches exactly `dirs` (non-recursively): new ones are added, ones no
+    /// longer wanted removed. A directory that does not exist (yet) cannot be
+    /// watched; it is returned so the caller can report it, and retried at the
+    /// next sync.
+    pub fn sync(&mut self, dirs: &BTreeSet<PathBuf>) -> Vec<(PathBuf, notify::Error)> {
+        let stale: Vec<PathBuf> = self.watched.difference(dirs).cloned().collect();
+        for dir in stale {
+            let _ = self.inner.unwatch(&dir);
+            self.watched.remove(&dir);
+        }
+        let mut failed = Vec::new();
+        for dir in dirs.difference(&self.watched.clone()) {
+            match self.inner.watch(dir, RecursiveMode::NonRecursive) {
+                Ok(()) => {
+                    self.watched.insert(dir.clone());
+                }
+                Err(e) => failed.push((dir.clone(), e)),
+            }
+        }
+        failed
+    }
+
+    /// The directories currently watched.
+    pub fn watched(&self) -> &BTreeSet<PathBuf> {
+        &self.watched
+    }
+}
+
+/// Whether an event kind can mean new content: creations, writes, renames and
+/// removals. Access events (reads, opens, closes without writing) and metadata
+/// changes (touch, chmod) cannot.
+fn changes_content(kind: &EventKind) -> bool {
+    match kind {
+        EventKind::Create(_) | EventKind::Remove(_) => true,
+        EventKind::Modify(ModifyKind::Metadata(_)) => false,
+        EventKind::Modify(_) => true,
+        EventKind::Access(_) => false,
+        // Some back ends report a close-after-write only as "other"/"any";
+        // the content hash decides later whether anything changed.
+        EventKind::Any | EventKind::Other => true,
+    }
+}
+
+/// Waits for the next batch of events whose paths `relevant` accepts. Blocks
+/// until the first such event (or Stop), then collects until `timing.quiet`
+/// passes without another one or `timing.cap` after the first.
+pub fn next_batch(
+    rx: &Receiver<Message>,
+    timing: Timing,
+    relevant: &dyn Fn(&Path) -> bool,
+) -> Batch {
+    let mut paths = BTreeSet::new();
+    let mut first: Option<Instant> = None;
+    let mut last = Instant::now();
+    loop {
+        let message = match first {
+            None => match rx.recv() {
+                Ok(m) => m,
+                Err(_) => return Batch::Stop,
+            },
+            Some(start) => {
+                let now = Instant::now();
+                let deadline = (last + timing.quiet).min(start + timing.cap);
+                if now >= deadline {
+                    return Batch::Paths(paths);
+                }
+                match rx.recv_timeout(deadline - now) {
+                    Ok(m) => m,
+                    Err(RecvTimeoutError::Timeout) => return Batch::Paths(paths),
+                    Err(RecvTimeoutError::Disconnected) => return Batch::Stop,
+                }
+            }
+        };
+        match message {
+            Message::Stop => return Batch::Stop,
+            Message::Fs(Err(e)) => {
+                tracing::warn!(error = %e, "file watcher error");
+            }
+            Message::Fs(Ok(event)) => {
+                if !changes_content(&event.kind) {
+                    continue;
+                }
+                let mut hit = false;
+                for p in event.paths.iter().filter(|p| relevant(p)) {
+                    paths.insert(p.clone());
+                    hit = true;
+                }
+                tracing::trace!(kind = ?event.kind, paths = ?event.paths, relevant = hit, "event");
+                if hit {
+                    last = Instant::now();
+                    first.get_or_insert(last);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use notify::event::{AccessKind, CreateKind, DataChange, MetadataKind};
+    use std::sync::mpsc::channel;
+
+    fn event(kind: EventKind, path: &str) -> Message {
+        Message::Fs(Ok(notify::Event::new(kind).add_path(PathBuf::from(path))))
+    }
+
+    fn short() -> Timing {
+        Timing {
+            quiet: Duration::from_millis(30),
+            cap: Duration::from_millis(200),
+        }
+    }
+
+    #[test]
+    fn irrelevant_paths_and_access_events_do_not_open_a_batch() {
+        let (tx, rx) = channel();
+        tx.send(event(EventKind::Access(AccessKind::Any), "/d/a.csv"))
+            .expect("send");
+        tx.send(event(
+            EventKind::Modify(ModifyKind::Metadata(MetadataKind::Any)),
+            "/d/a.csv",
+        ))
+        .expect("send");
+        tx.send(event(EventKind::Create(CreateKind::File), "/d/.a.csv.swp"))
+            .expect("send");
+        tx.send(event(
+            EventKind::Modify(ModifyKind::Data(DataChange::Any)),
+            "/d/a.csv",
+        ))
+        .expect("send");
+        let relevant = |p: &Path| p == Path::new("/d/a.csv");
+        // Closed by the quiet window: exactly the one relevant content change.
+        assert_eq!(
+            next_batch(&rx, short(), &relevant),
+            Batch::Paths([PathBuf::from("/d/a.csv")].into_iter().collect())
+        );
+        tx.send(Message::Stop).expect("send");
+        assert_eq!(next_batch(&rx, short(), &relevant), Batch::Stop);
+    }
+
+    #[test]
+    fn a_steady_stream_is_cut_at_the_cap() {
+        let (tx, rx) = channel();
+        let feeder = std::thread::spawn(move || {
+            // An event every 10 ms for 2 s: never quiet for 30 ms.
+            for _ in 0..200 {
+                if tx
+                    .send(event(
+                        EventKind::Modify(ModifyKind::Data(DataChange::Any)),
+                        "/d/a.csv",
+                    ))
+                    .is_err()
+                {
+                    break;
+                }
+                std::thread::sleep(Duration::from_millis(10));
+            }
+        });
+        let start = Instant::now();
+        let batch = next_batch(&rx, short(), &|_| true);
+        let took = start.elapsed();
+        assert!(matches!(batch, Batch::Paths(ref p) if p.len() == 1));
+        // Closed by the 200 ms cap, well before the stream ends (2 s); the
+        // bound is loose because this runs beside other tests.
+        assert!(took < Duration::from_millis(1500), "{took:?}");
+        drop(rx);
+        feeder.join().expect("feeder");
+    }
+
+    #[test]
+    fn stop_wins_while_waiting() {
+        let (tx, rx) = channel();
+        tx.send(Message::Stop).expect("send");
+        assert_eq!(next_batch(&rx, Timing::default(), &|_| true), Batch::Stop);
+        drop(tx);
+    }
+}
