@@ -131,7 +131,7 @@ const SCRIPT: &str = r#"(function () {
 /// leaf dims every leaf cell outside its neighbour set (itself included, as in
 /// the prototype), outlines its constraint partners (dashed where unrealised)
 /// and shows its root-to-leaf path and weight in a tooltip; a checkbox "Show
-/// unrealized links" (on by default) shows or hides SVG elements of class
+/// unrealized links" (off by default) shows or hides SVG elements of class
 /// `np-unrealized`. Identical input gives identical bytes.
 pub fn html(svg: &str, data: &HtmlData) -> String {
     let mut out = String::with_capacity(svg.len() + STYLE.len() + SCRIPT.len() + 1024);
