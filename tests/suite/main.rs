@@ -14,3 +14,4 @@ mod neighborhood;
 mod paper_data;
 mod random_hierarchies;
 mod similarity_paths;
+mod watch;
