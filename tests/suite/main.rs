@@ -12,4 +12,5 @@ mod determinism;
 mod neighborhood;
 mod paper_data;
 mod random_hierarchies;
+mod render_refs;
 mod similarity_paths;
