@@ -9,6 +9,7 @@ mod build;
 mod cli_errors;
 mod degenerate;
 mod determinism;
+mod escaping;
 mod neighborhood;
 mod paper_data;
 mod random_hierarchies;
