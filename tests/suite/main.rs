@@ -10,6 +10,7 @@ mod cli_errors;
 mod degenerate;
 mod determinism;
 mod escaping;
+mod labels;
 mod neighborhood;
 mod paper_data;
 mod random_hierarchies;
