@@ -244,7 +244,7 @@ pub fn html_page(computed: &Computed) -> String {
 
 /// The SVG picture: the treemap with, when there are constraints, the
 /// interlocking tabs and unrealised-link markers of its deepest level (where the
-/// paper draws them, method-reference §8.2–8.4) on top.
+/// paper draws them, method-reference §8.2–8.4) on top, the tabs under the labels.
 pub fn picture(computed: &Computed) -> String {
     picture_with(computed, &OverlayStyle::default())
 }

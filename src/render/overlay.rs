@@ -2,7 +2,9 @@
 //! interlocking tab on every edge shared by two constrained neighbours
 //! (method-reference §8.3) and, for constraints that are not neighbours,
 //! dashed red links between the cells plus an "unlinked" count on the cell
-//! (§8.4). Pure: a finished layout and its constraints in, SVG text out.
+//! (§8.4). Pure: a finished layout and its constraints in, SVG text out. The
+//! tabs go under the picture's labels, the rest over them
+//! ([`with_overlay`](crate::render::overlay::with_overlay)).
 
 use super::svg::{cell_colors, escape, num, LABELS_GROUP};
 use crate::geom::Point;
@@ -214,7 +216,7 @@ pub fn overlay(
     Overlay { tabs, marks: out }
 }
 
-/// The treemap SVG from [`super::svg`] with the overlay added: the tabs just
+/// The treemap SVG from [`super::svg()`] with the overlay added: the tabs just
 /// before its label group (or, without labels, at the end), the marks just
 /// before `</svg>`.
 pub fn with_overlay(svg: &str, overlay: &Overlay) -> String {
