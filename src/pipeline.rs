@@ -349,7 +349,8 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
 
 /// The SVG picture: the treemap with, when there are constraints, the
 /// interlocking tabs and unrealised-link markers of its deepest level (where the
-/// paper draws them, method-reference §8.2–8.4) on top, framed as `style` says.
+/// paper draws them, method-reference §8.2–8.4): the tabs under the labels, the
+/// rest over them; framed as `style` says.
 pub fn picture(computed: &Computed, style: &Style) -> String {
     let (dataset, layout) = (&computed.dataset, &computed.layout);
     let deepest = dataset.max_depth();

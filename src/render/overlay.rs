@@ -2,9 +2,11 @@
 //! interlocking tab on every edge shared by two constrained neighbours
 //! (method-reference §8.3) and, for constraints that are not neighbours,
 //! dashed red links between the cells plus an "unlinked" count on the cell
-//! (§8.4). Pure: a finished layout and its constraints in, SVG text out.
+//! (§8.4). Pure: a finished layout and its constraints in, SVG text out. The
+//! tabs go under the picture's labels, the rest over them
+//! ([`with_overlay`](crate::render::overlay::with_overlay)).
 
-use super::svg::{cell_colors, escape, num};
+use super::svg::{cell_colors, escape, num, LABELS_GROUP};
 use crate::geom::Point;
 use crate::layout::Layout;
 use crate::neighborhood::adjacency::{layout_diagonal, shared_segments, PERPENDICULAR_TOL};
@@ -82,8 +84,25 @@ pub fn tab_edge(layout: &Layout, link: &Link) -> Option<[Point; 2]> {
     .max_by(|s, t| s[0].distance(s[1]).total_cmp(&t[0].distance(t[1])))
 }
 
-/// The overlay's SVG elements (to be placed after the cells).
-pub fn overlay(dataset: &Dataset, layout: &Layout, links: &[Link], style: &OverlayStyle) -> String {
+/// The overlay's SVG elements in their two layers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Overlay {
+    /// The tabs, drawn over the cells but under the labels: they sit on cell
+    /// edges, which a fitted label may reach, and at the paper's size (12 px
+    /// scaled with the canvas) would otherwise hide whole words of small labels.
+    pub tabs: String,
+    /// The dashed links and the unlinked counts, drawn over everything: they
+    /// point at cells and are small.
+    pub marks: String,
+}
+
+/// The overlay's SVG elements (see [`with_overlay`] for where they go).
+pub fn overlay(
+    dataset: &Dataset,
+    layout: &Layout,
+    links: &[Link],
+    style: &OverlayStyle,
+) -> Overlay {
     let s = scale(layout);
     let colors = cell_colors(dataset);
     let fill = |i: usize| colors[i].map_or("#cccccc".to_string(), |c| c.to_string());
@@ -145,6 +164,7 @@ pub fn overlay(dataset: &Dataset, layout: &Layout, links: &[Link], style: &Overl
         ));
     }
     out.push_str("</g>\n");
+    let tabs = std::mem::take(&mut out);
     let display = if style.show_unrealized {
         ""
     } else {
@@ -204,15 +224,24 @@ pub fn overlay(dataset: &Dataset, layout: &Layout, links: &[Link], style: &Overl
         }
         out.push_str("</g>\n");
     }
-    out
+    Overlay { tabs, marks: out }
 }
 
-/// The treemap SVG with the overlay drawn on top.
-pub fn with_overlay(svg: &str, overlay: &str) -> String {
-    match svg.rfind("</svg>") {
-        Some(end) => format!("{}{}{}", &svg[..end], overlay, &svg[end..]),
-        None => svg.to_string(),
-    }
+/// The treemap SVG from [`super::svg()`] with the overlay added: the tabs just
+/// before its label group (or, without labels, at the end), the marks just
+/// before `</svg>`.
+pub fn with_overlay(svg: &str, overlay: &Overlay) -> String {
+    let Some(end) = svg.rfind("</svg>") else {
+        return svg.to_string();
+    };
+    let labels = svg[..end].find(LABELS_GROUP).unwrap_or(end);
+    let mut out = String::with_capacity(svg.len() + overlay.tabs.len() + overlay.marks.len());
+    out.push_str(&svg[..labels]);
+    out.push_str(&overlay.tabs);
+    out.push_str(&svg[labels..end]);
+    out.push_str(&overlay.marks);
+    out.push_str(&svg[end..]);
+    out
 }
 
 #[cfg(test)]
@@ -286,8 +315,9 @@ mod tests {
                 realized: false,
             },
         ];
-        let text = overlay(&ds, &layout, &links, &OverlayStyle::default());
-        assert_eq!(text.matches("class=\"np-tab\"").count(), 2);
+        let Overlay { tabs, marks } = overlay(&ds, &layout, &links, &OverlayStyle::default());
+        assert_eq!(tabs.matches("class=\"np-tab\"").count(), 2);
+        assert!(!marks.contains("np-tab"));
         // Each tab's edge is the shared side of its two cells: x = 300 and x = 600.
         for (link, x) in [(&links[0], 300.0), (&links[1], 600.0)] {
             let [p0, p1] = tab_edge(&layout, link).expect("room for a tab");
@@ -295,13 +325,25 @@ mod tests {
         }
         assert!(tab_edge(&layout, &links[2]).is_none());
         // The unrealised link is a hidden dashed line, and a and c carry a marker each.
-        assert_eq!(text.matches("<line ").count(), 1);
-        assert!(text.contains("class=\"np-unrealized\"") && text.contains("display=\"none\""));
-        assert_eq!(text.matches("unrealized link(s)").count(), 2);
+        assert_eq!(marks.matches("<line ").count(), 1);
+        assert!(marks.contains("class=\"np-unrealized\"") && marks.contains("display=\"none\""));
+        assert_eq!(marks.matches("unrealized link(s)").count(), 2);
     }
 
     #[test]
-    fn overlay_goes_before_the_closing_tag() {
-        assert_eq!(with_overlay("<svg>x</svg>", "<g/>"), "<svg>x<g/></svg>");
+    fn tabs_go_under_the_labels_and_marks_on_top() {
+        let layers = Overlay {
+            tabs: "<t/>".to_owned(),
+            marks: "<m/>".to_owned(),
+        };
+        let labelled = format!("<svg><c/>{LABELS_GROUP}><text/></g></svg>");
+        assert_eq!(
+            with_overlay(&labelled, &layers),
+            format!("<svg><c/><t/>{LABELS_GROUP}><text/></g><m/></svg>")
+        );
+        assert_eq!(
+            with_overlay("<svg>x</svg>", &layers),
+            "<svg>x<t/><m/></svg>"
+        );
     }
 }

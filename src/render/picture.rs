@@ -64,10 +64,14 @@ const TITLE_EM: f64 = 28.0;
 const PAD: f64 = 16.0;
 
 /// Canvas scale: 1 on a 1,000 × 1,000 canvas, so text and padding grow with
-/// the map instead of vanishing on large canvases.
+/// the map instead of vanishing on large canvases; never below 0.75, so the
+/// legend of a small picture stays readable (10.5 px text at 400 × 400).
 fn unit(layout: &Layout) -> f64 {
-    (layout.canvas.width * layout.canvas.height).sqrt() / 1000.0
+    ((layout.canvas.width * layout.canvas.height).sqrt() / 1000.0).max(MIN_UNIT)
 }
+
+/// Smallest canvas scale for the frame's text (see [`unit`]).
+const MIN_UNIT: f64 = 0.75;
 
 /// Draws the picture of `layout` (cells indexed like `dataset`) with the
 /// constraint `links` of its deepest level. Identical input gives identical
@@ -126,10 +130,16 @@ pub fn picture(dataset: &Dataset, layout: &Layout, links: &[Link], style: &Style
         ));
     }
     push_cells(&mut out, dataset, layout, &style.cells);
-    if !shown.is_empty() {
-        out.push_str(&overlay(dataset, layout, &shown, &style.overlay));
+    // Tabs under the labels (they sit on edges a fitted label may reach),
+    // links and counts over them.
+    let layers = (!shown.is_empty()).then(|| overlay(dataset, layout, &shown, &style.overlay));
+    if let Some(layers) = &layers {
+        out.push_str(&layers.tabs);
     }
     push_labels(&mut out, dataset, layout, &style.cells);
+    if let Some(layers) = &layers {
+        out.push_str(&layers.marks);
+    }
     if let Some(border) = style
         .border
         .filter(|b| b.width > 0.0 && b.width.is_finite())

@@ -153,6 +153,18 @@ mod tests {
         assert_eq!(bytes, png(svg, 1.0).expect("again"), "PNG is deterministic");
     }
 
+    /// The font database holds the built-in face and nothing else: labels
+    /// cannot depend on the machine's fonts (issue 5). resvg is built without
+    /// `system-fonts`, so fontdb could not even look for them.
+    #[test]
+    fn only_the_built_in_font_is_loaded() {
+        let db = &options().fontdb;
+        assert_eq!(db.len(), 1, "exactly one face");
+        let face = db.faces().next().expect("one face");
+        assert!(face.families.iter().any(|(name, _)| name == FAMILY));
+        assert_eq!(db.family_name(&usvg::fontdb::Family::SansSerif), FAMILY);
+    }
+
     #[test]
     fn scale_multiplies_the_pixel_size() {
         let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" width="50" height="20"/>"#;

@@ -80,6 +80,11 @@ impl Default for SvgStyle {
     }
 }
 
+/// How the label group opens (its attributes follow): the place where
+/// [`super::overlay::with_overlay`] puts the tabs, under the labels. Class
+/// names are ours, so no label text can contain it (labels are escaped).
+pub(crate) const LABELS_GROUP: &str = "<g class=\"np-labels\"";
+
 /// Draws `layout` (cells indexed like `dataset`'s nodes) as an SVG document.
 ///
 /// Every non-root cell is one `<path>`: leaves filled, internal nodes as
@@ -241,8 +246,9 @@ pub(crate) fn push_labels(out: &mut String, dataset: &Dataset, layout: &Layout, 
         }
         if !group_open {
             // pointer-events="none" lets hovering reach the cells' <title>s.
+            out.push_str(LABELS_GROUP);
             out.push_str(&format!(
-                "<g font-family=\"{}\" text-anchor=\"middle\" fill=\"{}\" stroke=\"{}\" \
+                " font-family=\"{}\" text-anchor=\"middle\" fill=\"{}\" stroke=\"{}\" \
                  stroke-linejoin=\"round\" paint-order=\"stroke\" pointer-events=\"none\">\n",
                 escape(&style.font_family),
                 style.text_color,

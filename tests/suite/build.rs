@@ -2,24 +2,9 @@
 //! written and checker-clean, byte-identical rebuilds, bad config and bad data
 //! rejected with file and line, exit code 2, and existing outputs untouched.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::support;
-
-/// Copies `examples/<name>` into a fresh temp dir and returns the config path.
-fn example(name: &str, tag: &str) -> PathBuf {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples")
-        .join(name);
-    let dir = support::temp_dir(&format!("build_{tag}"));
-    for entry in std::fs::read_dir(&src).expect("example dir") {
-        let path = entry.expect("entry").path();
-        if path.is_file() {
-            std::fs::copy(&path, dir.join(path.file_name().expect("name"))).expect("copy");
-        }
-    }
-    dir.join("nptreemap.yaml")
-}
 
 fn run(args: &[&str]) -> std::process::Output {
     support::bin().args(args).output().expect("run nptreemap")
@@ -27,7 +12,7 @@ fn run(args: &[&str]) -> std::process::Output {
 
 #[test]
 fn countries_example_builds_and_rebuilds_identically() {
-    let config = example("countries", "countries");
+    let config = support::example("countries", "countries");
     let cfg = config.to_str().expect("utf8");
     let first = run(&["build", cfg]);
     assert!(
@@ -59,7 +44,7 @@ fn countries_example_builds_and_rebuilds_identically() {
 
 #[test]
 fn unknown_config_key_names_line_and_column_and_writes_nothing() {
-    let config = example("countries", "bad_key");
+    let config = support::example("countries", "bad_key");
     let text = std::fs::read_to_string(&config).expect("read");
     std::fs::write(
         &config,
@@ -78,7 +63,7 @@ fn unknown_config_key_names_line_and_column_and_writes_nothing() {
 
 #[test]
 fn bad_data_names_file_and_line_and_keeps_existing_outputs() {
-    let config = example("countries", "bad_data");
+    let config = support::example("countries", "bad_data");
     let cfg = config.to_str().expect("utf8");
     assert!(run(&["build", cfg]).status.success());
     let svg = config.parent().expect("dir").join("out/countries.svg");
@@ -101,7 +86,7 @@ fn bad_data_names_file_and_line_and_keeps_existing_outputs() {
 
 #[test]
 fn check_validates_without_writing() {
-    let config = example("countries", "check");
+    let config = support::example("countries", "check");
     let out = run(&["check", config.to_str().expect("utf8")]);
     assert!(
         out.status.success(),

@@ -22,6 +22,21 @@ pub(crate) fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// Copies `examples/<name>` into a fresh temp dir and returns the config path.
+pub(crate) fn example(name: &str, tag: &str) -> PathBuf {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join(name);
+    let dir = temp_dir(&format!("example_{tag}"));
+    for entry in std::fs::read_dir(&src).expect("example dir") {
+        let path = entry.expect("entry").path();
+        if path.is_file() {
+            std::fs::copy(&path, dir.join(path.file_name().expect("name"))).expect("copy");
+        }
+    }
+    dir.join("nptreemap.yaml")
+}
+
 /// Runs `nptreemap layout INPUT --out ...` and asserts success.
 pub(crate) fn layout(input: &Path, outs: &[&Path], extra: &[&str]) -> Output {
     let mut cmd = bin();
