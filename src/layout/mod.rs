@@ -66,6 +66,10 @@ pub struct Report {
     pub area_error_max: f64,
     /// Diagrams that stopped at `max_iterations` above the convergence target.
     pub unconverged: usize,
+    /// Diagrams whose start already met the area target, so no tick ran: with
+    /// a warm start, diagrams taken over unchanged from the previous layout
+    /// (always 0 for a cold layout, whose diagrams make at least one tick).
+    pub reused: usize,
     /// Cells the optimiser left empty and that got a stand-in sliver; 0 unless
     /// the input is pathological. Such a layout fails `sanity_check`.
     pub degenerate: usize,

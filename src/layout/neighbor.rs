@@ -451,6 +451,7 @@ fn add_reports(a: Report, b: Report) -> Report {
         area_error_mean: 0.0,
         area_error_max: a.area_error_max.max(b.area_error_max),
         unconverged: a.unconverged + b.unconverged,
+        reused: a.reused + b.reused,
         degenerate: a.degenerate + b.degenerate,
     }
 }
