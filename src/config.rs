@@ -365,6 +365,8 @@ impl Config {
                 prototype: self.layout.prototype,
                 ..NeighborParams::default()
             },
+            // The caller that keeps previous layouts (the daemon) adds its own.
+            previous: None,
         }
     }
 }

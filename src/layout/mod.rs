@@ -3,7 +3,9 @@
 //!
 //! A layout is computed top-down: the root gets the outline polygon, then each
 //! internal node's cell is split among its children by a one-level power-diagram
-//! optimisation ([`map`]), run by the recursion in [`treemap`].
+//! optimisation ([`map`]), run by the recursion in [`treemap`]. A warm layout
+//! ([`warm`]) runs the same recursion from a [`Previous`] layout, given as an
+//! explicit argument ([`Request::previous`]), never kept as hidden state.
 
 /// Invariant checks a finished layout must pass.
 pub mod check;
@@ -17,19 +19,24 @@ pub mod method;
 pub mod neighbor;
 /// Run parameters and their defaults.
 pub mod params;
+/// The previous layout of a dataset, keyed by node id: a warm start's input.
+pub mod previous;
 /// Start positions and weights for one diagram.
 pub mod seed;
 /// Top-down recursion over the hierarchy.
 pub mod treemap;
+/// The warm layout: start every diagram from the previous layout, settle areas.
+pub mod warm;
 
 use crate::geom::{ConvexPolygon, Point};
 use nptreemap_formats::Dataset;
 
 pub use check::SanityError;
-pub use compute::{compute, Computed, Request};
+pub use compute::{compute, Computed, Request, Start};
 pub use method::Method;
 pub use neighbor::NeighborParams;
 pub use params::{Canvas, Outline, Params};
+pub use previous::{Previous, PreviousNode, WarmRefusal};
 pub use treemap::layout;
 
 /// The finished geometry of one node.
