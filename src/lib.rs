@@ -10,6 +10,11 @@
 //! 5. **Render** ([`render`]): a finished [`Layout`] becomes layout JSON or SVG.
 //!
 //! Steps 2 to 5 are pure: no files, no clock, no printing.
+//!
+//! A layout can start warm from the previous one ([`layout::Previous`], from a
+//! finished computation or read back from layout JSON by [`previous`]), so a
+//! small change of the data is a small change of the picture; [`stability`]
+//! measures how small.
 
 pub mod config;
 pub mod geom;
@@ -18,8 +23,10 @@ pub mod metrics;
 pub mod neighborhood;
 pub mod pipeline;
 pub mod power;
+pub mod previous;
 pub mod render;
 pub mod rng;
+pub mod stability;
 pub mod store;
 pub mod workspace;
 

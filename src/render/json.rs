@@ -72,6 +72,7 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
             weight: Num(node.value),
             is_virtual: node.is_virtual,
             site: point(cell.site),
+            power_weight: Num(cell.power_weight),
             polygon: cell.polygon.points().iter().copied().map(point).collect(),
         });
     push_array(&mut out, "nodes", nodes);
@@ -146,6 +147,10 @@ struct NodeOut<'a> {
     #[serde(rename = "virtual")]
     is_virtual: bool,
     site: [Coord; 2],
+    /// Not in the spec's list (it allows new fields): the site's power weight,
+    /// written in full precision so that this file alone can seed a warm start
+    /// (issue 6) that reproduces the cells.
+    power_weight: Num,
     polygon: Vec<[Coord; 2]>,
 }
 
@@ -230,7 +235,15 @@ mod tests {
         for (n, node) in nodes.iter().zip(dataset.nodes()) {
             let keys: Vec<&str> = n.as_object().unwrap().keys().map(String::as_str).collect();
             for k in [
-                "id", "label", "parent", "depth", "weight", "virtual", "site", "polygon",
+                "id",
+                "label",
+                "parent",
+                "depth",
+                "weight",
+                "virtual",
+                "site",
+                "power_weight",
+                "polygon",
             ] {
                 assert!(keys.contains(&k), "missing {k}");
             }
