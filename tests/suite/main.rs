@@ -13,3 +13,4 @@ mod neighborhood;
 mod paper_data;
 mod random_hierarchies;
 mod similarity_paths;
+mod warm_start;
