@@ -1,7 +1,9 @@
 //! Start policies for one diagram: where the sites begin. One function each
 //! (style principle 4); the optimiser does not care which was used. The warm
-//! start's pieces ([`CellMap`], [`clamp_inside`], [`beside`]) are here too;
-//! [`super::warm`] puts them together.
+//! start's pieces ([`CellMap`](crate::layout::seed::CellMap),
+//! [`clamp_inside`](crate::layout::seed::clamp_inside),
+//! [`beside`](crate::layout::seed::beside)) are here too;
+//! [`crate::layout::warm`] puts them together.
 
 use crate::geom::{ConvexPolygon, Point};
 use crate::rng::Rng;
