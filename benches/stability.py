@@ -115,7 +115,7 @@ def main():
     ]
     m = machine_info()
     report.append(f"- machine: {m['nproc']} CPUs, {m['cpu']}, load {m['loadavg']}")
-    report.append("- command: `python3 benches/stability.py " + " ".join(sys.argv[1:]) + "`")
+    report.append("- command: `" + " ".join(["python3 benches/stability.py"] + sys.argv[1:]) + "`")
     report.append(f"- each edit scales one leaf's weight by {args.factor}; times are medians of "
                   f"{args.runs} processes × {args.repeat} layouts (prepare + constraints + layout)")
     report.append("- moved: mean centroid displacement of the unchanged leaves, % of the canvas "
