@@ -51,6 +51,9 @@ pub struct LayoutConfig {
     pub min_weight_ratio: f64,
     /// Run the paper prototype's optimiser. Default: false.
     pub prototype: bool,
+    /// Snapshots per level kept for the HTML page's optimisation slider
+    /// (similarity layouts only); 0 keeps none. Default: 0.
+    pub frames: usize,
 }
 
 impl Default for LayoutConfig {
@@ -67,6 +70,7 @@ impl Default for LayoutConfig {
             min_iterations: p.min_iterations,
             min_weight_ratio: p.min_weight_ratio,
             prototype: false,
+            frames: NeighborParams::default().frames,
         }
     }
 }
@@ -509,8 +513,11 @@ impl Config {
             }),
             neighbor: NeighborParams {
                 prototype: self.layout.prototype,
+                frames: self.layout.frames,
                 ..NeighborParams::default()
             },
+            // The caller that keeps previous layouts (the daemon) adds its own.
+            previous: None,
         }
     }
 }

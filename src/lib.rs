@@ -14,6 +14,11 @@
 //! [`config`] (the YAML file), [`workspace`] (reading inputs), [`pipeline`]
 //! (one dataset from files to output bytes), [`store`] (atomic writes) and
 //! [`daemon`] (`nptreemap watch`: rebuild on change, warm-started).
+//!
+//! A layout can start warm from the previous one ([`layout::Previous`], from a
+//! finished computation or read back from layout JSON by [`previous`]), so a
+//! small change of the data is a small change of the picture; [`stability`]
+//! measures how small.
 
 pub mod config;
 pub mod daemon;
@@ -23,8 +28,10 @@ pub mod metrics;
 pub mod neighborhood;
 pub mod pipeline;
 pub mod power;
+pub mod previous;
 pub mod render;
 pub mod rng;
+pub mod stability;
 pub mod store;
 pub mod workspace;
 

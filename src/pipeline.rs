@@ -4,11 +4,12 @@
 //! untouched. No loop, no watcher, no printing.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use crate::config::{Config, DatasetConfig, OutputKind};
-use crate::layout::{compute, Computed, LayoutError};
+use crate::layout::{compute, Computed, LayoutError, Previous};
 use crate::neighborhood::adjacency::level_adjacency;
-use crate::render::html::{html, HtmlData, HtmlNode};
+use crate::render::html::{html, HtmlData, HtmlFrame, HtmlNode};
 use crate::render::overlay::Link;
 use crate::render::{layout_json, png, ConstraintOut, JsonExtras, PngError, Style};
 use crate::{metrics, render, store, workspace};
@@ -180,13 +181,13 @@ pub fn parse_inputs(d: &DatasetConfig, files: &[InputFile]) -> Result<Dataset, B
     })
 }
 
-/// Loads, lays out and renders one dataset, writing nothing.
-pub fn build(config: &Config, d: &DatasetConfig) -> Result<Built, BuildError> {
+/// Loads, lays out and renders one dataset, writing nothing. The layout
+/// starts warm from the one stored beside the outputs ([`stored_layout`])
+/// unless `cold`.
+pub fn build(config: &Config, d: &DatasetConfig, cold: bool) -> Result<Built, BuildError> {
     let dataset = load(d)?;
-    let computed = compute(&dataset, &config.request(d)).map_err(|source| BuildError::Layout {
-        dataset: d.name.clone(),
-        source,
-    })?;
+    let previous = if cold { None } else { stored_layout(d) };
+    let computed = lay_out(config, d, &dataset, previous)?;
     let outputs = render_all(config, d, &computed)?;
     Ok(Built {
         name: d.name.clone(),
@@ -195,28 +196,36 @@ pub fn build(config: &Config, d: &DatasetConfig) -> Result<Built, BuildError> {
     })
 }
 
-/// How a layout was started.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Start {
-    /// From scratch.
-    Cold,
-    /// From a previous layout of the same dataset.
-    Warm,
-}
-
-/// Lays a parsed dataset out, warm from `previous` when given.
+/// Lays a parsed dataset out, warm from `previous` when given (and when it
+/// fits: same canvas and outline, at least half the nodes surviving; else
+/// cold, see [`Computed::start`]).
 pub fn lay_out(
     config: &Config,
     d: &DatasetConfig,
     dataset: &Dataset,
-    previous: Option<&Computed>,
-) -> Result<(Computed, Start), BuildError> {
-    let _ = previous;
-    let computed = compute(dataset, &config.request(d)).map_err(|source| BuildError::Layout {
+    previous: Option<Arc<Previous>>,
+) -> Result<Computed, BuildError> {
+    let mut request = config.request(d);
+    request.previous = previous;
+    compute(dataset, &request).map_err(|source| BuildError::Layout {
         dataset: d.name.clone(),
         source,
-    })?;
-    Ok((computed, Start::Cold))
+    })
+}
+
+/// The layout stored for a dataset by [`store_layout`], if there is one.
+/// A stored layout that cannot be read is not an error the user must act on
+/// (the next build replaces it): it is logged and the layout starts cold.
+pub fn stored_layout(d: &DatasetConfig) -> Option<Arc<Previous>> {
+    let path = state_path(d)?;
+    let text = store::read_state(&path)?;
+    match Previous::from_layout_json(&text) {
+        Ok(previous) => Some(Arc::new(previous)),
+        Err(e) => {
+            tracing::warn!(path = %path.display(), error = %e, "stored layout unreadable; laying out cold");
+            None
+        }
+    }
 }
 
 /// Where a dataset's last layout is kept between runs: a hidden folder beside
@@ -247,7 +256,9 @@ pub fn store_layout(d: &DatasetConfig, computed: &Computed) -> std::io::Result<(
     let Some(path) = state_path(d) else {
         return Ok(());
     };
-    let json = layout_json(&computed.dataset, &computed.layout, &json_extras(computed));
+    let mut extras = json_extras(computed);
+    extras.exact = true;
+    let json = layout_json(&computed.dataset, &computed.layout, &extras);
     store::write_if_changed(&path, json.as_bytes()).map(|_| ())
 }
 
@@ -344,7 +355,33 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
         .title
         .clone()
         .unwrap_or_else(|| dataset.node(dataset.root()).label.clone());
-    html(&svg_text, &HtmlData { title, nodes })
+    let colors = crate::render::svg::cell_colors(dataset);
+    let frames = computed
+        .report
+        .frames
+        .iter()
+        .map(|f| HtmlFrame {
+            label: format!("level {}: {}", f.depth, f.label),
+            cells: f
+                .cells
+                .iter()
+                .map(|(i, polygon)| {
+                    let mut d = String::new();
+                    crate::render::svg::path_data(&mut d, polygon);
+                    let fill = colors[*i].map_or("#cccccc".to_string(), |c| c.to_string());
+                    (dataset.node(*i).id.clone(), d, fill)
+                })
+                .collect(),
+        })
+        .collect();
+    html(
+        &svg_text,
+        &HtmlData {
+            title,
+            nodes,
+            frames,
+        },
+    )
 }
 
 /// The SVG picture: the treemap with, when there are constraints, the
@@ -370,7 +407,8 @@ pub fn picture(computed: &Computed, style: &Style) -> String {
 }
 
 /// Writes a built dataset's outputs atomically; an output whose bytes would
-/// not change is left alone. Returns the paths written.
+/// not change is left alone. Returns the paths written. (The stored layout
+/// is written separately, by [`store_layout`].)
 pub fn write_outputs(built: &Built) -> std::io::Result<Vec<PathBuf>> {
     let mut written = Vec::new();
     for (path, bytes) in &built.outputs {
@@ -409,5 +447,6 @@ pub fn json_extras(computed: &Computed) -> JsonExtras {
             ),
             ("aspect_ratio_mean".to_string(), q.aspect_ratio_mean),
         ],
+        exact: false,
     }
 }

@@ -30,6 +30,13 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     result
 }
 
+/// The text of a stored layout (see `pipeline::state_path`), or `None` when
+/// there is none or it cannot be read: a missing stored layout only means a
+/// cold start.
+pub fn read_state(path: &Path) -> Option<String> {
+    std::fs::read_to_string(path).ok()
+}
+
 /// Writes `bytes` to `path` atomically unless the file already holds exactly
 /// these bytes (so unchanged pictures keep their timestamps and watchers of the
 /// output folder are not woken). Returns whether it wrote.

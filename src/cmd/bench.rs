@@ -2,15 +2,18 @@
 //! one JSON line with the median time of the whole layout step (preparation,
 //! constraints and layout; parsing excluded) and the layout's quality, for
 //! `benches/peers.py`; with `--render`, also the SVG and PNG rendering times.
+//! With `--previous` the layouts start warm (unless `--cold`), and the line
+//! adds the stability figures against that layout (`benches/stability.py`).
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
 
-use super::LayoutOptions;
+use super::{read_previous, LayoutOptions};
+use nptreemap::layout::Start;
 use nptreemap::render::Style;
-use nptreemap::{metrics, pipeline, workspace};
+use nptreemap::{metrics, pipeline, stability, workspace};
 
 /// Arguments of `nptreemap bench`.
 #[derive(Debug, Args)]
@@ -30,7 +33,15 @@ pub(crate) struct BenchArgs {
 
 pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
-    let request = args.options.request()?;
+    let mut request = args.options.request()?;
+    // Read even with --cold, for the stability figures.
+    let previous = match &args.options.previous {
+        Some(path) => Some(std::sync::Arc::new(read_previous(path)?)),
+        None => None,
+    };
+    if !args.options.cold {
+        request.previous = previous.clone();
+    }
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..args.repeat.max(1) {
@@ -61,7 +72,30 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         "method": computed.method.name(),
         "constraints": computed.constraints.len(),
         "realized": computed.realized.iter().filter(|r| **r).count(),
+        "start": match &computed.start {
+            Start::Cold => "cold",
+            Start::Refused(_) => "refused",
+            Start::Warm { .. } => "warm",
+        },
     });
+    if let (Some(previous), Some(fields)) = (&previous, line.as_object_mut()) {
+        let s = stability::stability(previous, &computed.dataset, &computed.layout);
+        for (key, value) in [
+            ("stable_leaves", serde_json::json!(s.leaves)),
+            ("unchanged_leaves", serde_json::json!(s.unchanged)),
+            ("displacement_mean", serde_json::json!(s.displacement_mean)),
+            (
+                "displacement_unchanged_mean",
+                serde_json::json!(s.displacement_unchanged_mean),
+            ),
+            ("displacement_max", serde_json::json!(s.displacement_max)),
+            ("realized_before", serde_json::json!(s.realized_before)),
+            ("kept", serde_json::json!(s.kept)),
+            ("kept_share", serde_json::json!(s.kept_share())),
+        ] {
+            fields.insert(key.to_string(), value);
+        }
+    }
     if args.render {
         let style = Style::default();
         let (mut svg_ms, mut png_ms) = (Vec::new(), Vec::new());

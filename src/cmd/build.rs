@@ -17,6 +17,10 @@ pub(crate) struct BuildArgs {
     /// The config file.
     #[arg(default_value = "nptreemap.yaml")]
     config: PathBuf,
+    /// Lay out from scratch instead of warm from the layout stored beside
+    /// the outputs by the last build or watch.
+    #[arg(long)]
+    cold: bool,
 }
 
 pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
@@ -25,7 +29,7 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
     let mut built = Vec::new();
     for (i, d) in config.datasets.iter().enumerate() {
         progress.step(i, &d.name);
-        let result = pipeline::build(&config, d);
+        let result = pipeline::build(&config, d, args.cold);
         if result.is_err() {
             progress.finish();
         }
@@ -35,6 +39,12 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
     for b in &built {
         let written = pipeline::write_outputs(b)
             .with_context(|| format!("dataset {:?}: cannot write its outputs", b.name))?;
+        if let Some(d) = config.datasets.iter().find(|d| d.name == b.name) {
+            // Losing the stored layout only costs the next build its warm start.
+            if let Err(e) = pipeline::store_layout(d, &b.computed) {
+                tracing::warn!(dataset = %b.name, error = %e, "cannot store the layout for warm starts");
+            }
+        }
         for (path, bytes) in &b.outputs {
             let state = if written.contains(path) {
                 "wrote"

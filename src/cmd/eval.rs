@@ -1,16 +1,20 @@
 //! `nptreemap eval`: the paper's Table 2 row for one input and one method (or
 //! all of them), and optionally the layout JSON with every constraint's
-//! `realized` flag.
+//! `realized` flag. With `--previous`, also issue 6's stability figures of a
+//! warm and of a cold layout against that previous layout, with their times.
 
 use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
 
-use super::{LayoutOptions, MethodArg, UsageError};
-use nptreemap::layout::{compute, Method};
+use super::{read_previous, LayoutOptions, MethodArg, UsageError};
+use nptreemap::layout::{compute, Computed, Method, Previous, Request, Start};
 use nptreemap::neighborhood::adjacency::{eval_metrics, EvalMetrics};
 use nptreemap::render::layout_json;
+use nptreemap::stability::{stability, Stability};
 use nptreemap::{store, workspace};
 
 /// Arguments of `nptreemap eval`.
@@ -28,21 +32,42 @@ pub(crate) struct EvalArgs {
     out: Option<PathBuf>,
 }
 
+/// One start's figures against the previous layout.
+struct StabilityRow {
+    start: &'static str,
+    used_previous: bool,
+    time_ms: f64,
+    iterations: usize,
+    figures: Stability,
+}
+
 pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
     let all = args.options.method == Some(MethodArg::All);
     if all && args.out.is_some() {
         return Err(UsageError("--out needs one method, not --method all".to_string()).into());
     }
+    if all && args.options.previous.is_some() {
+        return Err(UsageError("--previous needs one method, not --method all".to_string()).into());
+    }
     let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
+    // Read even with --cold: the figures compare both starts with it.
+    let previous = match &args.options.previous {
+        Some(path) => Some(Arc::new(read_previous(path)?)),
+        None => None,
+    };
     let methods: Vec<Option<Method>> = if all {
         Method::ALL.into_iter().map(Some).collect()
     } else {
         vec![args.options.method.and_then(MethodArg::method)]
     };
     let mut rows = Vec::new();
+    let mut stability_rows = Vec::new();
     for method in methods {
-        let request = args.options.request_with(method);
-        let computed = compute(&dataset, &request)?;
+        let mut request = args.options.request_with(method);
+        if !args.options.cold {
+            request.previous = previous.clone();
+        }
+        let (computed, time_ms) = timed(&dataset, &request)?;
         let deepest = computed.dataset.max_depth();
         let leaf_pairs: Vec<(usize, usize)> = computed
             .constraints
@@ -60,20 +85,81 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
             store::write_atomic(out, json.as_bytes())
                 .with_context(|| format!("{}: cannot write", out.display()))?;
         }
+        if let Some(previous) = &previous {
+            stability_rows = stability_against(previous, &dataset, request, (&computed, time_ms))?;
+            if let Start::Refused(why) = &computed.start {
+                super::note(format_args!(
+                    "previous layout not used ({why}); laid out cold"
+                ));
+            }
+        }
         rows.push((computed.method, m));
     }
     let file = args.input.display().to_string();
+    let previous_file = args
+        .options
+        .previous
+        .as_ref()
+        .map(|p| p.display().to_string());
     if args.json {
         for (method, m) in &rows {
             super::say(format_args!("{}", row_json(&file, *method, m)));
+        }
+        for s in &stability_rows {
+            let line = stability_json(&file, previous_file.as_deref().unwrap_or(""), s);
+            super::say(format_args!("{line}"));
         }
     } else {
         super::say(format_args!("{}", header()));
         for (method, m) in &rows {
             super::say(format_args!("{}", row_text(*method, m)));
         }
+        if let Some(previous_file) = &previous_file {
+            super::say(format_args!("\nagainst {previous_file}:"));
+            super::say(format_args!("{}", stability_header()));
+            for s in &stability_rows {
+                super::say(format_args!("{}", stability_text(s)));
+            }
+        }
     }
     Ok(())
+}
+
+/// Lays out and measures the wall time of the whole layout step.
+fn timed(dataset: &nptreemap::Dataset, request: &Request) -> anyhow::Result<(Computed, f64)> {
+    let t = Instant::now();
+    let computed = compute(dataset, request)?;
+    Ok((computed, t.elapsed().as_secs_f64() * 1000.0))
+}
+
+/// The warm and the cold row against `previous`; `done` is the layout of
+/// `request` already made (warm unless --cold), so only the other start runs.
+fn stability_against(
+    previous: &Arc<Previous>,
+    dataset: &nptreemap::Dataset,
+    mut request: Request,
+    done: (&Computed, f64),
+) -> anyhow::Result<Vec<StabilityRow>> {
+    let made_warm = request.previous.is_some();
+    request.previous = if made_warm {
+        None
+    } else {
+        Some(Arc::clone(previous))
+    };
+    let (other, other_ms) = timed(dataset, &request)?;
+    let row = |start, computed: &Computed, time_ms| StabilityRow {
+        start,
+        used_previous: matches!(computed.start, Start::Warm { .. }),
+        time_ms,
+        iterations: computed.report.iterations,
+        figures: stability(previous, &computed.dataset, &computed.layout),
+    };
+    let (warm, cold) = if made_warm {
+        (row("warm", done.0, done.1), row("cold", &other, other_ms))
+    } else {
+        (row("warm", &other, other_ms), row("cold", done.0, done.1))
+    };
+    Ok(vec![warm, cold])
 }
 
 fn header() -> String {
@@ -133,5 +219,67 @@ fn row_json(file: &str, method: Method, m: &EvalMetrics) -> serde_json::Value {
         "graph_distance_max": m.graph_distance_max,
         "aspect_ratio": m.aspect_ratio,
         "aspect_ratio_proto": m.aspect_ratio_proto,
+    })
+}
+
+fn stability_header() -> String {
+    format!(
+        "{:<6} {:>9} {:>10} {:>6} {:>9} {:>11} {:>9} {:>7} {:>7} {:>7}",
+        "start",
+        "time_ms",
+        "iterations",
+        "leaves",
+        "moved_%",
+        "unchanged_%",
+        "max_%",
+        "kept",
+        "of",
+        "kept_%"
+    )
+}
+
+/// Displacements in per cent of the canvas diagonal.
+fn stability_text(s: &StabilityRow) -> String {
+    let f = &s.figures;
+    let start = if s.start == "warm" && !s.used_previous {
+        "warm*"
+    } else {
+        s.start
+    };
+    let kept = f
+        .kept_share()
+        .map_or("-".to_string(), |k| format!("{:.2}", 100.0 * k));
+    format!(
+        "{:<6} {:>9.1} {:>10} {:>6} {:>9.4} {:>11.4} {:>9.4} {:>7} {:>7} {:>7}",
+        start,
+        s.time_ms,
+        s.iterations,
+        f.leaves,
+        100.0 * f.displacement_mean,
+        100.0 * f.displacement_unchanged_mean,
+        100.0 * f.displacement_max,
+        f.kept,
+        f.realized_before,
+        kept
+    )
+}
+
+fn stability_json(file: &str, previous: &str, s: &StabilityRow) -> serde_json::Value {
+    let f = &s.figures;
+    serde_json::json!({
+        "file": file,
+        "previous": previous,
+        "start": s.start,
+        "used_previous": s.used_previous,
+        "time_ms": s.time_ms,
+        "iterations": s.iterations,
+        "leaves": f.leaves,
+        "unchanged": f.unchanged,
+        "displacement_mean": f.displacement_mean,
+        "displacement_unchanged_mean": f.displacement_unchanged_mean,
+        "displacement_max": f.displacement_max,
+        "realized_before": f.realized_before,
+        "kept": f.kept,
+        "kept_share": f.kept_share(),
     })
 }

@@ -7,6 +7,7 @@ use clap::Args;
 
 use super::{LayoutOptions, UsageError};
 use nptreemap::config::kind_of;
+use nptreemap::layout::Start;
 use nptreemap::render::Style;
 use nptreemap::{pipeline, store, workspace};
 
@@ -52,7 +53,14 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
         })
         .collect::<Result<Vec<_>, _>>()?;
     let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
-    let computed = nptreemap::layout::compute(&dataset, &args.options.request()?)?;
+    let mut request = args.options.request()?;
+    request.previous = args.options.warm_start()?;
+    let computed = nptreemap::layout::compute(&dataset, &request)?;
+    if let Start::Refused(why) = &computed.start {
+        super::note(format_args!(
+            "previous layout not used ({why}); laid out cold"
+        ));
+    }
     let report = &computed.report;
     if report.unconverged > 0 {
         tracing::warn!(

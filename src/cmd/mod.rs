@@ -7,8 +7,12 @@ pub(crate) mod layout;
 mod progress;
 pub(crate) mod watch;
 
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::Context;
 use clap::{Args, ValueEnum};
-use nptreemap::layout::{Canvas, Method, NeighborParams, Outline, Params, Request};
+use nptreemap::layout::{Canvas, Method, NeighborParams, Outline, Params, Previous, Request};
 use nptreemap::neighborhood::SimilarityKind;
 use nptreemap::workspace::InputError;
 
@@ -46,6 +50,18 @@ pub(crate) struct LayoutOptions {
     /// the last 30% and pixel constants) instead of ours, for comparisons.
     #[arg(long)]
     pub(crate) prototype: bool,
+    /// Snapshots per level to keep for the HTML page's optimisation slider
+    /// (similarity layouts; 0 = none).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub(crate) frames: usize,
+    /// Layout JSON of a previous run to start from (warm start): surviving
+    /// nodes keep their place, so a small data change moves the picture little.
+    /// Not used if its canvas or outline differs or most nodes are gone.
+    #[arg(long, value_name = "FILE.json")]
+    pub(crate) previous: Option<PathBuf>,
+    /// Lay out from scratch even when --previous is given.
+    #[arg(long)]
+    pub(crate) cold: bool,
 }
 
 /// Layout methods on the command line.
@@ -148,8 +164,19 @@ impl LayoutOptions {
             }),
             neighbor: NeighborParams {
                 prototype: self.prototype,
+                frames: self.frames,
                 ..NeighborParams::default()
             },
+            previous: None,
+        }
+    }
+
+    /// The previous layout to start from: the `--previous` file, unless
+    /// `--cold` is given.
+    pub(crate) fn warm_start(&self) -> anyhow::Result<Option<Arc<Previous>>> {
+        match &self.previous {
+            Some(path) if !self.cold => Ok(Some(Arc::new(read_previous(path)?))),
+            _ => Ok(None),
         }
     }
 
@@ -158,6 +185,15 @@ impl LayoutOptions {
             weight_field: self.weight.clone(),
         }
     }
+}
+
+/// Reads and parses a previous layout JSON file.
+pub(crate) fn read_previous(path: &Path) -> anyhow::Result<Previous> {
+    let bytes = nptreemap::workspace::read_bytes(path)?;
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|e| UsageError(format!("{}: not UTF-8 text: {e}", path.display())))?;
+    Previous::from_layout_json(text)
+        .with_context(|| format!("{}: not a usable previous layout", path.display()))
 }
 
 /// Marks an error as the user's (bad input or arguments): exit code 2.
@@ -178,12 +214,20 @@ pub(crate) fn exit_code(err: &anyhow::Error) -> u8 {
                 e.downcast_ref::<nptreemap::daemon::DaemonError>(),
                 Some(nptreemap::daemon::DaemonError::Config(_))
             )
+            || e.is::<nptreemap::previous::PreviousError>()
     });
     if user {
         2
     } else {
         1
     }
+}
+
+/// Prints one line on stderr, for a fact the user should know but that is
+/// not an error (a previous layout that was not used).
+pub(crate) fn note(line: impl std::fmt::Display) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr().lock(), "note: {line}");
 }
 
 /// Prints one line on stdout. A closed pipe (`nptreemap build | head`) is not

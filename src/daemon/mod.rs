@@ -18,10 +18,11 @@ use std::collections::BTreeMap;
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender};
+use std::sync::Arc;
 use std::time::Instant;
 
 use crate::config::{Config, ConfigFileError, DatasetConfig};
-use crate::layout::Computed;
+use crate::layout::{Computed, Previous, Start};
 use crate::pipeline::{self, BuildError};
 use change::{ChangeSet, Reason};
 use status::{LayoutKind, Status};
@@ -31,7 +32,8 @@ use watcher::{Batch, DirWatcher, Message, Timing};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Options {
     /// Lay every dataset out from scratch at start instead of warm from the
-    /// layout stored beside its outputs. Later rebuilds are warm either way.
+    /// layout stored beside its outputs. Later rebuilds start warm from the
+    /// last good layout either way.
     pub cold: bool,
     /// Event batching windows.
     pub timing: Timing,
@@ -224,17 +226,23 @@ impl Daemon<'_> {
             return;
         }
         state.fingerprint = Some(fingerprint);
-        let previous = state.computed.as_ref();
+        // Warm from the last good layout in memory; at start, from the one
+        // stored beside the outputs (unless --cold).
+        let previous = match &state.computed {
+            Some(computed) => Some(Arc::new(Previous::from_computed(computed))),
+            None if reason == Reason::Start && self.options.cold => None,
+            None => pipeline::stored_layout(&d),
+        };
         let result = pipeline::parse_inputs(&d, &files).and_then(|dataset| {
-            let (computed, kind) = pipeline::lay_out(&self.config, &d, &dataset, previous)?;
+            let computed = pipeline::lay_out(&self.config, &d, &dataset, previous)?;
             let outputs = pipeline::render_all(&self.config, &d, &computed)?;
-            Ok((computed, kind, outputs))
+            Ok((computed, outputs))
         });
         match result {
-            Ok((computed, kind, outputs)) => {
-                let layout = match kind {
-                    pipeline::Start::Warm => LayoutKind::Warm,
-                    pipeline::Start::Cold => LayoutKind::Cold,
+            Ok((computed, outputs)) => {
+                let layout = match computed.start {
+                    Start::Warm { .. } => LayoutKind::Warm,
+                    Start::Cold | Start::Refused(_) => LayoutKind::Cold,
                 };
                 self.finish(name, reason, layout, started, computed, outputs);
             }

@@ -3,12 +3,16 @@
 //!
 //! A layout is computed top-down: the root gets the outline polygon, then each
 //! internal node's cell is split among its children by a one-level power-diagram
-//! optimisation ([`map`]), run by the recursion in [`treemap`].
+//! optimisation ([`map`]), run by the recursion in [`treemap`]. A warm layout
+//! ([`warm`]) runs the same recursion from a [`Previous`] layout, given as an
+//! explicit argument ([`Request::previous`]), never kept as hidden state.
 
 /// Invariant checks a finished layout must pass.
 pub mod check;
 /// The whole pure layout step: prepare, constraints, method dispatch.
 pub mod compute;
+/// Snapshots of a similarity layout during optimisation, for the HTML slider.
+pub mod frames;
 /// One-level optimiser: Lloyd steps plus weight adaptation towards target areas.
 pub mod map;
 /// Which layout strategy runs.
@@ -17,19 +21,25 @@ pub mod method;
 pub mod neighbor;
 /// Run parameters and their defaults.
 pub mod params;
+/// The previous layout of a dataset, keyed by node id: a warm start's input.
+pub mod previous;
 /// Start positions and weights for one diagram.
 pub mod seed;
 /// Top-down recursion over the hierarchy.
 pub mod treemap;
+/// The warm layout: start every diagram from the previous layout, settle areas.
+pub mod warm;
 
 use crate::geom::{ConvexPolygon, Point};
 use nptreemap_formats::Dataset;
 
 pub use check::SanityError;
-pub use compute::{compute, Computed, Request};
+pub use compute::{compute, Computed, Request, Start};
+pub use frames::Frame;
 pub use method::Method;
 pub use neighbor::NeighborParams;
 pub use params::{Canvas, Outline, Params};
+pub use previous::{Previous, PreviousNode, WarmRefusal};
 pub use treemap::layout;
 
 /// The finished geometry of one node.
@@ -66,9 +76,16 @@ pub struct Report {
     pub area_error_max: f64,
     /// Diagrams that stopped at `max_iterations` above the convergence target.
     pub unconverged: usize,
+    /// Diagrams whose start already met the area target, so no tick ran: with
+    /// a warm start, diagrams taken over unchanged from the previous layout
+    /// (always 0 for a cold layout, whose diagrams make at least one tick).
+    pub reused: usize,
     /// Cells the optimiser left empty and that got a stand-in sliver; 0 unless
     /// the input is pathological. Such a layout fails `sanity_check`.
     pub degenerate: usize,
+    /// Snapshots of the optimisation, level by level, when asked for
+    /// ([`NeighborParams::frames`]); empty otherwise.
+    pub frames: Vec<Frame>,
 }
 
 impl Layout {

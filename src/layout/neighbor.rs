@@ -16,6 +16,7 @@
 
 use rayon::prelude::*;
 
+use super::frames::{Frame, Recorder};
 use super::map::{MapSettings, MapSimulation};
 use super::method::Method;
 use super::treemap::{finish, target_areas};
@@ -56,6 +57,10 @@ pub struct NeighborParams {
     /// scaled to the canvas, one start. Areas are not settled afterwards, so the
     /// area error is the prototype's too. Default: false.
     pub prototype: bool,
+    /// Frames per level recorded while optimising, for the HTML page's
+    /// slider (see [`super::frames`]); 0 records none. Recording does not
+    /// change the layout. Default: 0.
+    pub frames: usize,
 }
 
 impl Default for NeighborParams {
@@ -70,6 +75,7 @@ impl Default for NeighborParams {
             max_starts: 8,
             lookahead_max_nodes: 64,
             prototype: false,
+            frames: 0,
         }
     }
 }
@@ -353,7 +359,7 @@ fn descend(
     } else {
         1
     };
-    let mut candidates: Vec<(usize, Vec<Diagram>)> = (0..starts)
+    let mut candidates: Vec<(usize, Vec<Diagram>, Vec<Frame>)> = (0..starts)
         .map(|start| {
             // Small hierarchies are cheap to score, and a level's best moment
             // is often brief.
@@ -362,7 +368,8 @@ fn descend(
                 .np
                 .prototype
                 .then(|| Distances::prototype(ctx.prototype_scale, depth + 1));
-            run_level(
+            let mut recorder = Recorder::new(depth + 1, ctx.np.frames, ctx.np.ticks);
+            let (score, diagrams) = run_level(
                 dataset,
                 &parents,
                 &polygons,
@@ -375,7 +382,10 @@ fn descend(
                 start,
                 plan,
                 prototype,
-            )
+                recorder.as_mut(),
+            );
+            let frames = recorder.map(Recorder::into_frames).unwrap_or_default();
+            (score, diagrams, frames)
         })
         .collect();
     // Best first; the stable sort keeps earlier starts first among equals.
@@ -387,9 +397,10 @@ fn descend(
     };
     candidates.truncate(keep);
     let mut best: Option<(usize, Vec<Option<LayoutCell>>, Report, f64)> = None;
-    for (_, diagrams) in candidates {
+    for (_, diagrams, frames) in candidates {
         let mut cells = cells.clone();
-        let (report, error_sum) = apply_level(diagrams, &mut cells);
+        let (mut report, error_sum) = apply_level(diagrams, &mut cells);
+        report.frames = frames;
         let (score, cells, below, below_sum) = descend(ctx, depth + 1, cells);
         if best.as_ref().is_none_or(|b| score > b.0) {
             best = Some((
@@ -451,7 +462,9 @@ fn add_reports(a: Report, b: Report) -> Report {
         area_error_mean: 0.0,
         area_error_max: a.area_error_max.max(b.area_error_max),
         unconverged: a.unconverged + b.unconverged,
+        reused: a.reused + b.reused,
         degenerate: a.degenerate + b.degenerate,
+        frames: a.frames.into_iter().chain(b.frames).collect(),
     }
 }
 
@@ -478,6 +491,7 @@ fn run_level(
     start: usize,
     plan: LevelPlan,
     prototype: Option<Distances>,
+    mut recorder: Option<&mut Recorder>,
 ) -> (usize, Vec<Diagram>) {
     let mut run_params = params.clone();
     run_params.seed = params
@@ -505,6 +519,13 @@ fn run_level(
             swap_round(&mut diagrams, links, canvas);
         }
     }
+    if let Some(r) = recorder.as_deref_mut() {
+        let label = match method {
+            Method::MatchSwap | Method::Neighbor => "matched and swapped",
+            _ => "initial",
+        };
+        r.take(label, frame_cells(&diagrams));
+    }
     // Swaps compared cells of the equal-area CVT; from here on cells aim for
     // their real areas.
     diagrams.par_iter_mut().for_each(|d| {
@@ -515,8 +536,28 @@ fn run_level(
     });
     match method {
         Method::Neighbor => match prototype {
-            Some(limits) => optimise_prototype(&mut diagrams, links, canvas, np, &limits),
-            None => return optimise_level(&mut diagrams, links, canvas, np, plan),
+            Some(limits) => optimise_prototype(
+                &mut diagrams,
+                links,
+                canvas,
+                np,
+                &limits,
+                recorder.as_deref_mut(),
+            ),
+            None => {
+                let (score, diagrams) = optimise_level(
+                    &mut diagrams,
+                    links,
+                    canvas,
+                    np,
+                    plan,
+                    recorder.as_deref_mut(),
+                );
+                if let Some(r) = recorder {
+                    r.take("final", frame_cells(&diagrams));
+                }
+                return (score, diagrams);
+            }
         },
         Method::MatchSwap => diagrams.par_iter_mut().for_each(|d| settle(d, np)),
         _ => diagrams.par_iter_mut().for_each(|d| {
@@ -525,7 +566,29 @@ fn run_level(
             }
         }),
     }
+    if let Some(r) = recorder {
+        r.take("final", frame_cells(&diagrams));
+    }
     (0, diagrams)
+}
+
+/// The level's current cells, for a [`Frame`].
+fn frame_cells(diagrams: &[Diagram]) -> Vec<(usize, ConvexPolygon)> {
+    let mut cells = Vec::new();
+    for d in diagrams {
+        match d {
+            Diagram::Single { child, polygon } => cells.push((*child, polygon.clone())),
+            Diagram::Sim { children, sim } => {
+                let state = sim.state();
+                for (c, cell) in children.iter().zip(&state.diagram.cells) {
+                    if let Some(p) = &cell.polygon {
+                        cells.push((*c, p.clone()));
+                    }
+                }
+            }
+        }
+    }
+    cells
 }
 
 fn sim_targets(
@@ -906,6 +969,7 @@ fn optimise_level(
     canvas: Canvas,
     np: &NeighborParams,
     plan: LevelPlan,
+    mut recorder: Option<&mut Recorder>,
 ) -> (usize, Vec<Diagram>) {
     // The unit length of the level: square root of its mean cell area.
     let total: f64 = diagrams
@@ -938,6 +1002,9 @@ fn optimise_level(
                 sim.tick_with_positions(&positions);
             }
         });
+        if let Some(r) = recorder.as_deref_mut().filter(|r| r.wants(tick)) {
+            r.take(format!("tick {}", tick + 1), frame_cells(diagrams));
+        }
         if (tick + 1) % plan.check_every == 0 || tick + 1 == np.ticks {
             let candidate = scored_copy(diagrams, links, canvas, np);
             // Ties go to the later state, which has had more optimisation.
@@ -1061,6 +1128,7 @@ fn optimise_prototype(
     canvas: Canvas,
     np: &NeighborParams,
     limits: &Distances,
+    mut recorder: Option<&mut Recorder>,
 ) {
     let last = np.ticks;
     let growth_from = last.saturating_sub(45);
@@ -1078,6 +1146,9 @@ fn optimise_prototype(
                 sim.tick_prototype(&positions, reset);
             }
         });
+        if let Some(r) = recorder.as_deref_mut().filter(|r| r.wants(tick)) {
+            r.take(format!("tick {}", tick + 1), frame_cells(diagrams));
+        }
     }
 }
 

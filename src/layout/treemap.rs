@@ -13,13 +13,13 @@ use crate::rng::Rng;
 use nptreemap_formats::Dataset;
 
 /// Outcome of dividing one parent's cell.
-struct Division {
-    cells: Vec<(usize, LayoutCell)>,
-    iterations: usize,
-    error: f64,
-    converged: bool,
-    optimised: bool,
-    degenerate: usize,
+pub(super) struct Division {
+    pub(super) cells: Vec<(usize, LayoutCell)>,
+    pub(super) iterations: usize,
+    pub(super) error: f64,
+    pub(super) converged: bool,
+    pub(super) optimised: bool,
+    pub(super) degenerate: usize,
 }
 
 /// Lays out the whole hierarchy.
@@ -29,13 +29,31 @@ struct Division {
 /// when every child of a node weighs zero they share its cell equally. A node
 /// with one child hands it its own cell unchanged.
 pub fn layout(dataset: &Dataset, params: &Params) -> Result<(Layout, Report), LayoutError> {
-    params.validate()?;
-    let root_polygon = params.outline.polygon(params.canvas)?;
-    let settings = MapSettings {
+    let settings = map_settings(params);
+    top_down(dataset, params, |parent, polygon| {
+        divide(dataset, params, settings, parent, polygon)
+    })
+}
+
+/// The stopping rules of every diagram of a run.
+pub(super) fn map_settings(params: &Params) -> MapSettings {
+    MapSettings {
         convergence_ratio: params.convergence_ratio,
         max_iterations: params.max_iterations,
         min_iterations: params.min_iterations.min(params.max_iterations),
-    };
+    }
+}
+
+/// The top-down pass shared by the cold and the warm layout: the root takes
+/// the outline, a node with one child hands it its own cell, and every node
+/// with several children has its cell split by `divide(parent, cell)`.
+pub(super) fn top_down(
+    dataset: &Dataset,
+    params: &Params,
+    divide: impl Fn(usize, ConvexPolygon) -> Division + Sync,
+) -> Result<(Layout, Report), LayoutError> {
+    params.validate()?;
+    let root_polygon = params.outline.polygon(params.canvas)?;
     let n = dataset.len();
     let mut cells: Vec<Option<LayoutCell>> = vec![None; n];
     let root = dataset.root();
@@ -57,7 +75,10 @@ pub fn layout(dataset: &Dataset, params: &Params) -> Result<(Layout, Report), La
                     .as_ref()
                     .map(|c| c.polygon.clone())
                     .expect("invariant: a level's cells are set before the next level");
-                divide(dataset, params, settings, parent, polygon)
+                match dataset.node(parent).children.as_slice() {
+                    [only] => single_child(*only, polygon),
+                    _ => divide(parent, polygon),
+                }
             })
             .collect();
         let mut next = Vec::new();
@@ -65,6 +86,9 @@ pub fn layout(dataset: &Dataset, params: &Params) -> Result<(Layout, Report), La
             if d.optimised {
                 report.diagrams += 1;
                 report.iterations += d.iterations;
+                if d.iterations == 0 {
+                    report.reused += 1;
+                }
                 error_sum += d.error;
                 report.area_error_max = report.area_error_max.max(d.error);
                 if !d.converged {
@@ -83,6 +107,23 @@ pub fn layout(dataset: &Dataset, params: &Params) -> Result<(Layout, Report), La
         report.area_error_mean = error_sum / report.diagrams as f64;
     }
     Ok((finish(dataset, params.canvas, cells), report))
+}
+
+/// An only child takes its parent's cell unchanged.
+fn single_child(child: usize, polygon: ConvexPolygon) -> Division {
+    let cell = LayoutCell {
+        site: polygon.centroid(),
+        power_weight: 0.0,
+        polygon,
+    };
+    Division {
+        cells: vec![(child, cell)],
+        iterations: 0,
+        error: 0.0,
+        converged: true,
+        optimised: false,
+        degenerate: 0,
+    }
 }
 
 /// The finished layout from every node's cell (all set by the top-down pass);
@@ -112,7 +153,9 @@ pub fn target_areas(values: &[f64], area: f64, min_weight_ratio: f64) -> Vec<f64
     eff.iter().map(|v| area * v / total).collect()
 }
 
-fn divide(
+/// The cold start of one diagram: well-spread sites, equal weights, the full
+/// optimisation (Lloyd steps plus weight steps).
+pub(super) fn divide(
     dataset: &Dataset,
     params: &Params,
     settings: MapSettings,
@@ -120,27 +163,37 @@ fn divide(
     polygon: ConvexPolygon,
 ) -> Division {
     let children = &dataset.node(parent).children;
-    if children.len() == 1 {
-        let cell = LayoutCell {
-            site: polygon.centroid(),
-            power_weight: 0.0,
-            polygon,
-        };
-        return Division {
-            cells: vec![(children[0], cell)],
-            iterations: 0,
-            error: 0.0,
-            converged: true,
-            optimised: false,
-            degenerate: 0,
-        };
-    }
-    let values: Vec<f64> = children.iter().map(|c| dataset.node(*c).value).collect();
-    let targets = target_areas(&values, polygon.area(), params.min_weight_ratio);
+    let targets = child_targets(dataset, parent, &polygon, params);
     let mut rng = Rng::for_key(params.seed, &dataset.node(parent).id);
     let positions = seed::halton_positions(&polygon, children.len(), &mut rng);
     let mut sim = MapSimulation::new(polygon.clone(), targets, positions, None, settings, rng);
     sim.run();
+    division_of(children, sim, &polygon)
+}
+
+/// Target areas of `parent`'s children inside `polygon`.
+pub(super) fn child_targets(
+    dataset: &Dataset,
+    parent: usize,
+    polygon: &ConvexPolygon,
+    params: &Params,
+) -> Vec<f64> {
+    let values: Vec<f64> = dataset
+        .node(parent)
+        .children
+        .iter()
+        .map(|c| dataset.node(*c).value)
+        .collect();
+    target_areas(&values, polygon.area(), params.min_weight_ratio)
+}
+
+/// The cells of a finished simulation, one per child (a sliver stands in for
+/// an empty one).
+pub(super) fn division_of(
+    children: &[usize],
+    sim: MapSimulation,
+    polygon: &ConvexPolygon,
+) -> Division {
     let iterations = sim.state().iteration_count;
     let error = sim.state().convergence_ratio;
     let converged = sim.converged();
@@ -152,7 +205,7 @@ fn divide(
         .map(|(&child, (site, cell))| {
             let polygon = cell.polygon.unwrap_or_else(|| {
                 degenerate += 1;
-                sliver(&polygon, site.position)
+                sliver(polygon, site.position)
             });
             (
                 child,

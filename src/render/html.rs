@@ -16,6 +16,19 @@ pub struct HtmlData {
     pub title: String,
     /// Every node the script may look up, in the caller's order (written so).
     pub nodes: Vec<HtmlNode>,
+    /// Snapshots of the optimisation for the slider, in order; the page shows
+    /// no slider when empty (layouts made without frames).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub frames: Vec<HtmlFrame>,
+}
+
+/// One snapshot of the optimisation as the slider draws it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct HtmlFrame {
+    /// What the moment is (`level 2: tick 40`); shown beside the slider.
+    pub label: String,
+    /// The cells then: node id, SVG path data, fill colour.
+    pub cells: Vec<(String, String, String)>,
 }
 
 /// One node of the map as the page's script sees it.
@@ -54,11 +67,13 @@ body.np-hide-unrealized .np-unrealized { display: none; }
 #np-tooltip { position: fixed; pointer-events: none; background: #fff; border: 1px solid #888;
   padding: .3em .5em; max-width: 40em; box-shadow: 0 1px 4px rgba(0,0,0,.3); }
 #np-tooltip[hidden] { display: none; }
+#np-frames { margin: .5em 0; }
+#np-frames input { width: 24em; vertical-align: middle; }
 "#;
 
 /// Inline script: hover highlighting, tooltip, and the unrealised-links toggle.
 /// User text reaches the page only through `textContent`.
-const SCRIPT: &str = r#"(function () {
+const SCRIPT: &str = r##"(function () {
   "use strict";
   var data = JSON.parse(document.getElementById("nptreemap-data").textContent);
   var nodes = {};
@@ -115,12 +130,43 @@ const SCRIPT: &str = r#"(function () {
     tip.style.top = (e.clientY + 14) + "px";
   });
 
+  // The optimisation slider: frame k drawn over the map, the last position
+  // the finished picture.
+  var slider = document.getElementById("np-frame");
+  if (slider && data.frames) {
+    var svgRoot = map.querySelector("svg");
+    var NS = svgRoot.namespaceURI;
+    var layer = document.createElementNS(NS, "g");
+    layer.setAttribute("id", "np-frame-layer");
+    layer.setAttribute("pointer-events", "none");
+    layer.setAttribute("stroke", "#ffffff");
+    layer.setAttribute("stroke-width", "1");
+    svgRoot.appendChild(layer);
+    var caption = document.getElementById("np-frame-label");
+    var showFrame = function () {
+      var k = parseInt(slider.value, 10);
+      while (layer.firstChild) { layer.removeChild(layer.firstChild); }
+      var frame = data.frames[k];
+      if (!frame) { caption.textContent = "final layout"; return; }
+      frame.cells.forEach(function (c) {
+        var p = document.createElementNS(NS, "path");
+        p.setAttribute("d", c[1]);
+        p.setAttribute("fill", c[2]);
+        p.setAttribute("data-frame-id", c[0]);
+        layer.appendChild(p);
+      });
+      caption.textContent = (k + 1) + " / " + data.frames.length + ": " + frame.label;
+    };
+    slider.addEventListener("input", showFrame);
+    showFrame();
+  }
+
   var box = document.getElementById("np-unrealized");
   function toggle() { document.body.classList.toggle("np-hide-unrealized", !box.checked); }
   box.addEventListener("change", toggle);
   toggle();
 })();
-"#;
+"##;
 
 /// Writes one self-contained HTML5 page showing `svg` (inserted verbatim, so it
 /// must be our own SVG text, whose cell `<path>`s carry `data-id`) with `data`.
@@ -147,6 +193,15 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
         "<label><input type=\"checkbox\" id=\"np-unrealized\"> \
          Show unrealized links</label>\n",
     );
+    if !data.frames.is_empty() {
+        // The last position is the finished picture; the others are frames.
+        out.push_str(&format!(
+            "<div id=\"np-frames\"><label>Optimisation <input type=\"range\" id=\"np-frame\" \
+             min=\"0\" max=\"{n}\" value=\"{n}\" step=\"1\"></label> \
+             <span id=\"np-frame-label\">final layout</span></div>\n",
+            n = data.frames.len()
+        ));
+    }
     out.push_str("<div id=\"np-map\">\n");
     out.push_str(svg);
     if !svg.ends_with('\n') {
@@ -212,7 +267,35 @@ mod tests {
         HtmlData {
             title: title.to_owned(),
             nodes,
+            frames: Vec::new(),
         }
+    }
+
+    #[test]
+    fn frames_bring_a_slider_and_travel_escaped() {
+        let (ds, layout) = sample();
+        let svg_text = svg(&ds, &layout, &SvgStyle::default());
+        let plain = html(&svg_text, &sample_data(&ds, "t"));
+        assert!(!plain.contains("id=\"np-frame\""), "no frames, no slider");
+        let mut data = sample_data(&ds, "t");
+        data.frames = vec![
+            HtmlFrame {
+                label: format!("level 1: {HOSTILE}"),
+                cells: vec![("A".into(), "M0,0L1,0L1,1Z".into(), "#ff0000".into())],
+            },
+            HtmlFrame {
+                label: "level 1: final".into(),
+                cells: Vec::new(),
+            },
+        ];
+        let page = html(&svg_text, &data);
+        // Two frames and the finished map: positions 0..=2, starting at the end.
+        assert!(page.contains("min=\"0\" max=\"2\" value=\"2\""));
+        assert!(!page.contains(HOSTILE));
+        let block: serde_json::Value =
+            serde_json::from_str(data_block(&page)).expect("data block parses");
+        assert_eq!(block["frames"][0]["label"], format!("level 1: {HOSTILE}"));
+        assert_eq!(block["frames"][0]["cells"][0][0], "A");
     }
 
     const HOSTILE: &str = "<script>alert(1)</script>";

@@ -45,6 +45,11 @@ pub struct JsonExtras {
     /// The producer's own figures, written as the `metrics` object in this order
     /// (keys should be unique); the field is left out when empty. Default: empty.
     pub metrics: Vec<(String, f64)>,
+    /// Write coordinates in full precision instead of rounding them to
+    /// [`COORD_DECIMALS`] places: for the layout kept for warm starts (issue
+    /// 6), which must reproduce the cells bit for bit so that a rebuild of
+    /// unchanged data gives unchanged bytes. Default: false.
+    pub exact: bool,
 }
 
 /// Writes the layout JSON document for `layout`, whose cells are indexed like
@@ -54,9 +59,10 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
     let mut out = String::with_capacity(256 + 200 * layout.cells.len());
     out.push_str("{\n");
     out.push_str(&format!("  \"format\": {},\n", to_json(&FORMAT)));
+    let exact = extra.exact;
     let canvas = CanvasOut {
-        width: Coord(layout.canvas.width),
-        height: Coord(layout.canvas.height),
+        width: Coord(layout.canvas.width, exact),
+        height: Coord(layout.canvas.height, exact),
     };
     out.push_str(&format!("  \"canvas\": {},\n", to_json(&canvas)));
 
@@ -71,8 +77,14 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
             depth: node.depth,
             weight: Num(node.value),
             is_virtual: node.is_virtual,
-            site: point(cell.site),
-            polygon: cell.polygon.points().iter().copied().map(point).collect(),
+            site: point(cell.site, exact),
+            power_weight: Num(cell.power_weight),
+            polygon: cell
+                .polygon
+                .points()
+                .iter()
+                .map(|p| point(*p, exact))
+                .collect(),
         });
     push_array(&mut out, "nodes", nodes);
     out.push(',');
@@ -125,8 +137,8 @@ fn to_json<T: Serialize + ?Sized>(value: &T) -> String {
     serde_json::to_string(value).expect("plain structs of strings and numbers serialise")
 }
 
-fn point(p: Point) -> [Coord; 2] {
-    [Coord(p.x), Coord(p.y)]
+fn point(p: Point, exact: bool) -> [Coord; 2] {
+    [Coord(p.x, exact), Coord(p.y, exact)]
 }
 
 #[derive(Serialize)]
@@ -146,6 +158,10 @@ struct NodeOut<'a> {
     #[serde(rename = "virtual")]
     is_virtual: bool,
     site: [Coord; 2],
+    /// Not in the spec's list (it allows new fields): the site's power weight,
+    /// written in full precision so that this file alone can seed a warm start
+    /// (issue 6) that reproduces the cells.
+    power_weight: Num,
     polygon: Vec<[Coord; 2]>,
 }
 
@@ -160,9 +176,10 @@ struct ConstraintRow<'a> {
     realized: bool,
 }
 
-/// A coordinate: rounded to [`COORD_DECIMALS`] places when written.
+/// A coordinate: rounded to [`COORD_DECIMALS`] places when written, unless
+/// the second field asks for full precision.
 #[derive(Clone, Copy)]
-struct Coord(f64);
+struct Coord(f64, bool);
 
 /// Any other number: written as is, except that non-finite values become 0.
 #[derive(Clone, Copy)]
@@ -170,7 +187,11 @@ struct Num(f64);
 
 impl Serialize for Coord {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_f64(round_coord(self.0))
+        if self.1 {
+            s.serialize_f64(finite(self.0) + 0.0)
+        } else {
+            s.serialize_f64(round_coord(self.0))
+        }
     }
 }
 
@@ -230,7 +251,15 @@ mod tests {
         for (n, node) in nodes.iter().zip(dataset.nodes()) {
             let keys: Vec<&str> = n.as_object().unwrap().keys().map(String::as_str).collect();
             for k in [
-                "id", "label", "parent", "depth", "weight", "virtual", "site", "polygon",
+                "id",
+                "label",
+                "parent",
+                "depth",
+                "weight",
+                "virtual",
+                "site",
+                "power_weight",
+                "polygon",
             ] {
                 assert!(keys.contains(&k), "missing {k}");
             }
@@ -290,6 +319,7 @@ mod tests {
                 realized: true,
             }],
             metrics: vec![("zeta".into(), 1.5), ("alpha".into(), f64::from(2u8))],
+            exact: false,
         };
         let text = layout_json(&dataset, &layout, &extra);
         let v: Value = serde_json::from_str(&text).unwrap();
@@ -305,13 +335,21 @@ mod tests {
     }
 
     #[test]
+    fn exact_coordinates_round_trip_bit_for_bit() {
+        let v = 1.0 / 3.0 + 123.456;
+        let text = to_json(&Coord(v, true));
+        assert_eq!(text.parse::<f64>().ok(), Some(v));
+        assert_eq!(to_json(&Coord(-0.0, true)), "0.0");
+    }
+
+    #[test]
     fn coordinates_are_rounded_to_six_places() {
         assert_eq!(round_coord(1.0 / 3.0), 0.333333);
-        assert_eq!(to_json(&Coord(1.0 / 3.0)), "0.333333");
-        assert_eq!(to_json(&Coord(0.1 + 0.2)), "0.3");
-        assert_eq!(to_json(&Coord(-1e-9)), "0.0");
-        assert_eq!(to_json(&Coord(-0.0)), "0.0");
-        assert_eq!(to_json(&Coord(-2.5000004)), "-2.5");
+        assert_eq!(to_json(&Coord(1.0 / 3.0, false)), "0.333333");
+        assert_eq!(to_json(&Coord(0.1 + 0.2, false)), "0.3");
+        assert_eq!(to_json(&Coord(-1e-9, false)), "0.0");
+        assert_eq!(to_json(&Coord(-0.0, false)), "0.0");
+        assert_eq!(to_json(&Coord(-2.5000004, false)), "-2.5");
         assert_eq!(to_json(&Num(1411778724.0)), "1411778724.0");
 
         let (dataset, layout) = sample();

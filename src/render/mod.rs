@@ -24,7 +24,7 @@ pub mod svg;
 #[cfg(test)]
 mod test_support;
 
-pub use html::{html, HtmlData, HtmlNode};
+pub use html::{html, HtmlData, HtmlFrame, HtmlNode};
 pub use json::{layout_json, ConstraintOut, JsonExtras};
 pub use palette::Rgb;
 pub use picture::{picture, Border, Style};

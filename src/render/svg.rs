@@ -214,7 +214,7 @@ pub(crate) fn cell_colors(dataset: &Dataset) -> Vec<Option<Rgb>> {
 }
 
 /// Appends `M x,y L x,y … Z` with two-decimal coordinates.
-fn path_data(out: &mut String, polygon: &ConvexPolygon) {
+pub(crate) fn path_data(out: &mut String, polygon: &ConvexPolygon) {
     for (k, p) in polygon.points().iter().enumerate() {
         out.push(if k == 0 { 'M' } else { 'L' });
         out.push_str(&num(p.x));

@@ -11,7 +11,9 @@ const PURE: &[&str] = &[
     "src/neighborhood",
     "src/render",
     "src/metrics.rs",
+    "src/previous.rs",
     "src/rng.rs",
+    "src/stability.rs",
 ];
 const FORBIDDEN: &[&str] = &[
     "std::fs",

@@ -48,11 +48,11 @@ impl Page {
     /// Lays out `shared/paper-data/<name>.json` into `<name>.html` and
     /// `<name>.json` under `dir`, and picks the first leaf (in file order) that
     /// has neighbours and partners, preferring one with an unrealised partner.
-    fn build(dir: &Path, name: &str) -> Page {
+    fn build(dir: &Path, name: &str, extra: &[&str]) -> Page {
         let input = support::shared().join(format!("paper-data/{name}.json"));
         let html = dir.join(format!("{name}.html"));
         let json = dir.join(format!("{name}.json"));
-        support::layout(&input, &[&html, &json], &[]);
+        support::layout(&input, &[&html, &json], extra);
         let data = page_data(&std::fs::read_to_string(&html).expect("read page"));
         let layout: Value =
             serde_json::from_slice(&std::fs::read(&json).expect("read layout")).expect("JSON");
@@ -179,9 +179,10 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
     };
     let dir = support::temp_dir("browser");
     // Countries: large weights (thousands separators); every constraint realised.
-    let countries = Page::build(&dir, "country_pop_50M_AUS");
+    let countries = Page::build(&dir, "country_pop_50M_AUS", &[]);
     // Movies: unrealised constraints, so dashed partners and links to show.
-    let movies = Page::build(&dir, "imdb_100_genre_sim_2child");
+    // Made with optimisation frames, for the slider.
+    let movies = Page::build(&dir, "imdb_100_genre_sim_2child", &["--frames", "6"]);
     assert!(
         movies.partners.values().any(|r| !r),
         "movies target has an unrealised partner"
@@ -203,6 +204,7 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
     browser.open(&movies.url);
     hover_and_leave(&mut browser, &movies);
     toggle_unrealized_links(&mut browser);
+    step_through_frames(&mut browser);
 
     // One more round trip, so every event sent before it has been read.
     browser.eval("0");
@@ -450,6 +452,46 @@ fn toggle_unrealized_links(browser: &mut Browser) {
             },
         );
     }
+}
+
+/// Moves the optimisation slider to its first frame, then back to the end:
+/// the frame layer holds exactly that frame's cells (every one of them a
+/// node of the page) with its caption, and the end shows the finished map.
+fn step_through_frames(browser: &mut Browser) {
+    const SET: &str = r##"(function (k) {
+      var slider = document.getElementById("np-frame");
+      var data = JSON.parse(document.getElementById("nptreemap-data").textContent);
+      if (!slider) { return { slider: false }; }
+      slider.value = String(k < 0 ? slider.max : k);
+      slider.dispatchEvent(new Event("input"));
+      var layer = document.getElementById("np-frame-layer");
+      var known = {};
+      data.nodes.forEach(function (n) { known[n.id] = true; });
+      var drawn = Array.prototype.map.call(layer.querySelectorAll("path"), function (p) {
+        return p.getAttribute("data-frame-id");
+      });
+      return {
+        slider: true, max: parseInt(slider.max, 10), frames: data.frames.length,
+        expected: k < 0 ? 0 : data.frames[k].cells.length,
+        drawn: drawn.length, unknown: drawn.filter(function (id) { return !known[id]; }).length,
+        caption: document.getElementById("np-frame-label").textContent
+      };
+    })"##;
+    let first = browser.eval(&format!("{SET}(0)"));
+    assert_eq!(
+        first["slider"], true,
+        "a page made with frames has a slider"
+    );
+    assert_eq!(first["max"], first["frames"], "{first}");
+    assert!(first["frames"].as_u64().unwrap_or(0) >= 2, "{first}");
+    assert!(first["drawn"].as_u64().unwrap_or(0) > 0, "{first}");
+    assert_eq!(first["drawn"], first["expected"], "{first}");
+    assert_eq!(first["unknown"], 0, "{first}");
+    let caption = first["caption"].as_str().unwrap_or("");
+    assert!(caption.contains("level 1"), "{first}");
+    let last = browser.eval(&format!("{SET}(-1)"));
+    assert_eq!(last["drawn"], 0, "{last}");
+    assert_eq!(last["caption"], "final layout", "{last}");
 }
 
 /// The JSON node data embedded in a page.

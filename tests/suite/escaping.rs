@@ -227,6 +227,7 @@ fn html_page_runs_no_hostile_script_and_its_data_round_trips() {
         &nptreemap::render::HtmlData {
             title: "t".to_owned(),
             nodes: Vec::new(),
+            frames: Vec::new(),
         },
     )
     .to_lowercase();

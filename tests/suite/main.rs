@@ -17,4 +17,5 @@ mod paper_data;
 mod random_hierarchies;
 mod render_refs;
 mod similarity_paths;
+mod warm_start;
 mod watch;

@@ -1,0 +1,344 @@
+//! `Previous`: the last layout of a dataset keyed by node id, the input of a
+//! warm start (issue 6, "warm start as in stable treemaps"). Owns the model and
+//! the decision whether a previous layout fits a new run; may not read files
+//! or parse text (the layout-JSON reader is `crate::previous`, at the edge) and
+//! does not lay anything out (that is [`crate::layout::warm`]).
+//!
+//! Nodes are matched by id, never by index: a new dataset may add, drop or
+//! reorder nodes. A node *survives* when the previous layout has its id under
+//! the same parent id; the two roots always continue each other, so a renamed
+//! root (another file name) does not turn a layout cold.
+
+use std::collections::HashMap;
+
+use super::compute::Computed;
+use super::{Canvas, Layout, Params};
+use crate::geom::{ConvexPolygon, Point};
+use nptreemap_formats::Dataset;
+
+/// One node of a previous layout.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreviousNode {
+    /// The node's id (stable across runs, taken from the source data).
+    pub id: String,
+    /// The parent's id; `None` for the root.
+    pub parent: Option<String>,
+    /// The node's target weight then (leaf value, or the sum of its children).
+    pub weight: f64,
+    /// Its power-diagram site.
+    pub site: Point,
+    /// Its site's power weight; `None` when the source did not record it
+    /// (layout JSON written before the field existed). Without it the warm start
+    /// begins from equal weights at the previous sites, which reaches the same
+    /// cells, only in more steps: for fixed sites the weights that give a set of
+    /// areas are unique up to a constant (Aurenhammer, Hoffmann and Aronov 1998).
+    pub power_weight: Option<f64>,
+    /// Its cell.
+    pub polygon: ConvexPolygon,
+}
+
+impl PreviousNode {
+    /// The centroid of its cell.
+    pub fn centroid(&self) -> Point {
+        self.polygon.centroid()
+    }
+}
+
+/// A previous layout: per node id its site, power weight, cell, target weight
+/// and parent, the canvas, and which constraints were realised.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Previous {
+    canvas: Canvas,
+    nodes: Vec<PreviousNode>,
+    by_id: HashMap<String, usize>,
+    /// Number of children per parent id.
+    child_counts: HashMap<String, usize>,
+    root: Option<usize>,
+    realized: Vec<(String, String)>,
+}
+
+/// Why a previous layout was not used; the layout then starts cold. None of
+/// these is an error: a layout is always made.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum WarmRefusal {
+    /// The previous layout has no root node.
+    #[error("the previous layout has no root")]
+    NoRoot,
+    /// The canvas changed.
+    #[error("the previous layout was made for a {width}×{height} canvas")]
+    Canvas {
+        /// The previous width.
+        width: f64,
+        /// The previous height.
+        height: f64,
+    },
+    /// The root outline changed (say a rectangle before, a circle now).
+    #[error("the previous layout has another outline")]
+    Outline,
+    /// The hierarchy changed too much for old positions to mean anything.
+    #[error("only {survivors} of {nodes} nodes survive from the previous layout")]
+    TooFewSurvivors {
+        /// Nodes found under the same parent.
+        survivors: usize,
+        /// Non-root nodes of the new dataset.
+        nodes: usize,
+    },
+}
+
+/// Share of the new dataset's non-root nodes that must survive for a warm
+/// start. Issue 6 asks to fall back to a cold layout when the hierarchy
+/// changed too much; below half, most diagrams would be seeded from scratch
+/// anyway and the old arrangement no longer guides the new one.
+const MIN_SURVIVING_SHARE: f64 = 0.5;
+
+/// Tolerance, as a share of the canvas diagonal, for "the same outline" (and
+/// the same parent cell, in [`super::warm`]): the
+/// layout JSON rounds coordinates to 1e-6 canvas units (render/json.rs), far
+/// below this, and the checker's shared-edge threshold is the same 1e-6.
+const SAME_CELL_TOLERANCE: f64 = 1e-6;
+
+impl Previous {
+    /// A previous layout from its parts. Never fails: a repeated id keeps its
+    /// last node, a node whose parent id is unknown simply never survives, and
+    /// the first node without a parent is the root (the layout-JSON reader
+    /// rejects such files with a message; this constructor stays total).
+    pub fn new(canvas: Canvas, nodes: Vec<PreviousNode>, realized: Vec<(String, String)>) -> Self {
+        let by_id = nodes
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.id.clone(), i))
+            .collect();
+        let root = nodes.iter().position(|n| n.parent.is_none());
+        let mut child_counts = HashMap::new();
+        for parent in nodes.iter().filter_map(|n| n.parent.as_ref()) {
+            *child_counts.entry(parent.clone()).or_insert(0) += 1;
+        }
+        Self {
+            canvas,
+            nodes,
+            by_id,
+            child_counts,
+            root,
+            realized,
+        }
+    }
+
+    /// The previous layout that `layout` of `dataset` (cells indexed like its
+    /// nodes) becomes, with no realised constraints.
+    pub fn from_layout(dataset: &Dataset, layout: &Layout) -> Self {
+        let nodes = dataset
+            .nodes()
+            .iter()
+            .zip(&layout.cells)
+            .map(|(node, cell)| PreviousNode {
+                id: node.id.clone(),
+                parent: node.parent.map(|p| dataset.node(p).id.clone()),
+                weight: node.value,
+                site: cell.site,
+                power_weight: Some(cell.power_weight),
+                polygon: cell.polygon.clone(),
+            })
+            .collect();
+        Self::new(layout.canvas, nodes, Vec::new())
+    }
+
+    /// The previous layout that a finished computation becomes, with the id
+    /// pairs of its realised constraints (what the daemon keeps in memory).
+    pub fn from_computed(computed: &Computed) -> Self {
+        let mut previous = Self::from_layout(&computed.dataset, &computed.layout);
+        let ds = &computed.dataset;
+        previous.realized = computed
+            .constraints
+            .iter()
+            .zip(&computed.realized)
+            .filter(|(_, r)| **r)
+            .map(|(c, _)| (ds.node(c.a).id.clone(), ds.node(c.b).id.clone()))
+            .collect();
+        previous
+    }
+
+    /// The canvas the previous layout was made for.
+    pub fn canvas(&self) -> Canvas {
+        self.canvas
+    }
+
+    /// Every node, in the source's order.
+    pub fn nodes(&self) -> &[PreviousNode] {
+        &self.nodes
+    }
+
+    /// The node with this id.
+    pub fn get(&self, id: &str) -> Option<&PreviousNode> {
+        self.by_id.get(id).map(|&i| &self.nodes[i])
+    }
+
+    /// The root node.
+    pub fn root(&self) -> Option<&PreviousNode> {
+        self.root.map(|i| &self.nodes[i])
+    }
+
+    /// How many children the node with this id had.
+    pub fn child_count(&self, id: &str) -> usize {
+        self.child_counts.get(id).copied().unwrap_or(0)
+    }
+
+    /// Id pairs of the constraints realised in the previous layout.
+    pub fn realized(&self) -> &[(String, String)] {
+        &self.realized
+    }
+
+    /// The previous cell of node `index` of `dataset` in its role as a parent:
+    /// the previous root for the root, else the node with the same id wherever
+    /// it was (a subtree moved under another parent keeps its inner arrangement).
+    pub fn cell_of(&self, dataset: &Dataset, index: usize) -> Option<&PreviousNode> {
+        if index == dataset.root() {
+            self.root()
+        } else {
+            self.get(&dataset.node(index).id)
+        }
+    }
+
+    /// The previous node that node `index` of `dataset` continues: same id and
+    /// same parent (see the module doc); `None` for a new or moved node and
+    /// for the root.
+    pub fn survivor(&self, dataset: &Dataset, index: usize) -> Option<&PreviousNode> {
+        let node = dataset.node(index);
+        let parent = node.parent?;
+        let old = self.get(&node.id)?;
+        let old_parent = old.parent.as_deref()?;
+        let same_parent = if parent == dataset.root() {
+            self.root().is_some_and(|r| r.id == old_parent)
+        } else {
+            dataset.node(parent).id == old_parent
+        };
+        same_parent.then_some(old)
+    }
+
+    /// How many non-root nodes of `dataset` survive.
+    pub fn survivors(&self, dataset: &Dataset) -> usize {
+        (0..dataset.len())
+            .filter(|&i| self.survivor(dataset, i).is_some())
+            .count()
+    }
+
+    /// Whether a run with `params` on `dataset` may start from this layout:
+    /// the same canvas and outline, and at least half of the nodes surviving.
+    /// A previous layout for another canvas or outline is not rescaled: it is
+    /// simply not used, and the layout starts cold.
+    pub fn fits(&self, dataset: &Dataset, params: &Params) -> Result<(), WarmRefusal> {
+        let root = self.root().ok_or(WarmRefusal::NoRoot)?;
+        let (c, p) = (self.canvas, params.canvas);
+        let tol = same_cell_tolerance(p);
+        if (c.width - p.width).abs() > tol || (c.height - p.height).abs() > tol {
+            return Err(WarmRefusal::Canvas {
+                width: c.width,
+                height: c.height,
+            });
+        }
+        match params.outline.polygon(params.canvas) {
+            Ok(outline) if same_polygon(&outline, &root.polygon, tol) => {}
+            _ => return Err(WarmRefusal::Outline),
+        }
+        let nodes = dataset.len().saturating_sub(1);
+        let survivors = self.survivors(dataset);
+        if (survivors as f64) < MIN_SURVIVING_SHARE * nodes as f64 {
+            return Err(WarmRefusal::TooFewSurvivors { survivors, nodes });
+        }
+        Ok(())
+    }
+}
+
+/// The distance under which two vertices count as the same (see
+/// `SAME_CELL_TOLERANCE`).
+pub(super) fn same_cell_tolerance(canvas: Canvas) -> f64 {
+    SAME_CELL_TOLERANCE * Point::new(canvas.width, canvas.height).length()
+}
+
+/// True when the two polygons have the same vertices within `tol` (in any
+/// starting position: the JSON reader may rotate the vertex list).
+pub(super) fn same_polygon(a: &ConvexPolygon, b: &ConvexPolygon, tol: f64) -> bool {
+    a.len() == b.len()
+        && a.points()
+            .iter()
+            .all(|p| b.points().iter().any(|q| p.distance(*q) <= tol))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::{layout, Outline};
+    use nptreemap_formats::{DatasetBuilder, NodeSpec};
+
+    fn tree(leaves: &[(&str, &str, f64)]) -> Dataset {
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("root"));
+        let mut groups: Vec<&str> = Vec::new();
+        for (g, _, _) in leaves {
+            if !groups.contains(g) {
+                groups.push(g);
+                b.add(NodeSpec::new(*g).parent("root"));
+            }
+        }
+        for (g, id, w) in leaves {
+            b.add(NodeSpec::new(*id).parent(*g).weight(*w));
+        }
+        b.build().expect("valid")
+    }
+
+    #[test]
+    fn survivors_need_the_same_parent_and_roots_continue_each_other() {
+        let old = tree(&[("A", "a1", 1.0), ("A", "a2", 2.0), ("B", "b1", 3.0)]);
+        let (l, _) = layout(&old, &Params::default()).expect("layout");
+        let prev = Previous::from_layout(&old, &l);
+        // b1 moved to A, a3 is new, the root is renamed.
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("other-root"));
+        b.add(NodeSpec::new("A").parent("other-root"));
+        b.add(NodeSpec::new("B").parent("other-root"));
+        for (id, g) in [("a1", "A"), ("a2", "A"), ("b1", "A"), ("a3", "B")] {
+            b.add(NodeSpec::new(id).parent(g).weight(1.0));
+        }
+        let new = b.build().expect("valid");
+        let alive: Vec<&str> = (0..new.len())
+            .filter(|&i| prev.survivor(&new, i).is_some())
+            .map(|i| new.node(i).id.as_str())
+            .collect();
+        assert_eq!(alive, ["A", "B", "a1", "a2"]);
+        assert_eq!(
+            prev.cell_of(&new, new.root()).map(|n| n.id.as_str()),
+            Some("root")
+        );
+        assert_eq!(prev.fits(&new, &Params::default()), Ok(()));
+    }
+
+    #[test]
+    fn another_canvas_outline_or_hierarchy_is_refused() {
+        let ds = tree(&[("A", "a1", 1.0), ("A", "a2", 2.0), ("B", "b1", 3.0)]);
+        let (l, _) = layout(&ds, &Params::default()).expect("layout");
+        let prev = Previous::from_layout(&ds, &l);
+        let mut wide = Params::default();
+        wide.canvas.width = 1200.0;
+        assert!(matches!(
+            prev.fits(&ds, &wide),
+            Err(WarmRefusal::Canvas { .. })
+        ));
+        let round = Params {
+            outline: Outline::Circle,
+            ..Params::default()
+        };
+        assert_eq!(prev.fits(&ds, &round), Err(WarmRefusal::Outline));
+        let other = tree(&[("X", "x1", 1.0), ("Y", "y1", 2.0), ("A", "a1", 3.0)]);
+        assert_eq!(
+            prev.fits(&other, &Params::default()),
+            Err(WarmRefusal::TooFewSurvivors {
+                survivors: 2,
+                nodes: 6
+            })
+        );
+        let empty = Previous::new(Canvas::default(), Vec::new(), Vec::new());
+        assert_eq!(
+            empty.fits(&ds, &Params::default()),
+            Err(WarmRefusal::NoRoot)
+        );
+    }
+}

@@ -1,0 +1,334 @@
+//! Reads layout JSON (`nptreemap-layout/1`, `shared/spec/layout-json.md`) back
+//! into a [`Previous`] layout, so that a file alone can seed a warm start
+//! (issue 6). Owns the reading of that text and its error messages, which name
+//! the offending field (`nodes[3].site`); may not open files (the caller passes
+//! the text) or decide whether the layout fits a run ([`Previous::fits`]).
+//!
+//! Hostile input is an error, never a panic: the text goes through
+//! `serde_json` (which limits nesting) into a `Value` that is walked with
+//! checked accessors only.
+
+use serde_json::{Map, Value};
+
+use crate::geom::{ConvexPolygon, Point};
+use crate::layout::{Canvas, Previous, PreviousNode};
+use crate::render::json::FORMAT;
+
+/// Why layout JSON could not be read as a previous layout.
+#[derive(Debug, thiserror::Error)]
+pub enum PreviousError {
+    /// The text is not JSON.
+    #[error("not JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    /// A field is missing or has the wrong type or value.
+    #[error("`{field}`: {reason}")]
+    Field {
+        /// Where: `format`, `canvas.width`, `nodes[3].polygon[1]`, ...
+        field: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+impl Previous {
+    /// Reads layout JSON (`nptreemap-layout/1`) text, as written by
+    /// [`crate::render::layout_json`]. Each node needs `id`, `parent`,
+    /// `weight`, `site` and `polygon`; `power_weight` is used when present
+    /// (files from before it existed still warm-start, in more steps).
+    /// `constraints` is optional; only its `a`, `b` and `realized` are read.
+    ///
+    /// A layout made for another canvas or outline reads fine; it is then not
+    /// used, and the layout starts cold ([`Previous::fits`]).
+    pub fn from_layout_json(text: &str) -> Result<Previous, PreviousError> {
+        let doc: Value = serde_json::from_str(text)?;
+        let top = object(&doc, "the document")?;
+        match top.get("format").and_then(Value::as_str) {
+            Some(FORMAT) => {}
+            Some(other) => {
+                return Err(bad(
+                    "format",
+                    format!("expected {FORMAT:?}, found {other:?}"),
+                ));
+            }
+            None => return Err(bad("format", format!("missing; expected {FORMAT:?}"))),
+        }
+        let canvas = field(top, "canvas", "canvas")?;
+        let canvas = object(canvas, "canvas")?;
+        let canvas = Canvas {
+            width: positive(field(canvas, "width", "canvas.width")?, "canvas.width")?,
+            height: positive(field(canvas, "height", "canvas.height")?, "canvas.height")?,
+        };
+        let nodes = array(field(top, "nodes", "nodes")?, "nodes")?;
+        let nodes = nodes
+            .iter()
+            .enumerate()
+            .map(|(i, v)| node(v, &format!("nodes[{i}]")))
+            .collect::<Result<Vec<_>, _>>()?;
+        check_tree(&nodes)?;
+        let realized = match top.get("constraints") {
+            None | Some(Value::Null) => Vec::new(),
+            Some(v) => realized_pairs(v)?,
+        };
+        Ok(Previous::new(canvas, nodes, realized))
+    }
+}
+
+fn bad(field: impl Into<String>, reason: impl Into<String>) -> PreviousError {
+    PreviousError::Field {
+        field: field.into(),
+        reason: reason.into(),
+    }
+}
+
+fn object<'a>(v: &'a Value, at: &str) -> Result<&'a Map<String, Value>, PreviousError> {
+    v.as_object().ok_or_else(|| bad(at, "expected an object"))
+}
+
+fn array<'a>(v: &'a Value, at: &str) -> Result<&'a Vec<Value>, PreviousError> {
+    v.as_array().ok_or_else(|| bad(at, "expected an array"))
+}
+
+fn field<'a>(obj: &'a Map<String, Value>, key: &str, at: &str) -> Result<&'a Value, PreviousError> {
+    obj.get(key).ok_or_else(|| bad(at, "missing"))
+}
+
+/// A finite number. serde_json never yields a non-finite one, but the check
+/// keeps that assumption out of the geometry.
+fn number(v: &Value, at: &str) -> Result<f64, PreviousError> {
+    v.as_f64()
+        .filter(|x| x.is_finite())
+        .ok_or_else(|| bad(at, "expected a number"))
+}
+
+fn positive(v: &Value, at: &str) -> Result<f64, PreviousError> {
+    let x = number(v, at)?;
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(bad(at, "expected a positive number"))
+    }
+}
+
+fn point(v: &Value, at: &str) -> Result<Point, PreviousError> {
+    match v.as_array().map(Vec::as_slice) {
+        Some([x, y]) => Ok(Point::new(number(x, at)?, number(y, at)?)),
+        _ => Err(bad(at, "expected [x, y]")),
+    }
+}
+
+fn node(v: &Value, at: &str) -> Result<PreviousNode, PreviousError> {
+    let obj = object(v, at)?;
+    let sub = |key: &str| format!("{at}.{key}");
+    let id = field(obj, "id", &sub("id"))?
+        .as_str()
+        .ok_or_else(|| bad(sub("id"), "expected a string"))?
+        .to_string();
+    let parent = match field(obj, "parent", &sub("parent"))? {
+        Value::Null => None,
+        Value::String(p) => Some(p.clone()),
+        _ => return Err(bad(sub("parent"), "expected a string or null")),
+    };
+    let weight = number(field(obj, "weight", &sub("weight"))?, &sub("weight"))?;
+    let site = point(field(obj, "site", &sub("site"))?, &sub("site"))?;
+    let power_weight = match obj.get("power_weight") {
+        None | Some(Value::Null) => None,
+        Some(w) => Some(number(w, &sub("power_weight"))?),
+    };
+    let points = array(field(obj, "polygon", &sub("polygon"))?, &sub("polygon"))?
+        .iter()
+        .enumerate()
+        .map(|(k, p)| point(p, &format!("{at}.polygon[{k}]")))
+        .collect::<Result<Vec<_>, _>>()?;
+    let polygon = ConvexPolygon::new(points).map_err(|e| bad(sub("polygon"), e.to_string()))?;
+    Ok(PreviousNode {
+        id,
+        parent,
+        weight,
+        site,
+        power_weight,
+        polygon,
+    })
+}
+
+/// Unique ids, exactly one root, and every parent id naming a node.
+fn check_tree(nodes: &[PreviousNode]) -> Result<(), PreviousError> {
+    let mut seen = std::collections::HashSet::new();
+    for (i, n) in nodes.iter().enumerate() {
+        if !seen.insert(n.id.as_str()) {
+            return Err(bad(
+                format!("nodes[{i}].id"),
+                format!("duplicate id {:?}", n.id),
+            ));
+        }
+    }
+    let mut roots = nodes.iter().enumerate().filter(|(_, n)| n.parent.is_none());
+    match (roots.next(), roots.next()) {
+        (None, _) => return Err(bad("nodes", "no root (a node with parent null)")),
+        (Some(_), Some((i, _))) => {
+            return Err(bad(format!("nodes[{i}].parent"), "a second root"));
+        }
+        _ => {}
+    }
+    for (i, n) in nodes.iter().enumerate() {
+        if let Some(p) = &n.parent {
+            if !seen.contains(p.as_str()) {
+                return Err(bad(
+                    format!("nodes[{i}].parent"),
+                    format!("no node has id {p:?}"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The `(a, b)` id pairs of the constraints marked realised.
+fn realized_pairs(v: &Value) -> Result<Vec<(String, String)>, PreviousError> {
+    let mut out = Vec::new();
+    for (i, c) in array(v, "constraints")?.iter().enumerate() {
+        let at = format!("constraints[{i}]");
+        let obj = object(c, &at)?;
+        let text = |key: &str| {
+            field(obj, key, &format!("{at}.{key}"))?
+                .as_str()
+                .map(str::to_string)
+                .ok_or_else(|| bad(format!("{at}.{key}"), "expected a string"))
+        };
+        let (a, b) = (text("a")?, text("b")?);
+        let realized = field(obj, "realized", &format!("{at}.realized"))?
+            .as_bool()
+            .ok_or_else(|| bad(format!("{at}.realized"), "expected true or false"))?;
+        if realized {
+            out.push((a, b));
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::{compute, Params, Request};
+    use crate::render::layout_json;
+    use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
+
+    fn dataset() -> Dataset {
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("root"));
+        for g in ["A", "B"] {
+            b.add(NodeSpec::new(g).parent("root"));
+            for k in 0..3 {
+                b.add(
+                    NodeSpec::new(format!("{g}{k}"))
+                        .parent(g)
+                        .weight(1.0 + k as f64),
+                );
+            }
+        }
+        b.build().expect("valid")
+    }
+
+    fn sample_text() -> (Dataset, String) {
+        let ds = dataset();
+        let c = compute(&ds, &Request::default()).expect("layout");
+        let text = layout_json(&c.dataset, &c.layout, &crate::pipeline::json_extras(&c));
+        (ds, text)
+    }
+
+    #[test]
+    fn reads_what_the_writer_writes() {
+        let (ds, text) = sample_text();
+        let c = compute(&ds, &Request::default()).expect("layout");
+        let prev = Previous::from_layout_json(&text).expect("reads");
+        assert_eq!(prev.nodes().len(), ds.len());
+        assert_eq!(prev.canvas(), Params::default().canvas);
+        assert_eq!(prev.root().map(|r| r.id.as_str()), Some("root"));
+        let a1 = prev.get("A1").expect("A1");
+        assert_eq!(a1.parent.as_deref(), Some("A"));
+        let i = ds.find("A1").expect("A1");
+        // Power weights are written in full precision, sites to 6 places.
+        assert_eq!(a1.power_weight, Some(c.layout.cells[i].power_weight));
+        assert!(a1.site.distance(c.layout.cells[i].site) < 1e-6);
+        prev.fits(&ds, &Params::default())
+            .expect("fits its own dataset");
+    }
+
+    /// The error for `text`, which must name `field`.
+    fn error_names(text: &str, field: &str) {
+        match Previous::from_layout_json(text) {
+            Err(PreviousError::Field { field: f, .. }) => assert_eq!(f, field, "{text}"),
+            other => panic!("expected an error at {field}, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn bad_files_are_errors_that_name_the_field() {
+        let (_, text) = sample_text();
+        let edit = |from: &str, to: &str| {
+            assert!(text.contains(from), "{from}");
+            text.replacen(from, to, 1)
+        };
+        error_names(&edit("nptreemap-layout/1", "other/2"), "format");
+        error_names(&edit("\"format\": \"nptreemap-layout/1\",", ""), "format");
+        error_names(&edit("\"width\":1000.0", "\"width\":-1"), "canvas.width");
+        error_names(
+            &edit("\"height\":1000.0", "\"height\":\"tall\""),
+            "canvas.height",
+        );
+        error_names(&edit("\"id\":\"A\"", "\"id\":7"), "nodes[1].id");
+        error_names(&edit("\"id\":\"B\"", "\"id\":\"A\""), "nodes[2].id");
+        error_names(
+            &edit("\"parent\":\"A\"", "\"parent\":\"Z\""),
+            "nodes[3].parent",
+        );
+        error_names(
+            &edit("\"parent\":\"root\"", "\"parent\":null"),
+            "nodes[1].parent",
+        );
+        error_names(&edit("\"site\":[", "\"site\":[1,"), "nodes[0].site");
+        error_names(
+            &edit("\"power_weight\":0.0", "\"power_weight\":\"x\""),
+            "nodes[0].power_weight",
+        );
+        error_names(
+            &edit("\"polygon\":[[0.0,0.0],", "\"polygon\":[[0.0],"),
+            "nodes[0].polygon[0]",
+        );
+        error_names(
+            &edit(
+                "\"polygon\":[[0.0,0.0],",
+                "\"polygon\":[[0.0,0.0],[5,5],[2,2],",
+            ),
+            "nodes[0].polygon",
+        );
+        error_names(&edit("\"nodes\": [", "\"nodes\": 3, \"x\": ["), "nodes");
+    }
+
+    #[test]
+    fn hostile_text_is_an_error_not_a_panic() {
+        for text in [
+            "",
+            "null",
+            "[]",
+            "{\"format\": \"nptreemap-layout/1\"}",
+            &"[".repeat(100_000),
+            "{\"format\": \"nptreemap-layout/1\", \"canvas\": {\"width\": 1e999, \"height\": 1}}",
+            "{\"format\": \"nptreemap-layout/1\", \"canvas\": {\"width\": 1, \"height\": 1}, \"nodes\": []}",
+            "{\"format\": \"nptreemap-layout/1\", \"canvas\": {\"width\": 1, \"height\": 1}, \"nodes\": [{}]}",
+        ] {
+            assert!(Previous::from_layout_json(text).is_err(), "{text:.60}");
+        }
+    }
+
+    #[test]
+    fn files_without_power_weights_still_read() {
+        let (ds, text) = sample_text();
+        let mut v: Value = serde_json::from_str(&text).expect("json");
+        for n in v["nodes"].as_array_mut().expect("nodes") {
+            n.as_object_mut().expect("object").remove("power_weight");
+        }
+        let prev = Previous::from_layout_json(&v.to_string()).expect("reads");
+        assert!(prev.nodes().iter().all(|n| n.power_weight.is_none()));
+        prev.fits(&ds, &Params::default()).expect("fits");
+    }
+}
