@@ -207,6 +207,8 @@ def main():
                            capture_output=True, text=True)
     rebuilds = sum(1 for _, l in daemon.lines if l.startswith("bench: data:"))
     errors = [l for _, l in daemon.lines if "error" in l]
+    for e in errors[:3]:
+        print("error line:", e[:300], file=sys.stderr)
     code = daemon.stop()
 
     steady = rss[len(rss) // 10:] or rss

@@ -269,14 +269,27 @@ pub fn render_all(
     computed: &Computed,
 ) -> Result<Vec<(PathBuf, Vec<u8>)>, BuildError> {
     let style = config.style(d);
+    // One picture for every SVG and PNG output (it is the same text).
+    let mut svg_text: Option<String> = None;
     d.outputs
         .iter()
         .map(|out| {
             let kind = out.kind.unwrap_or(OutputKind::Svg);
-            Ok((
-                out.path.clone(),
-                render(computed, &style, kind, out.scale, &out.path)?,
-            ))
+            let bytes = match kind {
+                OutputKind::Svg | OutputKind::Png => {
+                    let text = svg_text.get_or_insert_with(|| picture(computed, &style));
+                    if kind == OutputKind::Svg {
+                        text.clone().into_bytes()
+                    } else {
+                        png(text, out.scale).map_err(|source| BuildError::Png {
+                            path: out.path.clone(),
+                            source,
+                        })?
+                    }
+                }
+                _ => render(computed, &style, kind, out.scale, &out.path)?,
+            };
+            Ok((out.path.clone(), bytes))
         })
         .collect()
 }

@@ -76,6 +76,11 @@ struct Daemon<'a> {
     options: Options,
     states: BTreeMap<String, DatasetState>,
     report: &'a mut dyn FnMut(Status),
+    /// The current batch was cut by the cap while files were still changing
+    /// (see [`Batch::Paths`]): a read that fails to parse is then most likely
+    /// a file caught mid-write, so it is retried with the next batch instead
+    /// of being reported.
+    busy: bool,
 }
 
 /// A channel for [`run`]: give the sender to whatever should stop the daemon
@@ -107,6 +112,7 @@ pub fn run(
         options,
         states: BTreeMap::new(),
         report,
+        busy: false,
     };
     daemon.sync_watches(&mut watcher);
     (daemon.report)(Status::Watching {
@@ -128,7 +134,10 @@ pub fn run(
         let batch = watcher::next_batch(rx, daemon.options.timing, &|p: &Path| inputs.contains(p));
         let paths = match batch {
             Batch::Stop => break,
-            Batch::Paths(paths) => paths,
+            Batch::Paths { paths, busy } => {
+                daemon.busy = busy;
+                paths
+            }
         };
         tracing::debug!(?paths, "batch");
         let mut work = ChangeSet::default();
@@ -233,9 +242,20 @@ impl Daemon<'_> {
             None if reason == Reason::Start && self.options.cold => None,
             None => pipeline::stored_layout(&d),
         };
+        let read_ms = ms_since(started);
         let result = pipeline::parse_inputs(&d, &files).and_then(|dataset| {
+            let parsed = Instant::now();
             let computed = pipeline::lay_out(&self.config, &d, &dataset, previous)?;
+            let laid_out = Instant::now();
             let outputs = pipeline::render_all(&self.config, &d, &computed)?;
+            tracing::debug!(
+                dataset = name,
+                read_ms,
+                parse_ms = ms_between(started, parsed) - read_ms,
+                layout_ms = ms_between(parsed, laid_out),
+                render_ms = ms_since(laid_out),
+                "rebuilt in memory"
+            );
             Ok((computed, outputs))
         });
         match result {
@@ -245,6 +265,12 @@ impl Daemon<'_> {
                     Start::Cold | Start::Refused(_) => LayoutKind::Cold,
                 };
                 self.finish(name, reason, layout, started, computed, outputs);
+            }
+            Err(e) if self.busy && matches!(e, BuildError::Input(_)) => {
+                tracing::debug!(dataset = name, error = %e, "input changing; retried with the next batch");
+                if let Some(state) = self.states.get_mut(name) {
+                    state.fingerprint = None;
+                }
             }
             Err(e) => (self.report)(Status::problem(name, &e, "last good outputs kept")),
         }
@@ -329,6 +355,14 @@ impl Daemon<'_> {
 struct OutputError {
     path: PathBuf,
     source: std::io::Error,
+}
+
+fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1000.0
+}
+
+fn ms_between(a: Instant, b: Instant) -> f64 {
+    b.duration_since(a).as_secs_f64() * 1000.0
 }
 
 /// A fingerprint of a dataset's input bytes (roles, paths and contents).

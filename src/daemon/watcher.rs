@@ -27,7 +27,13 @@ pub enum Message {
 #[derive(Debug, PartialEq, Eq)]
 pub enum Batch {
     /// Paths touched by relevant events, each once, sorted.
-    Paths(BTreeSet<PathBuf>),
+    Paths {
+        /// The paths.
+        paths: BTreeSet<PathBuf>,
+        /// The batch was closed by the cap while events kept coming: a file
+        /// may be caught half-written, and another batch will follow.
+        busy: bool,
+    },
     /// Stop was asked for (or every sender is gone).
     Stop,
 }
@@ -131,13 +137,16 @@ pub fn next_batch(
             },
             Some(start) => {
                 let now = Instant::now();
-                let deadline = (last + timing.quiet).min(start + timing.cap);
+                let quiet_at = last + timing.quiet;
+                let cap_at = start + timing.cap;
+                let busy = cap_at < quiet_at;
+                let deadline = quiet_at.min(cap_at);
                 if now >= deadline {
-                    return Batch::Paths(paths);
+                    return Batch::Paths { paths, busy };
                 }
                 match rx.recv_timeout(deadline - now) {
                     Ok(m) => m,
-                    Err(RecvTimeoutError::Timeout) => return Batch::Paths(paths),
+                    Err(RecvTimeoutError::Timeout) => return Batch::Paths { paths, busy },
                     Err(RecvTimeoutError::Disconnected) => return Batch::Stop,
                 }
             }
@@ -204,7 +213,10 @@ mod tests {
         // Closed by the quiet window: exactly the one relevant content change.
         assert_eq!(
             next_batch(&rx, short(), &relevant),
-            Batch::Paths([PathBuf::from("/d/a.csv")].into_iter().collect())
+            Batch::Paths {
+                paths: [PathBuf::from("/d/a.csv")].into_iter().collect(),
+                busy: false
+            }
         );
         tx.send(Message::Stop).expect("send");
         assert_eq!(next_batch(&rx, short(), &relevant), Batch::Stop);
@@ -231,7 +243,7 @@ mod tests {
         let start = Instant::now();
         let batch = next_batch(&rx, short(), &|_| true);
         let took = start.elapsed();
-        assert!(matches!(batch, Batch::Paths(ref p) if p.len() == 1));
+        assert!(matches!(batch, Batch::Paths { ref paths, busy: true } if paths.len() == 1));
         // Closed by the 200 ms cap, well before the stream ends (2 s); the
         // bound is loose because this runs beside other tests.
         assert!(took < Duration::from_millis(1500), "{took:?}");

@@ -54,9 +54,24 @@ fn options() -> &'static usvg::Options<'static> {
 }
 
 /// Renders SVG text to PNG bytes at `scale` pixels per SVG unit.
+///
+/// Two kinds of parallel work, both invisible in the result: the document is
+/// parsed as up to [`LAYERS`] layer documents at once (text shaping in usvg's
+/// parse is most of a labelled picture's cost, issue 5's 1 s budget at
+/// 10,000 leaves and issue 6's 150 ms at 500), and the pixels are rendered in
+/// horizontal strips. Layers are drawn in document order onto the same
+/// pixels, exactly as one pass would draw the same elements.
 pub fn png(svg: &str, scale: f64) -> Result<Vec<u8>, PngError> {
-    let tree = usvg::Tree::from_str(svg, options()).map_err(|e| PngError::Svg(e.to_string()))?;
-    let size = tree.size();
+    let parts = layers(svg).unwrap_or_else(|| vec![svg.to_owned()]);
+    let trees = parts
+        .par_iter()
+        .map(|part| usvg::Tree::from_str(part, options()))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| PngError::Svg(e.to_string()))?;
+    let Some(first) = trees.first() else {
+        return Err(PngError::Svg("no SVG document".to_string()));
+    };
+    let size = first.size();
     let (width, height) = (
         f64::from(size.width()) * scale,
         f64::from(size.height()) * scale,
@@ -72,8 +87,7 @@ pub fn png(svg: &str, scale: f64) -> Result<Vec<u8>, PngError> {
     };
     let s = scale as f32;
     let (w, h) = (pixmap.width(), pixmap.height());
-    // Rendered as horizontal strips in parallel (resvg itself is one thread):
-    // each strip is the same picture shifted up by a whole number of pixels, so
+    // Each strip is the same picture shifted up by a whole number of pixels, so
     // every pixel is sampled exactly as in one pass. The strip count is fixed,
     // not taken from the machine, so the bytes never depend on the core count.
     let rows = h.div_ceil(STRIPS).max(1);
@@ -85,11 +99,10 @@ pub fn png(svg: &str, scale: f64) -> Result<Vec<u8>, PngError> {
         .par_iter()
         .map(|&(y0, rows)| {
             let mut strip = tiny_skia::Pixmap::new(w, rows)?;
-            resvg::render(
-                &tree,
-                tiny_skia::Transform::from_row(s, 0.0, 0.0, s, 0.0, -(y0 as f32)),
-                &mut strip.as_mut(),
-            );
+            let shift = tiny_skia::Transform::from_row(s, 0.0, 0.0, s, 0.0, -(y0 as f32));
+            for tree in &trees {
+                resvg::render(tree, shift, &mut strip.as_mut());
+            }
             Some(strip)
         })
         .collect();
@@ -103,13 +116,73 @@ pub fn png(svg: &str, scale: f64) -> Result<Vec<u8>, PngError> {
     encode(&pixmap)
 }
 
+/// Most layer documents [`png`] parses at once.
+const LAYERS: usize = 3;
+
+/// Splits SVG text as [`super::svg`] and [`super::picture`] write it (the
+/// root element's start tag on the first line, then top-level elements each
+/// starting on a new line) into up to [`LAYERS`] documents with the same root
+/// element, each holding a run of consecutive top-level elements, balanced by
+/// an estimate of their parsing cost (text elements dominate). `None` when the
+/// text does not have that shape; it is then parsed whole.
+fn layers(svg: &str) -> Option<Vec<String>> {
+    let header_end = svg.find('\n')? + 1;
+    let header = &svg[..header_end];
+    if !header.starts_with("<svg") {
+        return None;
+    }
+    let close = svg.rfind("</svg>")?;
+    let body = svg.get(header_end..close)?;
+    // Top-level elements: runs of lines after which no <g> is open. User text
+    // is escaped, so "<g" only ever starts a group element.
+    let mut chunks: Vec<&str> = Vec::new();
+    let (mut depth, mut start, mut at) = (0i64, 0usize, 0usize);
+    for line in body.split_inclusive('\n') {
+        at += line.len();
+        let opens = line.matches("<g ").count() + line.matches("<g>").count();
+        depth += opens as i64 - line.matches("</g>").count() as i64;
+        if depth < 0 {
+            return None;
+        }
+        if depth == 0 {
+            chunks.push(&body[start..at]);
+            start = at;
+        }
+    }
+    if depth != 0 || start != body.len() {
+        return None;
+    }
+    // A text element costs about as much to parse as 2 kB of path data.
+    let cost = |c: &str| c.len() + 2000 * c.matches("<text").count();
+    let total: usize = chunks.iter().map(|c| cost(c)).sum();
+    let share = total / LAYERS + 1;
+    let mut parts: Vec<String> = Vec::new();
+    let (mut part, mut acc) = (String::from(header), 0usize);
+    for chunk in chunks {
+        part.push_str(chunk);
+        acc += cost(chunk);
+        if acc >= share && parts.len() + 1 < LAYERS {
+            part.push_str("</svg>\n");
+            parts.push(std::mem::replace(&mut part, String::from(header)));
+            acc = 0;
+        }
+    }
+    if part.len() > header.len() || parts.is_empty() {
+        part.push_str("</svg>\n");
+        parts.push(part);
+    }
+    Some(parts)
+}
+
 /// Strips rendered in parallel (see [`png`]).
 const STRIPS: u32 = 2;
 
 /// PNG bytes of a pixmap: straight (not premultiplied) RGBA, compressed with
-/// the png crate's `Fast` level. tiny-skia's own `encode_png` uses the default
-/// level, which took half of a 2,000 × 2,000 render (issue 5's 1 s budget);
-/// `Fast` is several times quicker for a slightly larger file.
+/// the png crate's `Fastest` level (fdeflate). tiny-skia's own `encode_png`
+/// uses the default level, which took half of a 2,000 × 2,000 render (issue
+/// 5's 1 s budget) and a third of a 500-leaf rebuild (issue 6's 150 ms);
+/// `Fastest` is ~20× quicker for files about 30% larger, and the daemon
+/// rewrites these files on every edit.
 fn encode(pixmap: &tiny_skia::Pixmap) -> Result<Vec<u8>, PngError> {
     let mut rgba = pixmap.data().to_vec();
     for px in rgba.chunks_exact_mut(4) {
@@ -124,7 +197,7 @@ fn encode(pixmap: &tiny_skia::Pixmap) -> Result<Vec<u8>, PngError> {
     let mut encoder = ::png::Encoder::new(&mut out, pixmap.width(), pixmap.height());
     encoder.set_color(::png::ColorType::Rgba);
     encoder.set_depth(::png::BitDepth::Eight);
-    encoder.set_compression(::png::Compression::Fast);
+    encoder.set_compression(::png::Compression::Fastest);
     let mut writer = encoder
         .write_header()
         .map_err(|e| PngError::Encode(e.to_string()))?;
@@ -140,6 +213,50 @@ fn encode(pixmap: &tiny_skia::Pixmap) -> Result<Vec<u8>, PngError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn layers_keep_every_element_in_order() {
+        let svg = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"10\" height=\"10\">\n\
+                   <rect width=\"10\" height=\"10\" fill=\"#fff\"/>\n\
+                   <g stroke=\"#fff\">\n<g><path d=\"M0,0L5,0L5,5Z\"/></g>\n</g>\n\
+                   <g class=\"np-labels\">\n<text x=\"1\" y=\"1\">a &lt;g b</text>\n</g>\n\
+                   <text x=\"2\" y=\"2\">c</text>\n</svg>\n";
+        let parts = layers(svg).expect("our shape");
+        assert!(parts.len() > 1 && parts.len() <= LAYERS, "{parts:?}");
+        // Taking the root tags off, the parts concatenate to the body.
+        let header = svg.lines().next().expect("header");
+        let body: String = parts
+            .iter()
+            .map(|p| {
+                p.trim_start_matches(header)
+                    .trim_start_matches('\n')
+                    .trim_end_matches("</svg>\n")
+            })
+            .collect();
+        assert_eq!(format!("{header}\n{body}</svg>\n"), svg);
+        // Not our shape: parsed whole.
+        assert_eq!(layers("<svg><g></svg>"), None);
+    }
+
+    #[test]
+    fn layered_rendering_equals_one_pass() {
+        let svg = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"40\" height=\"30\">\n\
+                   <rect width=\"40\" height=\"30\" fill=\"#336699\"/>\n\
+                   <text x=\"5\" y=\"25\" font-size=\"9\">Ab</text>\n\
+                   <g fill=\"#ff0000\" opacity=\"0.5\">\n<circle cx=\"10\" cy=\"10\" r=\"8\"/>\n</g>\n\
+                   <text x=\"15\" y=\"12\" font-size=\"9\">Cd</text>\n\
+                   <g fill=\"#00ff00\">\n<circle cx=\"18\" cy=\"15\" r=\"9\"/>\n</g>\n</svg>\n";
+        assert!(layers(svg).is_some_and(|p| p.len() > 1));
+        let layered = png(svg, 2.0).expect("layered");
+        let tree = usvg::Tree::from_str(svg, options()).expect("parse");
+        let mut whole = tiny_skia::Pixmap::new(80, 60).expect("pixmap");
+        resvg::render(
+            &tree,
+            tiny_skia::Transform::from_scale(2.0, 2.0),
+            &mut whole.as_mut(),
+        );
+        assert_eq!(layered, encode(&whole).expect("encode"));
+    }
 
     #[test]
     fn renders_text_with_the_built_in_font() {
