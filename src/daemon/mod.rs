@@ -266,7 +266,7 @@ impl Daemon<'_> {
                 };
                 self.finish(name, reason, layout, started, computed, outputs);
             }
-            Err(e) if self.busy && matches!(e, BuildError::Input(_)) => {
+            Err(e) if matches!(e, BuildError::Input(_)) && self.still_changing(&d, fingerprint) => {
                 tracing::debug!(dataset = name, error = %e, "input changing; retried with the next batch");
                 if let Some(state) = self.states.get_mut(name) {
                     state.fingerprint = None;
@@ -274,6 +274,19 @@ impl Daemon<'_> {
             }
             Err(e) => (self.report)(Status::problem(name, &e, "last good outputs kept")),
         }
+    }
+
+    /// Whether a dataset's inputs are still being written, so that a parse
+    /// failure is most likely a file caught half-written (an editor or a script
+    /// writing in place truncates first): the batch was cut by the cap while
+    /// events kept coming, or the bytes differ from the ones just parsed after
+    /// one more quiet window. The events of that write bring the next rebuild.
+    fn still_changing(&self, d: &DatasetConfig, parsed: u64) -> bool {
+        if self.busy {
+            return true;
+        }
+        std::thread::sleep(self.options.timing.quiet);
+        pipeline::read_inputs(d).map_or(true, |files| fingerprint(&files) != parsed)
     }
 
     /// Renders a dataset's stored layout again (a render-only config change).

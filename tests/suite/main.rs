@@ -17,5 +17,6 @@ mod paper_data;
 mod random_hierarchies;
 mod render_refs;
 mod similarity_paths;
+mod tabs;
 mod warm_start;
 mod watch;
