@@ -285,8 +285,18 @@ impl Daemon<'_> {
         if self.busy {
             return true;
         }
+        // Modification times as well as bytes: a writer that truncates again
+        // during the wait can leave the same (empty) bytes behind.
+        let stamps = || -> Vec<Option<std::time::SystemTime>> {
+            d.files
+                .values()
+                .map(|p| std::fs::metadata(p).and_then(|m| m.modified()).ok())
+                .collect()
+        };
+        let before = stamps();
         std::thread::sleep(self.options.timing.quiet);
-        pipeline::read_inputs(d).map_or(true, |files| fingerprint(&files) != parsed)
+        stamps() != before
+            || pipeline::read_inputs(d).map_or(true, |files| fingerprint(&files) != parsed)
     }
 
     /// Renders a dataset's stored layout again (a render-only config change).
