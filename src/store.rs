@@ -41,7 +41,10 @@ pub fn read_state(path: &Path) -> Option<String> {
 /// these bytes (so unchanged pictures keep their timestamps and watchers of the
 /// output folder are not woken). Returns whether it wrote.
 pub fn write_if_changed(path: &Path, bytes: &[u8]) -> std::io::Result<bool> {
-    if std::fs::read(path).is_ok_and(|old| old == bytes) {
+    // The size first: most changed files change size, and reading a large
+    // PNG back only to find that out costs milliseconds per rebuild.
+    let same_size = std::fs::metadata(path).is_ok_and(|m| m.len() == bytes.len() as u64);
+    if same_size && std::fs::read(path).is_ok_and(|old| old == bytes) {
         return Ok(false);
     }
     write_atomic(path, bytes)?;

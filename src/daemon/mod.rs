@@ -64,6 +64,9 @@ struct DatasetState {
     /// The last good layout: the warm start of the next one and the source of
     /// render-only rebuilds.
     computed: Option<Computed>,
+    /// That layout as the warm start of the next rebuild, made once the
+    /// outputs are written, off the path between an edit and its pictures.
+    previous: Option<Arc<Previous>>,
     /// Fingerprint of the input bytes last built (or last failed on), so an
     /// event that changed nothing (a touch, a save without edits) costs nothing.
     fingerprint: Option<u64>,
@@ -237,8 +240,8 @@ impl Daemon<'_> {
         state.fingerprint = Some(fingerprint);
         // Warm from the last good layout in memory; at start, from the one
         // stored beside the outputs (unless --cold).
-        let previous = match &state.computed {
-            Some(computed) => Some(Arc::new(Previous::from_computed(computed))),
+        let previous = match &state.previous {
+            Some(previous) => Some(Arc::clone(previous)),
             None if reason == Reason::Start && self.options.cold => None,
             None => pipeline::stored_layout(&d),
         };
@@ -355,12 +358,6 @@ impl Daemon<'_> {
                 )),
             }
         }
-        if let Some(d) = self.dataset(name) {
-            if let Err(e) = pipeline::store_layout(d, &computed) {
-                tracing::warn!(dataset = name, error = %e, "cannot store the layout for warm starts");
-            }
-        }
-        self.states.entry(name.to_string()).or_default().computed = Some(computed);
         (self.report)(Status::Built {
             dataset: name.to_string(),
             reason,
@@ -369,6 +366,16 @@ impl Daemon<'_> {
             written,
             unchanged,
         });
+        // The pictures are out; what only the next rebuild or a restart needs
+        // comes after the status line.
+        if let Some(d) = self.dataset(name) {
+            if let Err(e) = pipeline::store_layout(d, &computed) {
+                tracing::warn!(dataset = name, error = %e, "cannot store the layout for warm starts");
+            }
+        }
+        let state = self.states.entry(name.to_string()).or_default();
+        state.previous = Some(Arc::new(Previous::from_computed(&computed)));
+        state.computed = Some(computed);
     }
 }
 
