@@ -79,12 +79,18 @@ struct Daemon<'a> {
     options: Options,
     states: BTreeMap<String, DatasetState>,
     report: &'a mut dyn FnMut(Status),
-    /// The current batch was cut by the cap while files were still changing
-    /// (see [`Batch::Paths`]): a read that fails to parse is then most likely
-    /// a file caught mid-write, so it is retried with the next batch instead
-    /// of being reported.
-    busy: bool,
+    /// Parse failures not reported yet, by dataset: a file read while a
+    /// writer is still at it (editors and scripts writing in place truncate
+    /// first) fails to parse, and the write's own events bring a rebuild that
+    /// succeeds. A failure is reported only when the inputs then stay quiet
+    /// for [`SETTLE`]; a good rebuild forgets it.
+    pending: BTreeMap<String, Status>,
 }
+
+/// How long the inputs must stay unchanged after a parse failure before it
+/// is reported (see `Daemon::pending`): long enough for a writer descheduled
+/// mid-write on a busy machine, short for a person fixing a typo.
+const SETTLE: std::time::Duration = std::time::Duration::from_millis(1000);
 
 /// A channel for [`run`]: give the sender to whatever should stop the daemon
 /// (a signal handler sends [`Message::Stop`]).
@@ -115,7 +121,7 @@ pub fn run(
         options,
         states: BTreeMap::new(),
         report,
-        busy: false,
+        pending: BTreeMap::new(),
     };
     daemon.sync_watches(&mut watcher);
     (daemon.report)(Status::Watching {
@@ -134,11 +140,23 @@ pub fn run(
     }
     loop {
         let inputs = change::inputs_of(&daemon.config, &daemon.config_path);
-        let batch = watcher::next_batch(rx, daemon.options.timing, &|p: &Path| inputs.contains(p));
+        let idle = (!daemon.pending.is_empty()).then_some(SETTLE);
+        let batch = watcher::next_batch(
+            rx,
+            daemon.options.timing,
+            &|p: &Path| inputs.contains(p),
+            idle,
+        );
         let paths = match batch {
             Batch::Stop => break,
+            Batch::Idle => {
+                for (_, problem) in std::mem::take(&mut daemon.pending) {
+                    (daemon.report)(problem);
+                }
+                continue;
+            }
             Batch::Paths { paths, busy } => {
-                daemon.busy = busy;
+                tracing::debug!(busy, "batch closed");
                 paths
             }
         };
@@ -269,37 +287,15 @@ impl Daemon<'_> {
                 };
                 self.finish(name, reason, layout, started, computed, outputs);
             }
-            Err(e) if matches!(e, BuildError::Input(_)) && self.still_changing(&d, fingerprint) => {
-                tracing::debug!(dataset = name, error = %e, "input changing; retried with the next batch");
-                if let Some(state) = self.states.get_mut(name) {
-                    state.fingerprint = None;
-                }
+            Err(e) if matches!(e, BuildError::Input(_)) => {
+                tracing::debug!(dataset = name, error = %e, "parse failed; reported unless the input changes again");
+                self.pending.insert(
+                    name.to_string(),
+                    Status::problem(name, &e, "last good outputs kept"),
+                );
             }
             Err(e) => (self.report)(Status::problem(name, &e, "last good outputs kept")),
         }
-    }
-
-    /// Whether a dataset's inputs are still being written, so that a parse
-    /// failure is most likely a file caught half-written (an editor or a script
-    /// writing in place truncates first): the batch was cut by the cap while
-    /// events kept coming, or the bytes differ from the ones just parsed after
-    /// one more quiet window. The events of that write bring the next rebuild.
-    fn still_changing(&self, d: &DatasetConfig, parsed: u64) -> bool {
-        if self.busy {
-            return true;
-        }
-        // Modification times as well as bytes: a writer that truncates again
-        // during the wait can leave the same (empty) bytes behind.
-        let stamps = || -> Vec<Option<std::time::SystemTime>> {
-            d.files
-                .values()
-                .map(|p| std::fs::metadata(p).and_then(|m| m.modified()).ok())
-                .collect()
-        };
-        let before = stamps();
-        std::thread::sleep(self.options.timing.quiet);
-        stamps() != before
-            || pipeline::read_inputs(d).map_or(true, |files| fingerprint(&files) != parsed)
     }
 
     /// Renders a dataset's stored layout again (a render-only config change).
@@ -358,6 +354,7 @@ impl Daemon<'_> {
                 )),
             }
         }
+        self.pending.remove(name);
         (self.report)(Status::Built {
             dataset: name.to_string(),
             reason,

@@ -34,6 +34,8 @@ pub enum Batch {
         /// may be caught half-written, and another batch will follow.
         busy: bool,
     },
+    /// No relevant event came within the idle time asked for.
+    Idle,
     /// Stop was asked for (or every sender is gone).
     Stop,
 }
@@ -119,23 +121,37 @@ fn changes_content(kind: &EventKind) -> bool {
 }
 
 /// Waits for the next batch of events whose paths `relevant` accepts. Blocks
-/// until the first such event (or Stop), then collects until `timing.quiet`
-/// passes without another one or `timing.cap` after the first.
+/// until the first such event (or Stop; or [`Batch::Idle`] once `idle` has
+/// passed without one, when given), then collects until `timing.quiet` passes
+/// without another one or `timing.cap` after the first.
 pub fn next_batch(
     rx: &Receiver<Message>,
     timing: Timing,
     relevant: &dyn Fn(&Path) -> bool,
+    idle: Option<Duration>,
 ) -> Batch {
     let mut paths = BTreeSet::new();
     let mut first: Option<Instant> = None;
     let mut last = Instant::now();
+    let idle_at = idle.map(|d| last + d);
     loop {
-        let message = match first {
-            None => match rx.recv() {
+        let message = match (first, idle_at) {
+            (None, None) => match rx.recv() {
                 Ok(m) => m,
                 Err(_) => return Batch::Stop,
             },
-            Some(start) => {
+            (None, Some(at)) => {
+                let now = Instant::now();
+                if now >= at {
+                    return Batch::Idle;
+                }
+                match rx.recv_timeout(at - now) {
+                    Ok(m) => m,
+                    Err(RecvTimeoutError::Timeout) => return Batch::Idle,
+                    Err(RecvTimeoutError::Disconnected) => return Batch::Stop,
+                }
+            }
+            (Some(start), _) => {
                 let now = Instant::now();
                 let quiet_at = last + timing.quiet;
                 let cap_at = start + timing.cap;
@@ -212,14 +228,14 @@ mod tests {
         let relevant = |p: &Path| p == Path::new("/d/a.csv");
         // Closed by the quiet window: exactly the one relevant content change.
         assert_eq!(
-            next_batch(&rx, short(), &relevant),
+            next_batch(&rx, short(), &relevant, None),
             Batch::Paths {
                 paths: [PathBuf::from("/d/a.csv")].into_iter().collect(),
                 busy: false
             }
         );
         tx.send(Message::Stop).expect("send");
-        assert_eq!(next_batch(&rx, short(), &relevant), Batch::Stop);
+        assert_eq!(next_batch(&rx, short(), &relevant, None), Batch::Stop);
     }
 
     #[test]
@@ -241,7 +257,7 @@ mod tests {
             }
         });
         let start = Instant::now();
-        let batch = next_batch(&rx, short(), &|_| true);
+        let batch = next_batch(&rx, short(), &|_| true, None);
         let took = start.elapsed();
         assert!(matches!(batch, Batch::Paths { ref paths, busy: true } if paths.len() == 1));
         // Closed by the 200 ms cap, well before the stream ends (2 s); the
@@ -252,10 +268,23 @@ mod tests {
     }
 
     #[test]
+    fn idle_when_nothing_relevant_comes() {
+        let (tx, rx) = channel();
+        tx.send(event(EventKind::Access(AccessKind::Any), "/d/a.csv"))
+            .expect("send");
+        let idle = Some(Duration::from_millis(50));
+        assert_eq!(next_batch(&rx, short(), &|_| true, idle), Batch::Idle);
+        drop(tx);
+    }
+
+    #[test]
     fn stop_wins_while_waiting() {
         let (tx, rx) = channel();
         tx.send(Message::Stop).expect("send");
-        assert_eq!(next_batch(&rx, Timing::default(), &|_| true), Batch::Stop);
+        assert_eq!(
+            next_batch(&rx, Timing::default(), &|_| true, None),
+            Batch::Stop
+        );
         drop(tx);
     }
 }
