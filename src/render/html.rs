@@ -126,8 +126,13 @@ const SCRIPT: &str = r##"(function () {
   });
   map.addEventListener("mouseleave", clear);
   map.addEventListener("mousemove", function (e) {
-    tip.style.left = (e.clientX + 14) + "px";
-    tip.style.top = (e.clientY + 14) + "px";
+    // Beside the pointer, flipped to its other side near the window's edge
+    // so the tooltip never runs out of view.
+    var x = e.clientX + 14, y = e.clientY + 14;
+    if (x + tip.offsetWidth > window.innerWidth) { x = Math.max(0, e.clientX - 14 - tip.offsetWidth); }
+    if (y + tip.offsetHeight > window.innerHeight) { y = Math.max(0, e.clientY - 14 - tip.offsetHeight); }
+    tip.style.left = x + "px";
+    tip.style.top = y + "px";
   });
 
   // The optimisation slider: frame k drawn over the map, the last position

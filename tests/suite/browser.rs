@@ -201,6 +201,7 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
 
     browser.open(&countries.url);
     hover_and_leave(&mut browser, &countries);
+    tooltip_stays_in_view(&mut browser);
     browser.open(&movies.url);
     hover_and_leave(&mut browser, &movies);
     toggle_unrealized_links(&mut browser);
@@ -269,9 +270,37 @@ const HOVER_STATE: &str = r##"(function () {
     dimmed: ids("path.np-dim"), partners: ids("path.np-partner"),
     dashed: ids("path.np-partner-unrealized"), style: style,
     tip: { hidden: tip.hidden, display: getComputedStyle(tip).display,
-           text: tip.textContent, width: box.width, height: box.height }
+           text: tip.textContent, width: box.width, height: box.height,
+           inside: box.left >= 0 && box.top >= 0 &&
+                   box.right <= window.innerWidth && box.bottom <= window.innerHeight }
   };
 })()"##;
+
+/// Hovers a leaf at the map's right edge, where a tooltip to the right of the
+/// pointer would run out of the window, and checks it is flipped into view.
+fn tooltip_stays_in_view(browser: &mut Browser) {
+    const EDGE: &str = r##"(function () {
+      var r = document.querySelector("#np-map svg").getBoundingClientRect();
+      return [Math.min(r.right, window.innerWidth) - 6, r.top + 0.3 * r.height];
+    })()"##;
+    let at = browser.eval(EDGE);
+    let (x, y) = (at[0].as_f64().expect("x"), at[1].as_f64().expect("y"));
+    browser.mouse_move(x, y);
+    browser.wait_for(
+        "a tooltip at the right edge inside the window",
+        HOVER_STATE,
+        |state| {
+            let tip = &state["tip"];
+            if tip["hidden"] == false && tip["width"].as_f64() > Some(0.0) && tip["inside"] == true
+            {
+                Ok(())
+            } else {
+                Err(format!("tooltip {tip}"))
+            }
+        },
+    );
+    browser.mouse_move(2.0, 2.0);
+}
 
 /// Moves the mouse onto the page's target cell and checks the highlight and
 /// tooltip, then off the map and checks that everything clears.
@@ -371,7 +400,9 @@ fn check_hovered(state: &Value, page: &Page) -> Result<(), String> {
     let visible = tip["hidden"] == false
         && tip["display"] != "none"
         && tip["width"].as_f64() > Some(0.0)
-        && tip["height"].as_f64() > Some(0.0);
+        && tip["height"].as_f64() > Some(0.0)
+        // Within the window, wherever the pointer is.
+        && tip["inside"] == true;
     let weight = format!("weight {}", en_us(page.weight));
     if !visible || !in_order(text, &page.path) || !text.contains(&weight) {
         return Err(format!(
