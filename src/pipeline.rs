@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use crate::config::{Config, DatasetConfig, OutputKind};
+use crate::config::{Config, DatasetConfig, OutputConfig, OutputKind};
 use crate::layout::{compute, Computed, LayoutError, Previous};
 use crate::neighborhood::adjacency::level_adjacency;
 use crate::render::html::{html, HtmlData, HtmlFrame, HtmlNode};
@@ -268,52 +268,41 @@ pub fn render_all(
     d: &DatasetConfig,
     computed: &Computed,
 ) -> Result<Vec<(PathBuf, Vec<u8>)>, BuildError> {
-    let style = config.style(d);
-    // One picture for every SVG and PNG output (it is the same text).
+    render_outputs(computed, &config.style(d), &d.outputs)
+}
+
+/// The bytes of each of `outputs` for a computed layout, in order. The
+/// picture is drawn once for every SVG and PNG output (it is the same text).
+pub fn render_outputs(
+    computed: &Computed,
+    style: &Style,
+    outputs: &[OutputConfig],
+) -> Result<Vec<(PathBuf, Vec<u8>)>, BuildError> {
     let mut svg_text: Option<String> = None;
-    d.outputs
+    outputs
         .iter()
         .map(|out| {
-            let kind = out.kind.unwrap_or(OutputKind::Svg);
-            let bytes = match kind {
-                OutputKind::Svg | OutputKind::Png => {
-                    let text = svg_text.get_or_insert_with(|| picture(computed, &style));
-                    if kind == OutputKind::Svg {
-                        text.clone().into_bytes()
-                    } else {
-                        png(text, out.scale).map_err(|source| BuildError::Png {
-                            path: out.path.clone(),
-                            source,
-                        })?
-                    }
+            let bytes = match out.kind.unwrap_or(OutputKind::Svg) {
+                OutputKind::Svg => svg_text
+                    .get_or_insert_with(|| picture(computed, style))
+                    .clone()
+                    .into_bytes(),
+                OutputKind::Png => {
+                    let text = svg_text.get_or_insert_with(|| picture(computed, style));
+                    png(text, out.scale).map_err(|source| BuildError::Png {
+                        path: out.path.clone(),
+                        source,
+                    })?
                 }
-                _ => render(computed, &style, kind, out.scale, &out.path)?,
+                OutputKind::Json => {
+                    layout_json(&computed.dataset, &computed.layout, &json_extras(computed))
+                        .into_bytes()
+                }
+                OutputKind::Html => html_page(computed, style).into_bytes(),
             };
             Ok((out.path.clone(), bytes))
         })
         .collect()
-}
-
-/// One output's bytes for a computed layout (`path` only names it in errors).
-pub fn render(
-    computed: &Computed,
-    style: &Style,
-    kind: OutputKind,
-    scale: f64,
-    path: &std::path::Path,
-) -> Result<Vec<u8>, BuildError> {
-    let (dataset, layout) = (&computed.dataset, &computed.layout);
-    Ok(match kind {
-        OutputKind::Json => layout_json(dataset, layout, &json_extras(computed)).into_bytes(),
-        OutputKind::Svg => picture(computed, style).into_bytes(),
-        OutputKind::Png => {
-            png(&picture(computed, style), scale).map_err(|source| BuildError::Png {
-                path: path.to_path_buf(),
-                source,
-            })?
-        }
-        OutputKind::Html => html_page(computed, style).into_bytes(),
-    })
 }
 
 /// The interactive page: the picture (its unrealised links drawn, for the

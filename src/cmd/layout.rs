@@ -6,7 +6,7 @@ use anyhow::Context;
 use clap::Args;
 
 use super::{LayoutOptions, UsageError};
-use nptreemap::config::kind_of;
+use nptreemap::config::{kind_of, OutputConfig};
 use nptreemap::layout::Start;
 use nptreemap::render::Style;
 use nptreemap::{pipeline, store, workspace};
@@ -74,18 +74,18 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
         legend: !args.no_legend,
         ..Style::default()
     };
-    // Render everything first: a failure leaves every existing output untouched.
-    let rendered = args
+    let outputs: Vec<OutputConfig> = args
         .out
         .iter()
         .zip(&kinds)
-        .map(|(path, kind)| {
-            Ok((
-                path.clone(),
-                pipeline::render(&computed, &style, *kind, args.scale, path)?,
-            ))
+        .map(|(path, kind)| OutputConfig {
+            path: path.clone(),
+            kind: Some(*kind),
+            scale: args.scale,
         })
-        .collect::<Result<Vec<(PathBuf, Vec<u8>)>, pipeline::BuildError>>()?;
+        .collect();
+    // Render everything first: a failure leaves every existing output untouched.
+    let rendered = pipeline::render_outputs(&computed, &style, &outputs)?;
     for (path, bytes) in &rendered {
         store::write_atomic(path, bytes)
             .with_context(|| format!("{}: cannot write", path.display()))?;

@@ -155,10 +155,7 @@ pub fn run(
                 }
                 continue;
             }
-            Batch::Paths { paths, busy } => {
-                tracing::debug!(busy, "batch closed");
-                paths
-            }
+            Batch::Paths(paths) => paths,
         };
         tracing::debug!(?paths, "batch");
         let mut work = ChangeSet::default();

@@ -27,13 +27,7 @@ pub enum Message {
 #[derive(Debug, PartialEq, Eq)]
 pub enum Batch {
     /// Paths touched by relevant events, each once, sorted.
-    Paths {
-        /// The paths.
-        paths: BTreeSet<PathBuf>,
-        /// The batch was closed by the cap while events kept coming: a file
-        /// may be caught half-written, and another batch will follow.
-        busy: bool,
-    },
+    Paths(BTreeSet<PathBuf>),
     /// No relevant event came within the idle time asked for.
     Idle,
     /// Stop was asked for (or every sender is gone).
@@ -153,16 +147,13 @@ pub fn next_batch(
             }
             (Some(start), _) => {
                 let now = Instant::now();
-                let quiet_at = last + timing.quiet;
-                let cap_at = start + timing.cap;
-                let busy = cap_at < quiet_at;
-                let deadline = quiet_at.min(cap_at);
+                let deadline = (last + timing.quiet).min(start + timing.cap);
                 if now >= deadline {
-                    return Batch::Paths { paths, busy };
+                    return Batch::Paths(paths);
                 }
                 match rx.recv_timeout(deadline - now) {
                     Ok(m) => m,
-                    Err(RecvTimeoutError::Timeout) => return Batch::Paths { paths, busy },
+                    Err(RecvTimeoutError::Timeout) => return Batch::Paths(paths),
                     Err(RecvTimeoutError::Disconnected) => return Batch::Stop,
                 }
             }
@@ -229,10 +220,7 @@ mod tests {
         // Closed by the quiet window: exactly the one relevant content change.
         assert_eq!(
             next_batch(&rx, short(), &relevant, None),
-            Batch::Paths {
-                paths: [PathBuf::from("/d/a.csv")].into_iter().collect(),
-                busy: false
-            }
+            Batch::Paths([PathBuf::from("/d/a.csv")].into_iter().collect())
         );
         tx.send(Message::Stop).expect("send");
         assert_eq!(next_batch(&rx, short(), &relevant, None), Batch::Stop);
@@ -259,7 +247,7 @@ mod tests {
         let start = Instant::now();
         let batch = next_batch(&rx, short(), &|_| true, None);
         let took = start.elapsed();
-        assert!(matches!(batch, Batch::Paths { ref paths, busy: true } if paths.len() == 1));
+        assert!(matches!(batch, Batch::Paths(ref p) if p.len() == 1));
         // Closed by the 200 ms cap, well before the stream ends (2 s); the
         // bound is loose because this runs beside other tests.
         assert!(took < Duration::from_millis(1500), "{took:?}");

@@ -4,9 +4,9 @@
 //! dashed red links between the cells plus an "unlinked" count on the cell
 //! (§8.4). Pure: a finished layout and its constraints in, SVG text out. The
 //! tabs go under the picture's labels, the rest over them
-//! ([`with_overlay`](crate::render::overlay::with_overlay)).
+//! ([`picture`](crate::render::picture::picture) places the two layers).
 
-use super::svg::{cell_colors, escape, num, LABELS_GROUP};
+use super::svg::{cell_colors, escape, num};
 use crate::geom::Point;
 use crate::layout::Layout;
 use crate::neighborhood::adjacency::{layout_diagonal, shared_segments, PERPENDICULAR_TOL};
@@ -96,7 +96,7 @@ pub struct Overlay {
     pub marks: String,
 }
 
-/// The overlay's SVG elements (see [`with_overlay`] for where they go).
+/// The overlay's SVG elements in their two layers (see [`Overlay`]).
 pub fn overlay(
     dataset: &Dataset,
     layout: &Layout,
@@ -227,23 +227,6 @@ pub fn overlay(
     Overlay { tabs, marks: out }
 }
 
-/// The treemap SVG from [`super::svg()`] with the overlay added: the tabs just
-/// before its label group (or, without labels, at the end), the marks just
-/// before `</svg>`.
-pub fn with_overlay(svg: &str, overlay: &Overlay) -> String {
-    let Some(end) = svg.rfind("</svg>") else {
-        return svg.to_string();
-    };
-    let labels = svg[..end].find(LABELS_GROUP).unwrap_or(end);
-    let mut out = String::with_capacity(svg.len() + overlay.tabs.len() + overlay.marks.len());
-    out.push_str(&svg[..labels]);
-    out.push_str(&overlay.tabs);
-    out.push_str(&svg[labels..end]);
-    out.push_str(&overlay.marks);
-    out.push_str(&svg[end..]);
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -328,22 +311,5 @@ mod tests {
         assert_eq!(marks.matches("<line ").count(), 1);
         assert!(marks.contains("class=\"np-unrealized\"") && marks.contains("display=\"none\""));
         assert_eq!(marks.matches("unrealized link(s)").count(), 2);
-    }
-
-    #[test]
-    fn tabs_go_under_the_labels_and_marks_on_top() {
-        let layers = Overlay {
-            tabs: "<t/>".to_owned(),
-            marks: "<m/>".to_owned(),
-        };
-        let labelled = format!("<svg><c/>{LABELS_GROUP}><text/></g></svg>");
-        assert_eq!(
-            with_overlay(&labelled, &layers),
-            format!("<svg><c/><t/>{LABELS_GROUP}><text/></g><m/></svg>")
-        );
-        assert_eq!(
-            with_overlay("<svg>x</svg>", &layers),
-            "<svg>x<t/><m/></svg>"
-        );
     }
 }

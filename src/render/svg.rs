@@ -80,10 +80,9 @@ impl Default for SvgStyle {
     }
 }
 
-/// How the label group opens (its attributes follow): the place where
-/// [`super::overlay::with_overlay`] puts the tabs, under the labels. Class
-/// names are ours, so no label text can contain it (labels are escaped).
-pub(crate) const LABELS_GROUP: &str = "<g class=\"np-labels\"";
+/// How the label group opens (its attributes follow); its class lets tests
+/// and pages find the cell labels among the picture's other text.
+const LABELS_GROUP: &str = "<g class=\"np-labels\"";
 
 /// Draws `layout` (cells indexed like `dataset`'s nodes) as an SVG document.
 ///
