@@ -7,8 +7,8 @@
 
 use std::sync::Arc;
 
-use nptreemap::layout::{compute, Previous, Request};
-use nptreemap::stability::stability;
+use nptreemap::layout::{compute, Request};
+use nptreemap::measure::stability;
 use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec, SimilarityHint};
 
 /// 8 groups of 12 leaves with varied weights and feature vectors (so the
@@ -43,7 +43,7 @@ fn dataset(l5: f64) -> Result<Dataset, Box<dyn std::error::Error>> {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let before = compute(&dataset(6.0)?, &Request::default())?;
     // The previous layout is an explicit argument, never hidden state.
-    let previous = Arc::new(Previous::from_computed(&before));
+    let previous = Arc::new(before.previous());
 
     let edited = dataset(6.6)?; // l5 grows by 10%
     let warm = compute(
@@ -56,7 +56,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cold = compute(&edited, &Request::default())?;
 
     for (name, run) in [("warm", &warm), ("cold", &cold)] {
-        let s = stability(&previous, &run.dataset, &run.layout);
+        let s = stability(&previous, run);
         println!(
             "{name}: {:>5} ticks; unchanged leaves moved {:.4}% of the diagonal on average; \
              {} of {} realised constraints kept",

@@ -6,12 +6,13 @@
 
 use std::path::{Path, PathBuf};
 
-use serde::Deserialize;
+use serde::{Deserialize, Deserializer};
 
 use crate::layout::{Canvas, Method, NeighborParams, Outline, Params, Request};
 use crate::neighborhood::SimilarityKind;
 use crate::render::overlay::OverlayStyle;
 use crate::render::{Border, Rgb, Style, SvgStyle};
+use nptreemap_formats::FormatOptions;
 
 /// The built-in defaults, every key documented (`config/default.yaml`).
 pub const DEFAULT_YAML: &str = include_str!("../config/default.yaml");
@@ -36,11 +37,11 @@ pub struct LayoutConfig {
     /// Canvas height. Default: 1000.
     pub height: f64,
     /// Root outline: `rect`, `circle` or `ngon`. Default: `rect`.
-    pub outline: OutlineName,
+    pub outline: Outline,
     /// Seed for every random choice. Default: 1.
     pub seed: u64,
     /// Layout method; `None` = `neighbor` with a similarity, else `plain`.
-    pub method: Option<MethodName>,
+    pub method: Option<Method>,
     /// Per-diagram area-error target. Default: 0.01.
     pub convergence_ratio: f64,
     /// Iteration cap per diagram. Default: 200.
@@ -62,7 +63,7 @@ impl Default for LayoutConfig {
         Self {
             width: p.canvas.width,
             height: p.canvas.height,
-            outline: OutlineName::Rect,
+            outline: p.outline,
             seed: p.seed,
             method: None,
             convergence_ratio: p.convergence_ratio,
@@ -76,7 +77,7 @@ impl Default for LayoutConfig {
 }
 
 /// The `render` section: how SVG, PNG and HTML pictures look. Colours are
-/// `#rrggbb` or `#rgb`; checked when the config is read.
+/// `#rrggbb` or `#rgb`, parsed when the config is read.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RenderConfig {
@@ -85,13 +86,16 @@ pub struct RenderConfig {
     /// Legend band under the map (top-level groups, tab and marker keys). Default: true.
     pub legend: bool,
     /// Canvas background colour, or `none` for transparent. Default: `#ffffff`.
-    pub background: String,
+    #[serde(deserialize_with = "background")]
+    pub background: Option<Rgb>,
     /// Colour of the line around the root outline. Default: `#4d4d4d`.
-    pub border_color: String,
+    #[serde(deserialize_with = "border_color")]
+    pub border_color: Rgb,
     /// Width of that line; 0 draws none. Default: 0.
     pub border_width: f64,
     /// Colour of cell outlines and label halos. Default: `#ffffff`.
-    pub stroke: String,
+    #[serde(deserialize_with = "stroke")]
+    pub stroke: Rgb,
     /// Outline width between top-level groups; each level down halves it. Default: 3.
     pub stroke_width: f64,
     /// Leaf labels. Default: true.
@@ -115,12 +119,10 @@ impl Default for RenderConfig {
         Self {
             title: None,
             legend: style.legend,
-            background: cells
-                .background
-                .map_or("none".to_string(), |c| c.to_string()),
-            border_color: "#4d4d4d".to_string(),
+            background: cells.background,
+            border_color: DEFAULT_BORDER_COLOR,
             border_width: 0.0,
-            stroke: cells.stroke.to_string(),
+            stroke: cells.stroke,
             stroke_width: cells.stroke_width,
             labels: cells.labels,
             min_font_size: cells.min_font_size,
@@ -139,16 +141,6 @@ impl RenderConfig {
             field: format!("render.{key}"),
             message,
         };
-        let color = |key: &str, value: &str| {
-            Rgb::from_hex(value)
-                .map(|_| ())
-                .ok_or_else(|| bad(key, format!("{value:?} is not a colour (#rrggbb or #rgb)")))
-        };
-        if self.background != "none" {
-            color("background", &self.background)?;
-        }
-        color("border_color", &self.border_color)?;
-        color("stroke", &self.stroke)?;
         for (key, v) in [
             ("border_width", self.border_width),
             ("stroke_width", self.stroke_width),
@@ -178,48 +170,34 @@ impl RenderConfig {
     }
 }
 
-/// Root outline names in the config.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum OutlineName {
-    /// The whole canvas.
-    Rect,
-    /// The largest centred circle.
-    Circle,
-    /// The largest centred regular 32-gon.
-    Ngon,
+/// The colour of the border line when `render.border_width` is set.
+const DEFAULT_BORDER_COLOR: Rgb = Rgb::new(0x4d, 0x4d, 0x4d);
+
+/// A colour of the `render` section, the key named in the error (the YAML
+/// error's own path stops at the section).
+fn color_of<'de, D: Deserializer<'de>>(d: D, key: &str) -> Result<Rgb, D::Error> {
+    let text = String::deserialize(d)?;
+    text.parse()
+        .map_err(|e| serde::de::Error::custom(format_args!("{key}: {e}")))
 }
 
-/// Method names in the config.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum MethodName {
-    /// See [`Method::Plain`].
-    Plain,
-    /// See [`Method::RandomCvt`].
-    RandomCvt,
-    /// See [`Method::ProjScale`].
-    ProjScale,
-    /// See [`Method::MatchSwap`].
-    MatchSwap,
-    /// See [`Method::Neighbor`].
-    Neighbor,
+/// `render.background`: `none` (transparent) or a colour.
+fn background<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Rgb>, D::Error> {
+    let text = String::deserialize(d)?;
+    if text == "none" {
+        return Ok(None);
+    }
+    text.parse().map(Some).map_err(|e| {
+        serde::de::Error::custom(format_args!("background: {e}, or none for transparent"))
+    })
 }
 
-/// Similarity names in the config.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum SimilarityName {
-    /// Cosine of feature vectors.
-    Cosine,
-    /// Jaccard index of non-zero supports.
-    Jaccard,
-    /// Identical vectors.
-    Binary,
-    /// Listed neighbours (shared borders).
-    Neighbors,
-    /// Pearson correlation of rows.
-    Pearson,
+fn border_color<'de, D: Deserializer<'de>>(d: D) -> Result<Rgb, D::Error> {
+    color_of(d, "border_color")
+}
+
+fn stroke<'de, D: Deserializer<'de>>(d: D) -> Result<Rgb, D::Error> {
+    color_of(d, "stroke")
 }
 
 /// One dataset: where its files are, how to read them, where its pictures go.
@@ -235,46 +213,16 @@ pub struct DatasetConfig {
     pub files: std::collections::BTreeMap<String, PathBuf>,
     /// Field mapping: which columns hold the id, label, weight, groups, ….
     #[serde(default)]
-    pub fields: FieldsConfig,
+    pub fields: FormatOptions,
     /// Similarity between nodes; default: what the format declares.
     #[serde(default)]
-    pub similarity: Option<SimilarityName>,
+    pub similarity: Option<SimilarityKind>,
     /// Title above this dataset's pictures; default: `render.title`.
     #[serde(default)]
     pub title: Option<String>,
     /// What to write.
     #[serde(default)]
     pub outputs: Vec<OutputConfig>,
-}
-
-/// The `fields` mapping of a dataset (the format's column names).
-#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct FieldsConfig {
-    /// Column with the node id.
-    pub id: Option<String>,
-    /// Column with the label shown to people.
-    pub label: Option<String>,
-    /// Column (or hierarchy JSON field) with the weight.
-    pub weight: Option<String>,
-    /// Column with a `#rrggbb` colour.
-    pub color: Option<String>,
-    /// Column with the parent's id.
-    pub parent: Option<String>,
-    /// Column with a path such as `Asia/China`.
-    pub path: Option<String>,
-    /// Grouping columns, outermost first.
-    pub groups: Vec<String>,
-    /// Pair-list column with the link strength.
-    pub strength: Option<String>,
-    /// Genre table: the multi-valued genres column (`Drama|Crime`).
-    pub genres: Option<String>,
-    /// Genre table: the separator inside that column (default `|`).
-    pub separator: Option<char>,
-    /// Genre table: one-hot genre columns instead of a multi-valued one.
-    pub genre_columns: Vec<String>,
-    /// Time series: fill missing values from the previous date instead of failing.
-    pub fill_missing: bool,
 }
 
 /// One output file.
@@ -449,11 +397,7 @@ impl Config {
                 width: l.width,
                 height: l.height,
             },
-            outline: match l.outline {
-                OutlineName::Rect => Outline::Rectangle,
-                OutlineName::Circle => Outline::Circle,
-                OutlineName::Ngon => Outline::Regular(32),
-            },
+            outline: l.outline.clone(),
             seed: l.seed,
             convergence_ratio: l.convergence_ratio,
             max_iterations: l.max_iterations,
@@ -465,21 +409,18 @@ impl Config {
     /// The picture style for one dataset (its own title, else `render.title`).
     pub fn style(&self, dataset: &DatasetConfig) -> Style {
         let r = &self.render;
-        // Colours were checked in `from_str`; the fallbacks only serve a
-        // hand-built Config.
-        let color = |s: &str, fallback: Rgb| Rgb::from_hex(s).unwrap_or(fallback);
         let defaults = Style::default();
         Style {
             title: dataset.title.clone().or_else(|| r.title.clone()),
             legend: r.legend,
             tabs: r.tabs,
-            border: (r.border_width > 0.0).then(|| Border {
-                color: color(&r.border_color, Rgb::new(0x4d, 0x4d, 0x4d)),
+            border: (r.border_width > 0.0).then_some(Border {
+                color: r.border_color,
                 width: r.border_width,
             }),
             cells: SvgStyle {
-                background: Rgb::from_hex(&r.background),
-                stroke: color(&r.stroke, defaults.cells.stroke),
+                background: r.background,
+                stroke: r.stroke,
                 stroke_width: r.stroke_width,
                 labels: r.labels,
                 min_font_size: r.min_font_size,
@@ -497,20 +438,8 @@ impl Config {
     pub fn request(&self, dataset: &DatasetConfig) -> Request {
         Request {
             params: self.params(),
-            method: self.layout.method.map(|m| match m {
-                MethodName::Plain => Method::Plain,
-                MethodName::RandomCvt => Method::RandomCvt,
-                MethodName::ProjScale => Method::ProjScale,
-                MethodName::MatchSwap => Method::MatchSwap,
-                MethodName::Neighbor => Method::Neighbor,
-            }),
-            similarity: dataset.similarity.map(|s| match s {
-                SimilarityName::Cosine => SimilarityKind::Cosine,
-                SimilarityName::Jaccard => SimilarityKind::Jaccard,
-                SimilarityName::Binary => SimilarityKind::Binary,
-                SimilarityName::Neighbors => SimilarityKind::NeighborList,
-                SimilarityName::Pearson => SimilarityKind::Pearson,
-            }),
+            method: self.layout.method,
+            similarity: dataset.similarity,
             neighbor: NeighborParams {
                 prototype: self.layout.prototype,
                 frames: self.layout.frames,
@@ -518,6 +447,26 @@ impl Config {
             },
             // The caller that keeps previous layouts (the daemon) adds its own.
             previous: None,
+        }
+    }
+}
+
+impl DatasetConfig {
+    /// A dataset read from one hierarchy JSON file, as `nptreemap layout FILE`
+    /// reads it (`weight`: the leaf field holding the weight, else the file's
+    /// own flags), with no outputs. Named after the file.
+    pub fn hierarchy_file(path: &Path, weight: Option<String>) -> DatasetConfig {
+        DatasetConfig {
+            name: path.display().to_string(),
+            format: "hierarchy-json".to_string(),
+            files: [("hierarchy".to_string(), path.to_path_buf())].into(),
+            fields: FormatOptions {
+                weight,
+                ..FormatOptions::default()
+            },
+            similarity: None,
+            title: None,
+            outputs: Vec::new(),
         }
     }
 }
@@ -610,13 +559,51 @@ mod tests {
     #[test]
     fn bad_render_values_name_the_key() {
         for (text, key) in [
-            ("render: {background: blue}\n", "render.background"),
-            ("render: {stroke: \"#12\"}\n", "render.stroke"),
+            (
+                "render:\n  background: blue\n",
+                "line 2, column 3: render: background: ",
+            ),
+            (
+                "render:\n  stroke: \"#12\"\n",
+                "line 2, column 3: render: stroke: ",
+            ),
             ("render: {border_width: -1}\n", "render.border_width"),
             ("render: {min_font_size: 30}\n", "render.min_font_size"),
         ] {
             let err = parse(text).expect_err(text).to_string();
             assert!(err.starts_with(key), "{text}: {err}");
+        }
+    }
+
+    #[test]
+    fn core_names_and_field_options_parse_into_the_core_types() {
+        let c = parse(
+            "layout: {outline: ngon, method: match-swap}\n\
+             datasets:\n  - name: a\n    format: x\n    files: {}\n    similarity: neighbors\n\
+             \x20   fields: {id: iso, delimiter: \";\", groups: [continent]}\n",
+        )
+        .expect("valid");
+        assert_eq!(c.params().outline, Outline::Regular(32));
+        assert_eq!(c.layout.method, Some(Method::MatchSwap));
+        let d = &c.datasets[0];
+        assert_eq!(d.similarity, Some(SimilarityKind::NeighborList));
+        assert_eq!(d.fields.delimiter, Some(b';'));
+        assert_eq!(d.fields.id.as_deref(), Some("iso"));
+        assert_eq!(d.fields.groups, ["continent"]);
+        for (text, wanted) in [
+            ("layout: {outline: square}\n", "unknown outline \"square\""),
+            ("layout: {method: best}\n", "unknown variant `best`"),
+            (
+                "datasets:\n  - {name: a, format: x, files: {}, fields: {delimiter: \";;\"}}\n",
+                "delimiter \";;\": expected a single one-byte character",
+            ),
+            (
+                "datasets:\n  - {name: a, format: x, files: {}, fields: {weigth: w}}\n",
+                "unknown field `weigth`",
+            ),
+        ] {
+            let err = parse(text).expect_err(text).to_string();
+            assert!(err.contains(wanted), "{text}: {err}");
         }
     }
 

@@ -10,28 +10,31 @@
 //! 5. **Render** ([`render`]): a finished [`Layout`] becomes layout JSON, SVG,
 //!    PNG or an interactive HTML page.
 //!
-//! Steps 2 to 5 are pure: no files, no clock, no printing. Around them:
-//! [`config`] (the YAML file), [`workspace`] (reading inputs), [`pipeline`]
-//! (one dataset from files to output bytes), [`store`] (atomic writes) and
-//! [`daemon`] (`nptreemap watch`: rebuild on change, warm-started).
+//! Steps 2 to 5 are pure: no files, no clock, no printing, and so are
+//! [`neighborhood`] (similarity, constraints, projections, matching),
+//! [`measure`] (area error, shape, the paper's Table 2, stability) and
+//! [`layout_json`] (the `nptreemap-layout/1` format, written and read back).
+//! Around them: [`config`] (the YAML file), [`workspace`] (the one reader of
+//! files), [`store`] (the one writer), [`pipeline`] (the stages every command
+//! goes through: read → parse → lay out → render → write) and [`daemon`]
+//! (`nptreemap watch`: rebuild on change, warm-started).
 //!
 //! A layout can start warm from the previous one ([`layout::Previous`], from a
-//! finished computation or read back from layout JSON by [`previous`]), so a
-//! small change of the data is a small change of the picture; [`stability`]
-//! measures how small.
+//! finished computation or read back from layout JSON by [`layout_json::read`]),
+//! so a small change of the data is a small change of the picture;
+//! [`measure::stability`] measures how small.
 
 pub mod config;
 pub mod daemon;
 pub mod geom;
 pub mod layout;
-pub mod metrics;
+pub mod layout_json;
+pub mod measure;
 pub mod neighborhood;
 pub mod pipeline;
 pub mod power;
-pub mod previous;
 pub mod render;
 pub mod rng;
-pub mod stability;
 pub mod store;
 pub mod workspace;
 

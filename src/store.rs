@@ -1,6 +1,7 @@
-//! Output writing: every output goes to a temporary file in its own directory and
-//! is renamed into place, so readers never see a partly written file and a failed
-//! run leaves existing outputs untouched.
+//! The one writer of files: every output (and every stored layout) goes to a
+//! temporary file in its own directory and is renamed into place, so readers
+//! never see a partly written file and a failed run leaves existing outputs
+//! untouched. Reading is [`crate::workspace`]'s.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -28,13 +29,6 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         let _ = std::fs::remove_file(&tmp);
     }
     result
-}
-
-/// The text of a stored layout (see `pipeline::state_path`), or `None` when
-/// there is none or it cannot be read: a missing stored layout only means a
-/// cold start.
-pub fn read_state(path: &Path) -> Option<String> {
-    std::fs::read_to_string(path).ok()
 }
 
 /// Writes `bytes` to `path` atomically unless the file already holds exactly

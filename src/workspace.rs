@@ -1,13 +1,15 @@
-//! The one reader of input files: turns a path into a validated [`Dataset`],
-//! attaching the path to every parse error so messages read `file:line:column`.
+//! The one reader of files: input data, previous layouts and the layouts
+//! stored beside the outputs. Attaches the path to every error, so messages
+//! read `file: line L, column C: problem`. Parsing is the formats' (see
+//! [`crate::pipeline::parse_inputs`]); writing is [`crate::store`]'s.
 
 use std::path::{Path, PathBuf};
 
-use nptreemap_formats::{parse_hierarchy_json, Dataset, FormatError, HierarchyJsonOptions};
+use nptreemap_formats::FormatError;
 
-/// Reading or parsing an input file failed.
+/// An input file could not be read, or its content is not valid.
 #[derive(Debug, thiserror::Error)]
-pub enum InputError {
+pub enum FileError {
     /// The file could not be read.
     #[error("{path}: cannot read: {source}")]
     Read {
@@ -24,34 +26,35 @@ pub enum InputError {
         /// What is wrong and where (boxed: it is large and errors are rare).
         source: Box<FormatError>,
     },
-}
-
-/// How to read a hierarchy file.
-#[derive(Clone, Debug, Default)]
-pub struct ReadOptions {
-    /// Leaf field holding the weight; `None` uses the file's own flags.
-    pub weight_field: Option<String>,
+    /// The file is not UTF-8 text where text is expected.
+    #[error("{path}: not UTF-8 text: {source}")]
+    Text {
+        /// The file.
+        path: PathBuf,
+        /// Where the first bad byte is.
+        source: std::string::FromUtf8Error,
+    },
 }
 
 /// Reads a file's bytes, naming it in the error.
-pub fn read_bytes(path: &Path) -> Result<Vec<u8>, InputError> {
-    std::fs::read(path).map_err(|source| InputError::Read {
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FileError> {
+    std::fs::read(path).map_err(|source| FileError::Read {
         path: path.to_path_buf(),
         source,
     })
 }
 
-/// Reads and validates a hierarchy JSON file.
-pub fn read_dataset(path: &Path, options: &ReadOptions) -> Result<Dataset, InputError> {
-    let bytes = std::fs::read(path).map_err(|source| InputError::Read {
+/// Reads a UTF-8 text file, naming it in the error.
+pub fn read_text(path: &Path) -> Result<String, FileError> {
+    String::from_utf8(read_bytes(path)?).map_err(|source| FileError::Text {
         path: path.to_path_buf(),
         source,
-    })?;
-    let opts = HierarchyJsonOptions {
-        weight_field: options.weight_field.clone(),
-    };
-    parse_hierarchy_json(&bytes, &opts).map_err(|source| InputError::Parse {
-        path: path.to_path_buf(),
-        source: Box::new(source),
     })
+}
+
+/// The text of a stored layout (see [`crate::pipeline::state_path`]), or
+/// `None` when there is none or it cannot be read: a missing stored layout
+/// only means a cold start.
+pub fn read_state(path: &Path) -> Option<String> {
+    std::fs::read_to_string(path).ok()
 }

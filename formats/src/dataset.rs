@@ -5,6 +5,8 @@
 
 use std::collections::HashMap;
 
+use crate::color::Rgb;
+
 /// A validated hierarchy. Only [`DatasetBuilder::build`] makes one, so code that
 /// receives a `Dataset` can trust its invariants:
 ///
@@ -41,8 +43,8 @@ pub struct Node {
     pub weight: Option<f64>,
     /// Own weight (0 when `None`) plus the children's values, as d3's `hierarchy.sum`.
     pub value: f64,
-    /// Colour as given, checked to be `#rgb` or `#rrggbb`.
-    pub color: Option<String>,
+    /// Colour, parsed by the reader from `#rgb` or `#rrggbb`.
+    pub color: Option<Rgb>,
     /// Similarity feature vector; every value is finite.
     pub features: Option<Vec<f64>>,
     /// Related nodes (for example countries sharing a border): sorted, without
@@ -131,14 +133,6 @@ pub enum ModelError {
         /// The id it names.
         target: String,
     },
-    /// A colour is not `#rgb` or `#rrggbb`.
-    #[error("node {id:?}: color {value:?} is not a hex color like #rgb or #rrggbb")]
-    InvalidColor {
-        /// The node.
-        id: String,
-        /// The colour as given.
-        value: String,
-    },
 }
 
 /// Words for what is wrong with a weight that failed [`is_valid_weight`].
@@ -161,8 +155,7 @@ impl ModelError {
             | ModelError::Cycle { id }
             | ModelError::InvalidWeight { id, .. }
             | ModelError::InvalidFeature { id, .. }
-            | ModelError::UnknownRelation { id, .. }
-            | ModelError::InvalidColor { id, .. } => Some(id),
+            | ModelError::UnknownRelation { id, .. } => Some(id),
             ModelError::MultipleRoots { second, .. } => Some(second),
         }
     }
@@ -171,14 +164,6 @@ impl ModelError {
 /// True when `value` can be a node weight: finite and not negative.
 pub(crate) fn is_valid_weight(value: f64) -> bool {
     value.is_finite() && value >= 0.0
-}
-
-/// True for CSS hex colours `#rgb` and `#rrggbb` (either case).
-pub(crate) fn is_hex_color(value: &str) -> bool {
-    let Some(digits) = value.strip_prefix('#') else {
-        return false;
-    };
-    matches!(digits.len(), 3 | 6) && digits.bytes().all(|b| b.is_ascii_hexdigit())
 }
 
 impl Dataset {
@@ -263,8 +248,8 @@ pub struct NodeSpec {
     pub parent: Option<String>,
     /// The node's own weight.
     pub weight: Option<f64>,
-    /// Hex colour, `#rgb` or `#rrggbb`.
-    pub color: Option<String>,
+    /// Colour.
+    pub color: Option<Rgb>,
     /// Similarity feature vector.
     pub features: Option<Vec<f64>>,
     /// Ids of related nodes; a relation to the node itself is dropped.
@@ -299,8 +284,8 @@ impl NodeSpec {
     }
 
     /// Sets the colour.
-    pub fn color(mut self, color: impl Into<String>) -> Self {
-        self.color = Some(color.into());
+    pub fn color(mut self, color: Rgb) -> Self {
+        self.color = Some(color);
         self
     }
 
@@ -538,14 +523,6 @@ fn check_values(spec: &NodeSpec) -> Result<(), ModelError> {
             });
         }
     }
-    if let Some(color) = &spec.color {
-        if !is_hex_color(color) {
-            return Err(ModelError::InvalidColor {
-                id: spec.id.clone(),
-                value: color.clone(),
-            });
-        }
-    }
     Ok(())
 }
 
@@ -650,11 +627,13 @@ mod tests {
                 .relation("y")
                 .relation("z")
                 .relation("x"),
-            NodeSpec::new("y").parent("r").color("#AbC"),
+            NodeSpec::new("y")
+                .parent("r")
+                .color(Rgb::new(0xaa, 0xbb, 0xcc)),
             NodeSpec::new("z")
                 .parent("r")
                 .features(vec![1.0, 0.5])
-                .color("#00ff7f"),
+                .color(Rgb::new(0x00, 0xff, 0x7f)),
         ])
         .expect("valid");
         let x = dataset.node(1);
@@ -662,7 +641,7 @@ mod tests {
         assert_eq!(dataset.node(2).label, "y");
         // Sorted, deduplicated, self dropped.
         assert_eq!(x.relations, vec![2, 3]);
-        assert_eq!(dataset.node(2).color.as_deref(), Some("#AbC"));
+        assert_eq!(dataset.node(2).color, Some(Rgb::new(0xaa, 0xbb, 0xcc)));
         assert_eq!(dataset.node(3).features, Some(vec![1.0, 0.5]));
         assert!(dataset.nodes().iter().all(|n| !n.is_virtual));
         assert_eq!(dataset.similarity_hint(), None);
@@ -818,25 +797,6 @@ mod tests {
         assert_eq!(
             error.to_string(),
             "node \"CN\": related node \"AF\" does not exist"
-        );
-    }
-
-    #[test]
-    fn invalid_colors() {
-        for bad in ["red", "#12", "#1234", "#ggg", "123456", "#1234567"] {
-            let error = build(vec![NodeSpec::new("r").color(bad)]).expect_err("bad colour");
-            assert_eq!(
-                error,
-                ModelError::InvalidColor {
-                    id: "r".into(),
-                    value: bad.into()
-                }
-            );
-        }
-        let error = build(vec![NodeSpec::new("r").color("red")]).expect_err("bad colour");
-        assert_eq!(
-            error.to_string(),
-            "node \"r\": color \"red\" is not a hex color like #rgb or #rrggbb"
         );
     }
 }

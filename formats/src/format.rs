@@ -64,8 +64,10 @@ impl<'a> Inputs<'a> {
 
 /// Column names and reading choices shared by the table formats. Every field is
 /// optional; each format documents its defaults. Formats ignore fields that do not
-/// apply to them.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// apply to them. Deserialises from a config's `fields:` mapping (unknown keys
+/// are errors), so the config and the formats share this one type.
+#[derive(Clone, Debug, Default, PartialEq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct FormatOptions {
     /// The id column (default `id`).
     pub id: Option<String>,
@@ -88,7 +90,8 @@ pub struct FormatOptions {
     /// Pair lists: the strength column (default `strength` when present).
     pub strength: Option<String>,
     /// Field delimiter; default `,`, or tab when the input's first line has tabs
-    /// and no commas.
+    /// and no commas. In a config: a one-byte string such as `";"` or `"\t"`.
+    #[serde(deserialize_with = "one_byte")]
     pub delimiter: Option<u8>,
     /// Label of the synthetic root of a table (default `root`).
     pub root_label: Option<String>,
@@ -139,6 +142,19 @@ impl InputError {
             role: role.into(),
             error,
         }
+    }
+}
+
+/// A delimiter given as a string of exactly one byte (`";"`, `"\t"`).
+fn one_byte<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u8>, D::Error> {
+    let text: Option<String> = serde::Deserialize::deserialize(d)?;
+    match text.as_deref().map(str::as_bytes) {
+        None => Ok(None),
+        Some([b]) => Ok(Some(*b)),
+        Some(_) => Err(serde::de::Error::custom(format!(
+            "delimiter {:?}: expected a single one-byte character such as \";\"",
+            text.unwrap_or_default()
+        ))),
     }
 }
 

@@ -43,8 +43,9 @@ use std::collections::HashSet;
 
 use serde_json::{Map, Value};
 
+use crate::color::Rgb;
 use crate::dataset::{
-    is_hex_color, is_valid_weight, Dataset, DatasetBuilder, ModelError, NodeSpec, SimilarityHint,
+    is_valid_weight, Dataset, DatasetBuilder, ModelError, NodeSpec, SimilarityHint,
 };
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
@@ -477,14 +478,16 @@ impl Walk<'_, '_> {
 
         let color = match object.get("color") {
             None | Some(Value::Null) => None,
-            Some(Value::String(color)) if is_hex_color(color) => Some(color.clone()),
-            Some(Value::String(color)) => {
-                return Err(error(
-                    "color",
-                    &field_at("color"),
-                    format!("{color:?} is not a hex color like #rgb or #rrggbb"),
-                ))
-            }
+            Some(Value::String(text)) => match Rgb::from_hex(text) {
+                Some(color) => Some(color),
+                None => {
+                    return Err(error(
+                        "color",
+                        &field_at("color"),
+                        format!("{text:?} is not a hex color like #rgb or #rrggbb"),
+                    ))
+                }
+            },
             Some(other) => {
                 return Err(error(
                     "color",

@@ -26,6 +26,8 @@
 
 /// Border lists: a node table plus a pair list.
 pub mod border_list;
+/// [`Rgb`]: colours parsed once from `#rgb` / `#rrggbb`.
+pub mod color;
 /// The model: [`Dataset`], [`Node`], and [`DatasetBuilder`] with its checks.
 pub mod dataset;
 /// Embedding matrices: a node table plus one vector per leaf.
@@ -46,6 +48,7 @@ pub mod table;
 pub mod time_series;
 
 pub use border_list::BorderList;
+pub use color::{ColorError, Rgb};
 pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, SimilarityHint};
 pub use embedding::EmbeddingMatrix;
 pub use error::FormatError;

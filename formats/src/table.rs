@@ -47,6 +47,7 @@
 
 use std::collections::HashMap;
 
+use crate::color::Rgb;
 use crate::dataset::{is_valid_weight, Dataset, DatasetBuilder, NodeSpec, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{FormatOptions, InputError, Inputs, Role};
@@ -569,8 +570,15 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
             None => 1.0,
         });
         if let Some(column) = color_column {
-            if !field(column).is_empty() {
-                spec.color = Some(field(column).to_owned());
+            let text = field(column);
+            if !text.is_empty() {
+                spec.color = Some(Rgb::from_hex(text).ok_or_else(|| FormatError::Field {
+                    line: Some(row.line),
+                    column: Some(column + 1),
+                    node: Some(id.clone()),
+                    field: table.header[column].clone(),
+                    message: format!("{text:?} is not a hex color like #rgb or #rrggbb"),
+                })?);
             }
         }
         tree.push(spec, Some(row.line), id_col, true)?;

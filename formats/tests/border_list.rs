@@ -36,7 +36,7 @@ fn parse_plain(nodes: &[u8], pairs: &[u8]) -> Result<Dataset, InputError> {
     )
 }
 
-fn neighbours(dataset: &Dataset, id: &str) -> Vec<String> {
+fn neighbors(dataset: &Dataset, id: &str) -> Vec<String> {
     let node = dataset.node(dataset.find(id).expect("id"));
     let mut ids: Vec<String> = node
         .relations
@@ -59,15 +59,15 @@ fn countries_and_borders() {
     let total: usize = dataset.nodes().iter().map(|n| n.relations.len()).sum();
     assert_eq!(total, 2 * 48, "each border on both countries");
     assert_eq!(
-        neighbours(&dataset, "DE"),
+        neighbors(&dataset, "DE"),
         ["AT", "BE", "CH", "CZ", "FR", "NL", "PL"]
     );
     assert_eq!(
-        neighbours(&dataset, "CN"),
+        neighbors(&dataset, "CN"),
         ["IN", "KZ", "LA", "MM", "MN", "NP", "PK", "RU", "VN"]
     );
-    assert_eq!(neighbours(&dataset, "PT"), ["ES"]);
-    assert_eq!(neighbours(&dataset, "MX"), ["US"]);
+    assert_eq!(neighbors(&dataset, "PT"), ["ES"]);
+    assert_eq!(neighbors(&dataset, "MX"), ["US"]);
     // Symmetric: every relation has its reverse.
     for (i, node) in dataset.nodes().iter().enumerate() {
         for &j in &node.relations {
@@ -105,9 +105,9 @@ fn strength_self_pairs_and_repeats() {
     let nodes = b"id\nx\ny\nz\n";
     let pairs = b"from,to,strength\nx,y,2.5\ny,x,1\nx,x,1\ny,z,0\n";
     let dataset = parse_plain(nodes, pairs).expect("valid");
-    assert_eq!(neighbours(&dataset, "x"), ["y"]);
-    assert_eq!(neighbours(&dataset, "y"), ["x"], "strength 0 drops y,z");
-    assert!(neighbours(&dataset, "z").is_empty());
+    assert_eq!(neighbors(&dataset, "x"), ["y"]);
+    assert_eq!(neighbors(&dataset, "y"), ["x"], "strength 0 drops y,z");
+    assert!(neighbors(&dataset, "z").is_empty());
 }
 
 #[test]

@@ -5,23 +5,23 @@
 //! With `--previous` the layouts start warm (unless `--cold`), and the line
 //! adds the stability figures against that layout (`benches/stability.py`).
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
 
-use super::{read_previous, LayoutOptions};
-use nptreemap::layout::Start;
-use nptreemap::render::Style;
-use nptreemap::{metrics, pipeline, stability, workspace};
+use super::LayoutOptions;
+use nptreemap::layout::{Method, Start};
+use nptreemap::render::picture;
+use nptreemap::{measure, pipeline};
 
 /// Arguments of `nptreemap bench`.
 #[derive(Debug, Args)]
 pub(crate) struct BenchArgs {
-    /// Hierarchy JSON file.
-    input: PathBuf,
     #[command(flatten)]
     options: LayoutOptions,
+    /// Layout method (default: neighbor when the data has a similarity, else plain).
+    #[arg(long, value_enum)]
+    method: Option<Method>,
     /// Layouts to time; the median is reported.
     #[arg(long, default_value_t = 3)]
     repeat: usize,
@@ -32,13 +32,10 @@ pub(crate) struct BenchArgs {
 }
 
 pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
-    let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
-    let mut request = args.options.request()?;
+    let job = args.options.job(args.method)?;
+    let (dataset, mut request) = (&job.dataset, job.request.clone());
     // Read even with --cold, for the stability figures.
-    let previous = match &args.options.previous {
-        Some(path) => Some(std::sync::Arc::new(read_previous(path)?)),
-        None => None,
-    };
+    let previous = args.options.previous_layout()?;
     if !args.options.cold {
         request.previous = previous.clone();
     }
@@ -46,7 +43,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let mut last = None;
     for _ in 0..args.repeat.max(1) {
         let t = Instant::now();
-        let computed = nptreemap::layout::compute(&dataset, &request)?;
+        let computed = pipeline::lay_out(&job.config, dataset, &request)?;
         times.push(t.elapsed().as_secs_f64() * 1000.0);
         last = Some(computed);
     }
@@ -54,7 +51,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         anyhow::bail!("no layout was made");
     };
     let report = &computed.report;
-    let q = metrics::quality(&computed.dataset, &computed.layout);
+    let q = measure::quality(&computed.dataset, &computed.layout);
     let mut sorted = times.clone();
     sorted.sort_by(f64::total_cmp);
     let mut line = serde_json::json!({
@@ -79,7 +76,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         },
     });
     if let (Some(previous), Some(fields)) = (&previous, line.as_object_mut()) {
-        let s = stability::stability(previous, &computed.dataset, &computed.layout);
+        let s = measure::stability(previous, &computed);
         for (key, value) in [
             ("stable_leaves", serde_json::json!(s.leaves)),
             ("unchanged_leaves", serde_json::json!(s.unchanged)),
@@ -97,12 +94,12 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         }
     }
     if args.render {
-        let style = Style::default();
+        let style = &job.style;
         let (mut svg_ms, mut png_ms) = (Vec::new(), Vec::new());
         let mut sizes = (0, 0);
         for _ in 0..args.repeat.max(1) {
             let t = Instant::now();
-            let svg = pipeline::picture(&computed, &style);
+            let svg = picture(&computed, style);
             svg_ms.push(t.elapsed().as_secs_f64() * 1000.0);
             let t = Instant::now();
             let png = nptreemap::render::png(&svg, 1.0)?;

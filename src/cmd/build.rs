@@ -4,12 +4,11 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::Args;
 
 use super::progress::Progress;
 use nptreemap::config::Config;
-use nptreemap::pipeline;
+use nptreemap::pipeline::{self, BuildError};
 
 /// Arguments of `nptreemap build` and `nptreemap check`.
 #[derive(Debug, Args)]
@@ -24,37 +23,37 @@ pub(crate) struct BuildArgs {
 }
 
 pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
-    let config = Config::from_path(&args.config)?;
+    let config = Config::from_path(&args.config).map_err(BuildError::from)?;
     let progress = Progress::new(config.datasets.len());
     let mut built = Vec::new();
     for (i, d) in config.datasets.iter().enumerate() {
         progress.step(i, &d.name);
-        let result = pipeline::build(&config, d, args.cold);
+        let result = pipeline::build(d, &config.request(d), &config.style(d), args.cold);
         if result.is_err() {
             progress.finish();
         }
-        built.push(result?);
+        built.push((d, result?));
     }
     progress.finish();
-    for b in &built {
-        let written = pipeline::write_outputs(b)
-            .with_context(|| format!("dataset {:?}: cannot write its outputs", b.name))?;
-        if let Some(d) = config.datasets.iter().find(|d| d.name == b.name) {
-            // Losing the stored layout only costs the next build its warm start.
-            if let Err(e) = pipeline::store_layout(d, &b.computed) {
-                tracing::warn!(dataset = %b.name, error = %e, "cannot store the layout for warm starts");
-            }
+    for (d, b) in &built {
+        let written = pipeline::write_outputs(&b.outputs);
+        if let Some(e) = written.failed.into_iter().next() {
+            return Err(e.into());
         }
-        for (path, bytes) in &b.outputs {
-            let state = if written.contains(path) {
+        // Losing the stored layout only costs the next build its warm start.
+        if let Err(e) = pipeline::store_layout(d, &b.computed) {
+            tracing::warn!(dataset = %b.name, error = %e, "cannot store the layout for warm starts");
+        }
+        for out in &b.outputs {
+            let state = if written.written.contains(&out.path) {
                 "wrote"
             } else {
                 "unchanged"
             };
             super::say(format_args!(
                 "{state} {} ({} bytes, dataset {})",
-                path.display(),
-                bytes.len(),
+                out.path.display(),
+                out.bytes.len(),
                 b.name
             ));
         }
@@ -63,7 +62,7 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
 }
 
 pub(crate) fn check(args: &BuildArgs) -> anyhow::Result<()> {
-    let config = Config::from_path(&args.config)?;
+    let config = Config::from_path(&args.config).map_err(BuildError::from)?;
     for d in &config.datasets {
         let dataset = pipeline::load(d)?;
         super::say(format_args!(

@@ -1,35 +1,55 @@
-//! `nptreemap eval`: the paper's Table 2 row for one input and one method (or
-//! all of them), and optionally the layout JSON with every constraint's
-//! `realized` flag. With `--previous`, also issue 6's stability figures of a
-//! warm and of a cold layout against that previous layout, with their times.
+//! `nptreemap eval`: the paper's Table 2 row for one dataset (a hierarchy JSON
+//! file, or a dataset of a config) and one method (or all of them), and
+//! optionally the layout JSON with every constraint's `realized` flag. With
+//! `--previous`, also issue 6's stability figures of a warm and of a cold
+//! layout against that previous layout, with their times.
 
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::Context;
 use clap::Args;
 
-use super::{read_previous, LayoutOptions, MethodArg, UsageError};
-use nptreemap::layout::{compute, Computed, Method, Previous, Request, Start};
-use nptreemap::neighborhood::adjacency::{eval_metrics, EvalMetrics};
-use nptreemap::render::layout_json;
-use nptreemap::stability::{stability, Stability};
-use nptreemap::{store, workspace};
+use super::{LayoutOptions, UsageError};
+use nptreemap::config::DatasetConfig;
+use nptreemap::layout::{Computed, Method, Previous, Request, Start};
+use nptreemap::measure::{stability, table2, EvalMetrics, Stability};
+use nptreemap::pipeline::{self, Rendered};
+use nptreemap::{layout_json, Dataset};
 
 /// Arguments of `nptreemap eval`.
 #[derive(Debug, Args)]
 pub(crate) struct EvalArgs {
-    /// Hierarchy JSON file.
-    input: PathBuf,
     #[command(flatten)]
     options: LayoutOptions,
+    /// Layout method, or `all` for one row per method (default: neighbor when
+    /// the data has a similarity, else plain).
+    #[arg(long, value_parser = parse_methods, value_name = "METHOD|all")]
+    method: Option<Methods>,
     /// Print JSON lines instead of a table.
     #[arg(long)]
     json: bool,
     /// Also write the layout JSON (with constraints and their `realized` flags).
     #[arg(long, value_name = "FILE.json")]
     out: Option<PathBuf>,
+}
+
+/// What `--method` asks for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Methods {
+    /// One method.
+    One(Method),
+    /// Every method, one row each.
+    All,
+}
+
+fn parse_methods(name: &str) -> Result<Methods, String> {
+    if name == "all" {
+        return Ok(Methods::All);
+    }
+    Method::parse(name)
+        .map(Methods::One)
+        .ok_or_else(|| format!("expected all or one of {}", Method::names()))
 }
 
 /// One start's figures against the previous layout.
@@ -42,51 +62,46 @@ struct StabilityRow {
 }
 
 pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
-    let all = args.options.method == Some(MethodArg::All);
+    let all = args.method == Some(Methods::All);
     if all && args.out.is_some() {
         return Err(UsageError("--out needs one method, not --method all".to_string()).into());
     }
     if all && args.options.previous.is_some() {
         return Err(UsageError("--previous needs one method, not --method all".to_string()).into());
     }
-    let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
-    // Read even with --cold: the figures compare both starts with it.
-    let previous = match &args.options.previous {
-        Some(path) => Some(Arc::new(read_previous(path)?)),
-        None => None,
+    let one = match args.method {
+        Some(Methods::One(m)) => Some(m),
+        _ => None,
     };
+    let job = args.options.job(one)?;
+    // Read even with --cold: the figures compare both starts with it.
+    let previous = args.options.previous_layout()?;
     let methods: Vec<Option<Method>> = if all {
         Method::ALL.into_iter().map(Some).collect()
     } else {
-        vec![args.options.method.and_then(MethodArg::method)]
+        vec![job.request.method]
     };
     let mut rows = Vec::new();
     let mut stability_rows = Vec::new();
     for method in methods {
-        let mut request = args.options.request_with(method);
+        let mut request = job.request.clone();
+        request.method = method;
         if !args.options.cold {
             request.previous = previous.clone();
         }
-        let (computed, time_ms) = timed(&dataset, &request)?;
-        let deepest = computed.dataset.max_depth();
-        let leaf_pairs: Vec<(usize, usize)> = computed
-            .constraints
-            .iter()
-            .filter(|c| computed.dataset.node(c.a).depth == deepest)
-            .map(|c| (c.a, c.b))
-            .collect();
-        let m = eval_metrics(&computed.dataset, &computed.layout, &leaf_pairs);
+        let (computed, time_ms) = timed(&job.config, &job.dataset, &request)?;
+        let m = table2(&computed);
         if let Some(out) = &args.out {
-            let json = layout_json(
-                &computed.dataset,
-                &computed.layout,
-                &nptreemap::pipeline::json_extras(&computed),
-            );
-            store::write_atomic(out, json.as_bytes())
-                .with_context(|| format!("{}: cannot write", out.display()))?;
+            let rendered = [Rendered {
+                path: out.clone(),
+                bytes: layout_json::document(&computed).into_bytes(),
+            }];
+            if let Some(e) = pipeline::write_outputs(&rendered).failed.into_iter().next() {
+                return Err(e.into());
+            }
         }
         if let Some(previous) = &previous {
-            stability_rows = stability_against(previous, &dataset, request, (&computed, time_ms))?;
+            stability_rows = stability_against(previous, &job, request, (&computed, time_ms))?;
             if let Start::Refused(why) = &computed.start {
                 super::note(format_args!(
                     "previous layout not used ({why}); laid out cold"
@@ -95,7 +110,7 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
         }
         rows.push((computed.method, m));
     }
-    let file = args.input.display().to_string();
+    let file = job.config.name.clone();
     let previous_file = args
         .options
         .previous
@@ -126,9 +141,13 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
 }
 
 /// Lays out and measures the wall time of the whole layout step.
-fn timed(dataset: &nptreemap::Dataset, request: &Request) -> anyhow::Result<(Computed, f64)> {
+fn timed(
+    d: &DatasetConfig,
+    dataset: &Dataset,
+    request: &Request,
+) -> anyhow::Result<(Computed, f64)> {
     let t = Instant::now();
-    let computed = compute(dataset, request)?;
+    let computed = pipeline::lay_out(d, dataset, request)?;
     Ok((computed, t.elapsed().as_secs_f64() * 1000.0))
 }
 
@@ -136,7 +155,7 @@ fn timed(dataset: &nptreemap::Dataset, request: &Request) -> anyhow::Result<(Com
 /// `request` already made (warm unless --cold), so only the other start runs.
 fn stability_against(
     previous: &Arc<Previous>,
-    dataset: &nptreemap::Dataset,
+    job: &super::Job,
     mut request: Request,
     done: (&Computed, f64),
 ) -> anyhow::Result<Vec<StabilityRow>> {
@@ -146,13 +165,13 @@ fn stability_against(
     } else {
         Some(Arc::clone(previous))
     };
-    let (other, other_ms) = timed(dataset, &request)?;
+    let (other, other_ms) = timed(&job.config, &job.dataset, &request)?;
     let row = |start, computed: &Computed, time_ms| StabilityRow {
         start,
         used_previous: matches!(computed.start, Start::Warm { .. }),
         time_ms,
         iterations: computed.report.iterations,
-        figures: stability(previous, &computed.dataset, &computed.layout),
+        figures: stability(previous, computed),
     };
     let (warm, cold) = if made_warm {
         (row("warm", done.0, done.1), row("cold", &other, other_ms))

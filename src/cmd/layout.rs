@@ -1,23 +1,24 @@
-//! `nptreemap layout`: one input file to layout JSON, SVG, PNG and/or HTML files.
+//! `nptreemap layout`: one dataset (a hierarchy JSON file, or a dataset of a
+//! config) to layout JSON, SVG, PNG and/or HTML files, through the pipeline's
+//! stages.
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::Args;
 
 use super::{LayoutOptions, UsageError};
 use nptreemap::config::{kind_of, OutputConfig};
-use nptreemap::layout::Start;
-use nptreemap::render::Style;
-use nptreemap::{pipeline, store, workspace};
+use nptreemap::layout::{Method, Start};
+use nptreemap::pipeline;
 
 /// Arguments of `nptreemap layout`.
 #[derive(Debug, Args)]
 pub(crate) struct LayoutArgs {
-    /// Hierarchy JSON file (the paper's format or d3-hierarchy style).
-    input: PathBuf,
     #[command(flatten)]
     options: LayoutOptions,
+    /// Layout method (default: neighbor when the data has a similarity, else plain).
+    #[arg(long, value_enum)]
+    method: Option<Method>,
     /// Output file; the extension picks the kind (.json layout, .svg or .png
     /// picture, .html interactive page). Repeatable.
     #[arg(long, required = true, value_name = "FILE")]
@@ -40,22 +41,26 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
         );
     }
     // Check every output's kind before doing any work, so a typo costs nothing.
-    let kinds = args
+    let outputs = args
         .out
         .iter()
-        .map(|p| {
-            kind_of(p).ok_or_else(|| {
+        .map(|path| {
+            let kind = kind_of(path).ok_or_else(|| {
                 UsageError(format!(
                     "{}: unknown output kind (use a .json, .svg, .png or .html extension)",
-                    p.display()
+                    path.display()
                 ))
+            })?;
+            Ok(OutputConfig {
+                path: path.clone(),
+                kind: Some(kind),
+                scale: args.scale,
             })
         })
-        .collect::<Result<Vec<_>, _>>()?;
-    let dataset = workspace::read_dataset(&args.input, &args.options.read_options())?;
-    let mut request = args.options.request()?;
-    request.previous = args.options.warm_start()?;
-    let computed = nptreemap::layout::compute(&dataset, &request)?;
+        .collect::<Result<Vec<_>, UsageError>>()?;
+    let mut job = args.options.job(args.method)?;
+    job.request.previous = args.options.warm_start()?;
+    let computed = pipeline::lay_out(&job.config, &job.dataset, &job.request)?;
     if let Start::Refused(why) = &computed.start {
         super::note(format_args!(
             "previous layout not used ({why}); laid out cold"
@@ -69,26 +74,15 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
             "some diagrams stopped at the iteration cap above the area-error target"
         );
     }
-    let style = Style {
-        title: args.title.clone(),
-        legend: !args.no_legend,
-        ..Style::default()
-    };
-    let outputs: Vec<OutputConfig> = args
-        .out
-        .iter()
-        .zip(&kinds)
-        .map(|(path, kind)| OutputConfig {
-            path: path.clone(),
-            kind: Some(*kind),
-            scale: args.scale,
-        })
-        .collect();
-    // Render everything first: a failure leaves every existing output untouched.
-    let rendered = pipeline::render_outputs(&computed, &style, &outputs)?;
-    for (path, bytes) in &rendered {
-        store::write_atomic(path, bytes)
-            .with_context(|| format!("{}: cannot write", path.display()))?;
+    if args.title.is_some() {
+        job.style.title = args.title.clone();
     }
-    Ok(())
+    job.style.legend &= !args.no_legend;
+    // Render everything first: a failure leaves every existing output untouched.
+    let rendered = pipeline::render_outputs(&computed, &job.style, &outputs)?;
+    let written = pipeline::write_outputs(&rendered);
+    match written.failed.into_iter().next() {
+        Some(e) => Err(e.into()),
+        None => Ok(()),
+    }
 }

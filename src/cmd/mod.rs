@@ -1,4 +1,7 @@
-//! Subcommands of the binary, one file each, plus the options they share.
+//! Subcommands of the binary, one file each, plus what the single-dataset
+//! commands (`layout`, `eval`, `bench`) share: where the data comes from (a
+//! hierarchy JSON file, or a dataset of a config) and the layout flags that
+//! override the config's settings.
 
 pub(crate) mod bench;
 pub(crate) mod build;
@@ -10,211 +13,212 @@ pub(crate) mod watch;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anyhow::Context;
-use clap::{Args, ValueEnum};
-use nptreemap::layout::{Canvas, Method, NeighborParams, Outline, Params, Previous, Request};
+use clap::Args;
+use nptreemap::config::{Config, DatasetConfig};
+use nptreemap::layout::{Method, Outline, Previous, Request};
 use nptreemap::neighborhood::SimilarityKind;
-use nptreemap::workspace::InputError;
+use nptreemap::pipeline::{self, BuildError, Fault};
+use nptreemap::render::Style;
+use nptreemap::Dataset;
 
-/// Layout options shared by every subcommand that makes a layout.
+/// Where a single-dataset command's data comes from, and the layout flags.
 #[derive(Debug, Clone, Args)]
 pub(crate) struct LayoutOptions {
+    /// Hierarchy JSON file (the paper's format or d3-hierarchy style); or
+    /// give --config and --dataset instead.
+    #[arg(required_unless_present = "config", conflicts_with = "config")]
+    pub(crate) input: Option<PathBuf>,
+    /// A YAML config whose dataset (--dataset) to read, with any format and
+    /// field mapping it declares; its `layout:` and `render:` settings apply
+    /// unless a flag below overrides them.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) config: Option<PathBuf>,
+    /// The dataset of --config (may be left out when the config has one).
+    #[arg(long, value_name = "NAME", requires = "config")]
+    pub(crate) dataset: Option<String>,
     /// Leaf field holding the weight (default: the file's `weightAttribute`, else value/weight/size).
-    #[arg(long, value_name = "FIELD")]
+    #[arg(long, value_name = "FIELD", conflicts_with = "config")]
     pub(crate) weight: Option<String>,
-    /// Canvas width.
-    #[arg(long, default_value_t = 1000.0)]
-    pub(crate) width: f64,
-    /// Canvas height.
-    #[arg(long, default_value_t = 1000.0)]
-    pub(crate) height: f64,
-    /// Seed for every random choice; the same seed gives byte-identical output.
-    #[arg(long, default_value_t = 1)]
-    pub(crate) seed: u64,
-    /// Shape of the root cell.
-    #[arg(long, value_enum, default_value_t = OutlineArg::Rect)]
-    pub(crate) outline: OutlineArg,
-    /// Per-diagram area-error target Σ|A − A*| / A(parent).
-    #[arg(long, default_value_t = 0.01)]
-    pub(crate) convergence: f64,
-    /// Iteration cap per diagram.
-    #[arg(long, default_value_t = 200)]
-    pub(crate) max_iterations: usize,
-    /// Layout method (default: neighbor when the data has a similarity, else plain).
-    #[arg(long, value_enum)]
-    pub(crate) method: Option<MethodArg>,
+    /// Canvas width [default: 1000, or the config's].
+    #[arg(long)]
+    pub(crate) width: Option<f64>,
+    /// Canvas height [default: 1000, or the config's].
+    #[arg(long)]
+    pub(crate) height: Option<f64>,
+    /// Seed for every random choice; the same seed gives byte-identical output [default: 1].
+    #[arg(long)]
+    pub(crate) seed: Option<u64>,
+    /// Shape of the root cell: rect, circle or ngon [default: rect].
+    #[arg(long, value_name = "SHAPE")]
+    pub(crate) outline: Option<Outline>,
+    /// Per-diagram area-error target Σ|A − A*| / A(parent) [default: 0.01].
+    #[arg(long)]
+    pub(crate) convergence: Option<f64>,
+    /// Iteration cap per diagram [default: 200].
+    #[arg(long)]
+    pub(crate) max_iterations: Option<usize>,
     /// Similarity between nodes (default: what the data declares).
     #[arg(long, value_enum)]
-    pub(crate) similarity: Option<SimilarityArg>,
+    pub(crate) similarity: Option<SimilarityKind>,
     /// Run the paper prototype's optimiser (its tick schedule, weight growth in
     /// the last 30% and pixel constants) instead of ours, for comparisons.
     #[arg(long)]
     pub(crate) prototype: bool,
     /// Snapshots per level to keep for the HTML page's optimisation slider
     /// (similarity layouts; 0 = none).
-    #[arg(long, default_value_t = 0, value_name = "N")]
-    pub(crate) frames: usize,
+    #[arg(long, value_name = "N")]
+    pub(crate) frames: Option<usize>,
     /// Layout JSON of a previous run to start from (warm start): surviving
     /// nodes keep their place, so a small data change moves the picture little.
     /// Not used if its canvas or outline differs or most nodes are gone.
     #[arg(long, value_name = "FILE.json")]
     pub(crate) previous: Option<PathBuf>,
     /// Lay out from scratch even when --previous is given.
-    #[arg(long)]
+    #[arg(long, requires = "previous")]
     pub(crate) cold: bool,
 }
 
-/// Layout methods on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(crate) enum MethodArg {
-    /// The classic Voronoi treemap; similarity ignored.
-    Plain,
-    /// Random assignment to a CVT, then classic optimisation (Yao et al.).
-    RandomCvt,
-    /// Projection shrunk into the parent, then classic optimisation (Nocaj and Brandes).
-    ProjScale,
-    /// CVT, Kuhn–Munkres matching and swaps only.
-    MatchSwap,
-    /// The full neighbourhood-preserving method.
-    Neighbor,
-    /// Every method, one after the other (`eval` only).
-    All,
-}
-
-impl MethodArg {
-    /// The one method named, or `None` for `all`.
-    pub(crate) fn method(self) -> Option<Method> {
-        match self {
-            MethodArg::Plain => Some(Method::Plain),
-            MethodArg::RandomCvt => Some(Method::RandomCvt),
-            MethodArg::ProjScale => Some(Method::ProjScale),
-            MethodArg::MatchSwap => Some(Method::MatchSwap),
-            MethodArg::Neighbor => Some(Method::Neighbor),
-            MethodArg::All => None,
-        }
-    }
-}
-
-/// Similarity functions on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(crate) enum SimilarityArg {
-    /// Cosine of feature vectors, rescaled to [0, 1].
-    Cosine,
-    /// Jaccard index of the vectors' non-zero supports.
-    Jaccard,
-    /// 1 for identical vectors (e.g. identical genre sets), else 0.
-    Binary,
-    /// 1 for nodes listed as each other's neighbours (shared borders), else 0.
-    Neighbors,
-    /// Pearson correlation of the vectors (time series), rescaled to [0, 1].
-    Pearson,
-}
-
-/// Root outline choices on the command line.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub(crate) enum OutlineArg {
-    /// The whole canvas.
-    Rect,
-    /// The largest centred circle.
-    Circle,
-    /// The largest centred regular 32-gon (the paper's prototype outline).
-    Ngon,
+/// A single dataset resolved from [`LayoutOptions`]: read and parsed, with the
+/// request and style its source and the flags give.
+pub(crate) struct Job {
+    /// The dataset as configured (a one-file dataset for INPUT).
+    pub(crate) config: DatasetConfig,
+    /// Its parsed data.
+    pub(crate) dataset: Dataset,
+    /// The layout request (without a previous layout).
+    pub(crate) request: Request,
+    /// The picture style.
+    pub(crate) style: Style,
 }
 
 impl LayoutOptions {
-    pub(crate) fn params(&self) -> Params {
-        Params {
-            canvas: Canvas {
-                width: self.width,
-                height: self.height,
-            },
-            outline: match self.outline {
-                OutlineArg::Rect => Outline::Rectangle,
-                OutlineArg::Circle => Outline::Circle,
-                OutlineArg::Ngon => Outline::Regular(32),
-            },
-            seed: self.seed,
-            convergence_ratio: self.convergence,
-            max_iterations: self.max_iterations,
-            ..Params::default()
+    /// Resolves the source, reads and parses the dataset, and applies the
+    /// flags to the source's settings. `method` is the method asked for, if
+    /// any (each command has its own `--method`).
+    pub(crate) fn job(&self, method: Option<Method>) -> anyhow::Result<Job> {
+        let (config, mut request, style) = match (&self.input, &self.config) {
+            (Some(input), _) => (
+                DatasetConfig::hierarchy_file(input, self.weight.clone()),
+                Request::default(),
+                Style::default(),
+            ),
+            (None, Some(path)) => {
+                let config = Config::from_path(path).map_err(BuildError::from)?;
+                let d = pick_dataset(&config, self.dataset.as_deref(), path)?;
+                (d.clone(), config.request(d), config.style(d))
+            }
+            (None, None) => {
+                return Err(UsageError("give an INPUT file, or --config".to_string()).into())
+            }
+        };
+        let p = &mut request.params;
+        if let Some(w) = self.width {
+            p.canvas.width = w;
         }
+        if let Some(h) = self.height {
+            p.canvas.height = h;
+        }
+        if let Some(seed) = self.seed {
+            p.seed = seed;
+        }
+        if let Some(outline) = &self.outline {
+            p.outline = outline.clone();
+        }
+        if let Some(c) = self.convergence {
+            p.convergence_ratio = c;
+        }
+        if let Some(m) = self.max_iterations {
+            p.max_iterations = m;
+        }
+        if method.is_some() {
+            request.method = method;
+        }
+        if self.similarity.is_some() {
+            request.similarity = self.similarity;
+        }
+        request.neighbor.prototype |= self.prototype;
+        if let Some(frames) = self.frames {
+            request.neighbor.frames = frames;
+        }
+        let dataset = pipeline::load(&config)?;
+        Ok(Job {
+            config,
+            dataset,
+            request,
+            style,
+        })
     }
 
-    /// The layout request; `--method all` is refused here (only `eval` takes it).
-    pub(crate) fn request(&self) -> Result<Request, UsageError> {
-        match self.method {
-            Some(MethodArg::All) => Err(UsageError(
-                "--method all is for `nptreemap eval`; pick one method here".to_string(),
-            )),
-            other => Ok(self.request_with(other.and_then(MethodArg::method))),
-        }
-    }
-
-    /// The layout request for one method (`None`: the default for the data).
-    pub(crate) fn request_with(&self, method: Option<Method>) -> Request {
-        Request {
-            params: self.params(),
-            method,
-            similarity: self.similarity.map(|s| match s {
-                SimilarityArg::Cosine => SimilarityKind::Cosine,
-                SimilarityArg::Jaccard => SimilarityKind::Jaccard,
-                SimilarityArg::Binary => SimilarityKind::Binary,
-                SimilarityArg::Neighbors => SimilarityKind::NeighborList,
-                SimilarityArg::Pearson => SimilarityKind::Pearson,
-            }),
-            neighbor: NeighborParams {
-                prototype: self.prototype,
-                frames: self.frames,
-                ..NeighborParams::default()
-            },
-            previous: None,
-        }
-    }
-
-    /// The previous layout to start from: the `--previous` file, unless
-    /// `--cold` is given.
-    pub(crate) fn warm_start(&self) -> anyhow::Result<Option<Arc<Previous>>> {
+    /// The `--previous` layout, read even with `--cold` (eval and bench
+    /// compare both starts with it).
+    pub(crate) fn previous_layout(&self) -> anyhow::Result<Option<Arc<Previous>>> {
         match &self.previous {
-            Some(path) if !self.cold => Ok(Some(Arc::new(read_previous(path)?))),
-            _ => Ok(None),
+            Some(path) => Ok(Some(Arc::new(pipeline::read_previous(path)?))),
+            None => Ok(None),
         }
     }
 
-    pub(crate) fn read_options(&self) -> nptreemap::workspace::ReadOptions {
-        nptreemap::workspace::ReadOptions {
-            weight_field: self.weight.clone(),
+    /// The layout to start warm from: `--previous` unless `--cold`.
+    pub(crate) fn warm_start(&self) -> anyhow::Result<Option<Arc<Previous>>> {
+        if self.cold {
+            return Ok(None);
         }
+        self.previous_layout()
     }
 }
 
-/// Reads and parses a previous layout JSON file.
-pub(crate) fn read_previous(path: &Path) -> anyhow::Result<Previous> {
-    let bytes = nptreemap::workspace::read_bytes(path)?;
-    let text = std::str::from_utf8(&bytes)
-        .map_err(|e| UsageError(format!("{}: not UTF-8 text: {e}", path.display())))?;
-    Previous::from_layout_json(text)
-        .with_context(|| format!("{}: not a usable previous layout", path.display()))
+/// The dataset named `name` in `config`, or its only one.
+fn pick_dataset<'a>(
+    config: &'a Config,
+    name: Option<&str>,
+    path: &Path,
+) -> Result<&'a DatasetConfig, UsageError> {
+    let names = || {
+        config
+            .datasets
+            .iter()
+            .map(|d| d.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match name {
+        Some(name) => config
+            .datasets
+            .iter()
+            .find(|d| d.name == name)
+            .ok_or_else(|| {
+                UsageError(format!(
+                    "{}: no dataset {name:?} (it has: {})",
+                    path.display(),
+                    names()
+                ))
+            }),
+        None => match config.datasets.as_slice() {
+            [one] => Ok(one),
+            [] => Err(UsageError(format!("{}: has no datasets", path.display()))),
+            _ => Err(UsageError(format!(
+                "{}: pick one with --dataset (it has: {})",
+                path.display(),
+                names()
+            ))),
+        },
+    }
 }
 
-/// Marks an error as the user's (bad input or arguments): exit code 2.
+/// Marks an error as the user's (bad arguments): exit code 2.
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
 pub(crate) struct UsageError(pub(crate) String);
 
-/// Exit code for an error: 2 when the input or the arguments are at fault.
+/// Exit code for an error: 2 when the input, the config or the arguments are
+/// at fault ([`BuildError::fault`] decides for every build error), else 1.
 pub(crate) fn exit_code(err: &anyhow::Error) -> u8 {
-    // A failure to write is the machine's, not the input's: it keeps code 1.
     let user = err.chain().any(|e| {
-        e.is::<InputError>()
-            || e.is::<UsageError>()
-            || e.is::<nptreemap::layout::LayoutError>()
-            || e.is::<nptreemap::config::ConfigFileError>()
-            || e.is::<nptreemap::pipeline::BuildError>()
-            || matches!(
-                e.downcast_ref::<nptreemap::daemon::DaemonError>(),
-                Some(nptreemap::daemon::DaemonError::Config(_))
-            )
-            || e.is::<nptreemap::previous::PreviousError>()
+        e.is::<UsageError>()
+            || e.downcast_ref::<BuildError>()
+                .is_some_and(|b| b.fault() == Fault::Input)
+            || e.downcast_ref::<nptreemap::daemon::DaemonError>()
+                .is_some_and(|d| d.fault() == Fault::Input)
     });
     if user {
         2

@@ -22,8 +22,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::config::{Config, ConfigFileError, DatasetConfig};
-use crate::layout::{Computed, Previous, Start};
-use crate::pipeline::{self, BuildError};
+use crate::layout::{Computed, Start};
+use crate::pipeline::{self, Fault, Rendered};
 use change::{ChangeSet, Reason};
 use status::{LayoutKind, Status};
 use watcher::{Batch, DirWatcher, Message, Timing};
@@ -58,15 +58,23 @@ pub enum DaemonError {
     Watcher(#[from] notify::Error),
 }
 
+impl DaemonError {
+    /// Whose fault it is that the daemon could not start: the config's
+    /// (exit code 2) or the system's (1).
+    pub fn fault(&self) -> Fault {
+        match self {
+            DaemonError::Config(_) => Fault::Input,
+            DaemonError::Path { .. } | DaemonError::Watcher(_) => Fault::System,
+        }
+    }
+}
+
 /// What the daemon remembers of a dataset between rebuilds.
 #[derive(Default)]
 struct DatasetState {
-    /// The last good layout: the warm start of the next one and the source of
-    /// render-only rebuilds.
+    /// The last good layout: the source of render-only rebuilds, and (as
+    /// [`Computed::previous`]) the warm start of the next layout.
     computed: Option<Computed>,
-    /// That layout as the warm start of the next rebuild, made once the
-    /// outputs are written, off the path between an edit and its pictures.
-    previous: Option<Arc<Previous>>,
     /// Fingerprint of the input bytes last built (or last failed on), so an
     /// event that changed nothing (a touch, a save without edits) costs nothing.
     fingerprint: Option<u64>,
@@ -234,9 +242,7 @@ impl Daemon<'_> {
         let files = match pipeline::read_inputs(&d) {
             Ok(files) => files,
             Err(e) => {
-                let gone = matches!(&e, BuildError::Input(crate::workspace::InputError::Read { source, .. })
-                    if source.kind() == std::io::ErrorKind::NotFound);
-                let consequence = if gone {
+                let consequence = if e.missing_file().is_some() {
                     "last outputs kept; rebuilt when the file is back"
                 } else {
                     "last good outputs kept"
@@ -255,17 +261,19 @@ impl Daemon<'_> {
         state.fingerprint = Some(fingerprint);
         // Warm from the last good layout in memory; at start, from the one
         // stored beside the outputs (unless --cold).
-        let previous = match &state.previous {
-            Some(previous) => Some(Arc::clone(previous)),
+        let mut request = self.config.request(&d);
+        request.previous = match &state.computed {
+            Some(computed) => Some(Arc::new(computed.previous())),
             None if reason == Reason::Start && self.options.cold => None,
             None => pipeline::stored_layout(&d),
         };
+        let style = self.config.style(&d);
         let read_ms = ms_since(started);
         let result = pipeline::parse_inputs(&d, &files).and_then(|dataset| {
             let parsed = Instant::now();
-            let computed = pipeline::lay_out(&self.config, &d, &dataset, previous)?;
+            let computed = pipeline::lay_out(&d, &dataset, &request)?;
             let laid_out = Instant::now();
-            let outputs = pipeline::render_all(&self.config, &d, &computed)?;
+            let outputs = pipeline::render_outputs(&computed, &style, &d.outputs)?;
             tracing::debug!(
                 dataset = name,
                 read_ms,
@@ -284,8 +292,8 @@ impl Daemon<'_> {
                 };
                 self.finish(name, reason, layout, started, computed, outputs);
             }
-            Err(e) if matches!(e, BuildError::Input(_)) => {
-                tracing::debug!(dataset = name, error = %e, "parse failed; reported unless the input changes again");
+            Err(e) if e.fault() == Fault::Input => {
+                tracing::debug!(dataset = name, error = %e, "input refused; reported unless the input changes again");
                 self.pending.insert(
                     name.to_string(),
                     Status::problem(name, &e, "last good outputs kept"),
@@ -306,7 +314,7 @@ impl Daemon<'_> {
             return;
         };
         let started = Instant::now();
-        match pipeline::render_all(&self.config, &d, &computed) {
+        match pipeline::render_outputs(&computed, &self.config.style(&d), &d.outputs) {
             Ok(outputs) => self.finish(
                 name,
                 Reason::Render,
@@ -333,23 +341,11 @@ impl Daemon<'_> {
         layout: LayoutKind,
         started: Instant,
         computed: Computed,
-        outputs: Vec<(PathBuf, Vec<u8>)>,
+        outputs: Vec<Rendered>,
     ) {
-        let mut written = Vec::new();
-        let mut unchanged = 0;
-        for (path, bytes) in &outputs {
-            match crate::store::write_if_changed(path, bytes) {
-                Ok(true) => written.push(path.clone()),
-                Ok(false) => unchanged += 1,
-                Err(e) => (self.report)(Status::problem(
-                    name,
-                    &OutputError {
-                        path: path.clone(),
-                        source: e,
-                    },
-                    "other outputs written",
-                )),
-            }
+        let written = pipeline::write_outputs(&outputs);
+        for e in &written.failed {
+            (self.report)(Status::problem(name, e, "other outputs written"));
         }
         self.pending.remove(name);
         (self.report)(Status::Built {
@@ -357,8 +353,8 @@ impl Daemon<'_> {
             reason,
             layout,
             ms: started.elapsed().as_secs_f64() * 1000.0,
-            written,
-            unchanged,
+            written: written.written,
+            unchanged: written.unchanged.len(),
         });
         // The pictures are out; what only the next rebuild or a restart needs
         // comes after the status line.
@@ -367,18 +363,8 @@ impl Daemon<'_> {
                 tracing::warn!(dataset = name, error = %e, "cannot store the layout for warm starts");
             }
         }
-        let state = self.states.entry(name.to_string()).or_default();
-        state.previous = Some(Arc::new(Previous::from_computed(&computed)));
-        state.computed = Some(computed);
+        self.states.entry(name.to_string()).or_default().computed = Some(computed);
     }
-}
-
-/// An output that could not be written.
-#[derive(Debug, thiserror::Error)]
-#[error("{}: cannot write: {source}", .path.display())]
-struct OutputError {
-    path: PathBuf,
-    source: std::io::Error,
 }
 
 fn ms_since(t: Instant) -> f64 {

@@ -1,9 +1,14 @@
 //! Pure 2-D geometry: points and convex polygons with their measures. Knows nothing
 //! of sites, weights or hierarchies, and does no I/O.
 
+/// Which cells of one level share an edge, and hop distances on that graph.
+pub mod adjacency;
 /// Convex polygons: construction, area, centroid, containment, clipping, sampling.
 pub mod polygon;
+/// The boundary two cells have in common, and the tolerance that decides it.
+pub mod shared_edge;
 
+pub use adjacency::{level_adjacency, LevelAdjacency};
 pub use glam::DVec2 as Point;
 pub use polygon::{ConvexPolygon, GeomError};
 

@@ -304,7 +304,7 @@ mod tests {
     }
 
     #[test]
-    fn orientation_is_normalised_and_collinear_points_dropped() {
+    fn orientation_is_normalized_and_collinear_points_dropped() {
         let p = ConvexPolygon::new(vec![
             Point::new(0.0, 0.0),
             Point::new(0.0, 1.0),

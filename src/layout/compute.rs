@@ -5,14 +5,14 @@
 //! Given a previous layout that fits, the layout starts warm instead
 //! ([`crate::layout::warm`], issue 6), whatever the method.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use super::method::Method;
 use super::neighbor::{layout_similar, projection_of, NeighborParams};
 use super::previous::{Previous, WarmRefusal};
 use super::warm::layout_warm;
 use super::{treemap, Layout, LayoutError, Params, Report};
-use crate::neighborhood::adjacency::level_adjacency;
+use crate::geom::LevelAdjacency;
 use crate::neighborhood::similarity::similarity;
 use crate::neighborhood::{build_constraints, prepare, Constraint, SimilarityKind};
 use nptreemap_formats::Dataset;
@@ -35,6 +35,35 @@ pub struct Computed {
     pub method: Method,
     /// Whether the layout started cold or from the previous layout.
     pub start: Start,
+    /// Each depth level's adjacency in `layout` (index = depth), computed at
+    /// most once: by [`compute`] when there are constraints to flag, else on
+    /// first use ([`Computed::adjacency`]).
+    adjacency: OnceLock<Vec<LevelAdjacency>>,
+}
+
+impl Computed {
+    /// Which cells of each depth level share an edge (index = depth), by the
+    /// checker's definition (`geom::shared_edge`). Renderers, measurements and
+    /// the constraints' `realized` flags all read this one computation.
+    pub fn adjacency(&self) -> &[LevelAdjacency] {
+        self.adjacency
+            .get_or_init(|| levels_adjacency(&self.dataset, &self.layout))
+    }
+
+    /// The previous layout this computation becomes for the next warm start:
+    /// every node's id, parent, weight, site, power weight and cell, and the
+    /// id pairs of its realised constraints.
+    pub fn previous(&self) -> Previous {
+        let ds = &self.dataset;
+        let realized = self
+            .constraints
+            .iter()
+            .zip(&self.realized)
+            .filter(|(_, r)| **r)
+            .map(|(c, _)| (ds.node(c.a).id.clone(), ds.node(c.b).id.clone()))
+            .collect();
+        Previous::from_layout(ds, &self.layout).with_realized(realized)
+    }
 }
 
 /// How a layout started.
@@ -70,11 +99,6 @@ pub struct Request {
     pub previous: Option<Arc<Previous>>,
 }
 
-/// Minimum shared boundary (share of the canvas diagonal) for a constraint to
-/// count as realised: `shared/tools/check-layout`'s default, so our flags and
-/// the checker agree.
-pub(crate) const MIN_SHARED: f64 = 1e-6;
-
 /// Runs the layout step.
 pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutError> {
     let kind = request
@@ -106,6 +130,7 @@ pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutE
             realized: Vec::new(),
             method,
             start,
+            adjacency: OnceLock::new(),
         });
     };
     let prepared = prepare(dataset);
@@ -133,7 +158,11 @@ pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutE
             &request.neighbor,
         )?
     };
-    let realized = realized_flags(&prepared, &layout, &constraints);
+    let adjacency = levels_adjacency(&prepared, &layout);
+    let realized = constraints
+        .iter()
+        .map(|c| adjacency[prepared.node(c.a).depth].are_adjacent(c.a, c.b))
+        .collect();
     Ok(Computed {
         dataset: prepared,
         layout,
@@ -142,6 +171,7 @@ pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutE
         realized,
         method,
         start,
+        adjacency: OnceLock::from(adjacency),
     })
 }
 
@@ -162,18 +192,14 @@ fn warm_start_for(dataset: &Dataset, request: &Request) -> Start {
     }
 }
 
-/// Whether each constraint's cells share an edge (checker semantics).
-pub fn realized_flags(dataset: &Dataset, layout: &Layout, constraints: &[Constraint]) -> Vec<bool> {
+/// Each depth level's adjacency in `layout` (index = depth).
+fn levels_adjacency(dataset: &Dataset, layout: &Layout) -> Vec<LevelAdjacency> {
     let mut by_depth: Vec<Vec<usize>> = vec![Vec::new(); dataset.max_depth() + 1];
     for (i, node) in dataset.nodes().iter().enumerate() {
         by_depth[node.depth].push(i);
     }
-    let adjacency: Vec<_> = by_depth
+    by_depth
         .iter()
-        .map(|nodes| level_adjacency(layout, nodes, MIN_SHARED))
-        .collect();
-    constraints
-        .iter()
-        .map(|c| adjacency[dataset.node(c.a).depth].are_adjacent(c.a, c.b))
+        .map(|nodes| layout.level_adjacency(nodes))
         .collect()
 }

@@ -330,7 +330,7 @@ impl MapSimulation {
             for i in 0..self.sites.len() {
                 let cell = &self.diagram.cells[i];
                 let others = cell
-                    .neighbours
+                    .neighbors
                     .iter()
                     .map(|nb| nb.site)
                     .chain(cell.dominated_by);
@@ -434,7 +434,7 @@ impl MapSimulation {
         let mut diag = vec![0.0; n];
         for (i, cell) in self.diagram.cells.iter().enumerate() {
             start.push(cols.len());
-            for nb in &cell.neighbours {
+            for nb in &cell.neighbors {
                 let d = self.sites[i]
                     .position
                     .distance(self.sites[nb.site].position);

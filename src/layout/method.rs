@@ -2,8 +2,10 @@
 //! (issue 3): the engine's classic treemap, the paper's two baselines, its
 //! initialisation alone, and the full neighbourhood-preserving method.
 
-/// A layout strategy.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// A layout strategy. Named in configs (`layout.method`) and on the command
+/// line (`--method`) by [`Method::name`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// The classic Voronoi treemap of the engine; similarity is ignored.
     Plain,
@@ -48,6 +50,11 @@ impl Method {
         Method::ALL.into_iter().find(|m| m.name() == name)
     }
 
+    /// Every name, for messages (`plain, random-cvt, ...`).
+    pub fn names() -> String {
+        Method::ALL.map(Method::name).join(", ")
+    }
+
     /// True for the methods that use the similarity.
     pub fn uses_similarity(self) -> bool {
         self != Method::Plain
@@ -64,5 +71,13 @@ mod tests {
             assert_eq!(Method::parse(m.name()), Some(m));
         }
         assert_eq!(Method::parse("nope"), None);
+        // The config and the command line spell them the same way.
+        for m in Method::ALL {
+            use serde::de::{value::Error, IntoDeserializer};
+            let de = IntoDeserializer::<Error>::into_deserializer(m.name());
+            assert_eq!(<Method as serde::Deserialize>::deserialize(de), Ok(m));
+            let cli = <Method as clap::ValueEnum>::from_str(m.name(), false).expect("cli name");
+            assert_eq!(cli, m);
+        }
     }
 }

@@ -30,7 +30,8 @@ pub mod treemap;
 /// The warm layout: start every diagram from the previous layout, settle areas.
 pub mod warm;
 
-use crate::geom::{ConvexPolygon, Point};
+use crate::geom::shared_edge::extent_diagonal;
+use crate::geom::{level_adjacency, ConvexPolygon, LevelAdjacency, Point};
 use nptreemap_formats::Dataset;
 
 pub use check::SanityError;
@@ -92,6 +93,29 @@ impl Layout {
     /// The cell of node `index`.
     pub fn cell(&self, index: usize) -> &LayoutCell {
         &self.cells[index]
+    }
+
+    /// The layout's length scale for shared-edge tolerances: the diagonal of
+    /// the bounding box of every cell, as the layout checker computes it from
+    /// the polygons (for a rectangle outline, the canvas diagonal); the canvas
+    /// diagonal when there are no cells, 1 when that is degenerate too.
+    pub fn diagonal(&self) -> f64 {
+        let diag = extent_diagonal(self.cells.iter().map(|c| &c.polygon))
+            .unwrap_or_else(|| Point::new(self.canvas.width, self.canvas.height).length());
+        if diag > 0.0 && diag.is_finite() {
+            diag
+        } else {
+            1.0
+        }
+    }
+
+    /// Which cells among `nodes` (one depth level, node indices) share an edge.
+    pub fn level_adjacency(&self, nodes: &[usize]) -> LevelAdjacency {
+        level_adjacency(
+            |i| self.cells.get(i).map(|c| &c.polygon),
+            nodes,
+            self.diagonal(),
+        )
     }
 
     /// Checks every invariant of a finished layout against its dataset; see [`check`].

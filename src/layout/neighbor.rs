@@ -21,8 +21,8 @@ use super::map::{MapSettings, MapSimulation};
 use super::method::Method;
 use super::treemap::{finish, target_areas};
 use super::{seed, Canvas, Layout, LayoutCell, LayoutError, Params, Report};
+use crate::geom::LevelAdjacency;
 use crate::geom::{cross, ConvexPolygon, Point};
-use crate::neighborhood::adjacency::{level_adjacency, LevelAdjacency};
 use crate::neighborhood::{matching, projection, Constraint};
 use crate::rng::Rng;
 use nptreemap_formats::Dataset;
@@ -112,9 +112,6 @@ const EXHAUSTIVE_MAX_CELLS: usize = 64;
 const EXHAUSTIVE_BUDGET: usize = 400;
 /// Ticks between checkpoints (every tick on small hierarchies) at which a settled copy of the level is scored.
 const CHECK_EVERY: usize = 10;
-/// Minimum shared boundary, as a share of the canvas diagonal, for two cells
-/// to count as neighbours: the independent checker's default.
-const MIN_SHARED: f64 = 1e-6;
 
 /// The distance rules of one level's attraction moves (method-reference
 /// §5.6–5.7).
@@ -321,7 +318,7 @@ fn descend(
                 cells: layout_cells,
             };
             let all: Vec<usize> = (0..leaves.len()).collect();
-            links.score_of(&level_adjacency(&layout, &all, MIN_SHARED))
+            links.score_of(&layout.level_adjacency(&all))
         } else {
             0
         };
@@ -536,7 +533,7 @@ fn run_level(
     });
     match method {
         Method::Neighbor => match prototype {
-            Some(limits) => optimise_prototype(
+            Some(limits) => optimize_prototype(
                 &mut diagrams,
                 links,
                 canvas,
@@ -545,7 +542,7 @@ fn run_level(
                 recorder.as_deref_mut(),
             ),
             None => {
-                let (score, diagrams) = optimise_level(
+                let (score, diagrams) = optimize_level(
                     &mut diagrams,
                     links,
                     canvas,
@@ -681,11 +678,11 @@ fn init_diagram(
 /// towards it by factors 0.99, 0.89, …, 0.09 until every point is inside.
 fn project_and_scale(parent: &ConvexPolygon, points: &[Point], rng: &mut Rng) -> Vec<Point> {
     let c = parent.centroid();
-    let hull_centre = match ConvexPolygon::new(points.to_vec()) {
+    let hull_center = match ConvexPolygon::new(points.to_vec()) {
         Ok(h) => h.centroid(),
         Err(_) => points.iter().copied().sum::<Point>() / points.len().max(1) as f64,
     };
-    let moved: Vec<Point> = points.iter().map(|p| *p - hull_centre + c).collect();
+    let moved: Vec<Point> = points.iter().map(|p| *p - hull_center + c).collect();
     let mut placed = None;
     for step in 0..10 {
         let f = 0.99 - 0.1 * step as f64;
@@ -863,7 +860,7 @@ fn snapshot(diagrams: &[Diagram], links: &LevelLinks, canvas: Canvas) -> Snapsho
         .collect();
     let layout = Layout { canvas, cells };
     let all: Vec<usize> = (0..m).collect();
-    let adjacency = level_adjacency(&layout, &all, MIN_SHARED);
+    let adjacency = layout.level_adjacency(&all);
     Snapshot {
         site,
         centroid,
@@ -892,7 +889,7 @@ fn tiny_square(at: Point) -> ConvexPolygon {
 fn swap_round(diagrams: &mut [Diagram], links: &LevelLinks, canvas: Canvas) -> usize {
     let snap = snapshot(diagrams, links, canvas);
     let adj = &snap.adjacency;
-    let realised = |x: usize, at: usize| -> i64 {
+    let realized = |x: usize, at: usize| -> i64 {
         // Partners of x (own and lifted) adjacent to the cell at `at`.
         let own = links.links[x]
             .iter()
@@ -914,15 +911,15 @@ fn swap_round(diagrams: &mut [Diagram], links: &LevelLinks, canvas: Canvas) -> u
         let mut seen: Vec<usize> = Vec::new();
         let partners = links.links[a].iter().map(|(t, _)| *t);
         for t in partners.chain(links.lifted[a].iter().map(|(t, _)| *t)) {
-            for &b in adj.neighbours(t) {
+            for &b in adj.neighbors(t) {
                 if b != a && snap.diagram[b] == snap.diagram[a] && !seen.contains(&b) {
                     seen.push(b);
                 }
             }
         }
         for b in seen {
-            let now = realised(a, a) + realised(b, b);
-            let after = realised(a, b) + realised(b, a);
+            let now = realized(a, a) + realized(b, b);
+            let after = realized(a, b) + realized(b, a);
             let gain = after - now;
             if gain > 0 {
                 let (x, y) = if a < b { (a, b) } else { (b, a) };
@@ -941,7 +938,7 @@ fn swap_round(diagrams: &mut [Diagram], links: &LevelLinks, canvas: Canvas) -> u
         }
         for x in [a, b] {
             dirty[x] = true;
-            for &y in adj.neighbours(x) {
+            for &y in adj.neighbors(x) {
                 dirty[y] = true;
             }
         }
@@ -963,7 +960,7 @@ fn swap_round(diagrams: &mut [Diagram], links: &LevelLinks, canvas: Canvas) -> u
 /// level's neighbourhoods are recomputed and every diagram makes one step in
 /// which each cell either makes one attraction move (Algorithm 2) or a
 /// centroid step, followed by a weight step towards the target areas.
-fn optimise_level(
+fn optimize_level(
     diagrams: &mut [Diagram],
     links: &LevelLinks,
     canvas: Canvas,
@@ -1122,7 +1119,7 @@ fn exhaustive_polish(
 /// 45 ticks before the end, then grown by d3's clamped multiplicative step;
 /// swap rounds at t = 20, 40, … up to 20 ticks before the end; no attraction
 /// at t = 0 and in the last 10 ticks (pure 0.8 Lloyd there).
-fn optimise_prototype(
+fn optimize_prototype(
     diagrams: &mut [Diagram],
     links: &LevelLinks,
     canvas: Canvas,
@@ -1195,14 +1192,14 @@ fn attraction_moves(
     for (_, j) in order {
         let me = local[j];
         let centroid = state.diagram.cells[j].centroid;
-        let neighbours_here: Vec<usize> = state.diagram.cells[j]
-            .neighbours
+        let neighbors_here: Vec<usize> = state.diagram.cells[j]
+            .neighbors
             .iter()
             .map(|nb| nb.site)
             .collect();
         let accept = |p: Point, pos: &[Point], cross_parent: bool| -> bool {
             clip.contains(p)
-                && neighbours_here.iter().all(|&o| p.distance(pos[o]) >= gap)
+                && neighbors_here.iter().all(|&o| p.distance(pos[o]) >= gap)
                 && (!cross_parent || boundary_distance(clip, p) >= gap)
         };
         let mut moved = false;
@@ -1222,9 +1219,9 @@ fn attraction_moves(
                 .collect();
             records.sort_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
             for (same, dist, t, score) in records {
-                let neighbour = snap.adjacency.are_adjacent(me, t);
+                let neighbor = snap.adjacency.are_adjacent(me, t);
                 if same {
-                    if neighbour || dist < d_opt || !has_free_neighbour(links, snap, t, score) {
+                    if neighbor || dist < d_opt || !has_free_neighbor(links, snap, t, score) {
                         continue;
                     }
                     let target = pos[snap.slot[t]];
@@ -1241,7 +1238,7 @@ fn attraction_moves(
                 let toward = step_towards(pos[j], snap.site[t], step);
                 let slide = edge
                     .and_then(|(a, b)| slide_along(pos[j], centroid, snap.centroid[t], a, b, step));
-                if neighbour {
+                if neighbor {
                     let candidate = if d <= limits.d_max { slide } else { toward };
                     if let Some(p) = candidate {
                         if accept(p, &pos, true) {
@@ -1279,9 +1276,9 @@ fn attraction_moves(
 /// Does target `t` have a neighbour that a link of strength `score` could
 /// displace: one without a constraint to `t`, or with a weaker one (the
 /// paper's Fig. 4e/f test)?
-fn has_free_neighbour(links: &LevelLinks, snap: &Snapshot, t: usize, score: u8) -> bool {
+fn has_free_neighbor(links: &LevelLinks, snap: &Snapshot, t: usize, score: u8) -> bool {
     snap.adjacency
-        .neighbours(t)
+        .neighbors(t)
         .iter()
         .any(|&m| links.score(t, m).is_none_or(|s| s < score))
 }

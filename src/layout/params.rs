@@ -23,8 +23,10 @@ impl Default for Canvas {
     }
 }
 
-/// The shape of the root cell.
-#[derive(Clone, Debug, PartialEq)]
+/// The shape of the root cell. Named in configs (`layout.outline`) and on the
+/// command line (`--outline`) as `rect`, `circle` or `ngon`.
+#[derive(Clone, Debug, PartialEq, serde::Deserialize)]
+#[serde(try_from = "String")]
 pub enum Outline {
     /// The whole canvas (the default).
     Rectangle,
@@ -40,6 +42,35 @@ pub enum Outline {
 
 /// Vertices used to approximate a circular outline.
 const CIRCLE_SIDES: usize = 128;
+
+/// Sides of the `ngon` outline: the paper prototype's 32-gon.
+const NGON_SIDES: usize = 32;
+
+/// An outline name that is not `rect`, `circle` or `ngon`.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown outline {0:?} (expected rect, circle or ngon)")]
+pub struct OutlineNameError(String);
+
+impl std::str::FromStr for Outline {
+    type Err = OutlineNameError;
+
+    fn from_str(name: &str) -> Result<Self, Self::Err> {
+        match name {
+            "rect" => Ok(Outline::Rectangle),
+            "circle" => Ok(Outline::Circle),
+            "ngon" => Ok(Outline::Regular(NGON_SIDES)),
+            other => Err(OutlineNameError(other.to_string())),
+        }
+    }
+}
+
+impl TryFrom<String> for Outline {
+    type Error = OutlineNameError;
+
+    fn try_from(name: String) -> Result<Self, Self::Error> {
+        name.parse()
+    }
+}
 
 impl Outline {
     /// The root polygon on `canvas`.

@@ -11,7 +11,6 @@
 
 use std::collections::HashMap;
 
-use super::compute::Computed;
 use super::{Canvas, Layout, Params};
 use crate::geom::{ConvexPolygon, Point};
 use nptreemap_formats::Dataset;
@@ -142,19 +141,10 @@ impl Previous {
         Self::new(layout.canvas, nodes, Vec::new())
     }
 
-    /// The previous layout that a finished computation becomes, with the id
-    /// pairs of its realised constraints (what the daemon keeps in memory).
-    pub fn from_computed(computed: &Computed) -> Self {
-        let mut previous = Self::from_layout(&computed.dataset, &computed.layout);
-        let ds = &computed.dataset;
-        previous.realized = computed
-            .constraints
-            .iter()
-            .zip(&computed.realized)
-            .filter(|(_, r)| **r)
-            .map(|(c, _)| (ds.node(c.a).id.clone(), ds.node(c.b).id.clone()))
-            .collect();
-        previous
+    /// The same layout with these id pairs as its realised constraints.
+    pub fn with_realized(mut self, realized: Vec<(String, String)>) -> Self {
+        self.realized = realized;
+        self
     }
 
     /// The canvas the previous layout was made for.

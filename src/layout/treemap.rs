@@ -18,7 +18,7 @@ pub(super) struct Division {
     pub(super) iterations: usize,
     pub(super) error: f64,
     pub(super) converged: bool,
-    pub(super) optimised: bool,
+    pub(super) optimized: bool,
     pub(super) degenerate: usize,
 }
 
@@ -83,7 +83,7 @@ pub(super) fn top_down(
             .collect();
         let mut next = Vec::new();
         for d in divisions {
-            if d.optimised {
+            if d.optimized {
                 report.diagrams += 1;
                 report.iterations += d.iterations;
                 if d.iterations == 0 {
@@ -121,7 +121,7 @@ fn single_child(child: usize, polygon: ConvexPolygon) -> Division {
         iterations: 0,
         error: 0.0,
         converged: true,
-        optimised: false,
+        optimized: false,
         degenerate: 0,
     }
 }
@@ -222,7 +222,7 @@ pub(super) fn division_of(
         iterations,
         error,
         converged,
-        optimised: true,
+        optimized: true,
         degenerate,
     }
 }

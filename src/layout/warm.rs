@@ -158,7 +158,7 @@ fn reused(
         iterations: 0,
         error,
         converged: error <= params.convergence_ratio,
-        optimised: true,
+        optimized: true,
         degenerate: 0,
     })
 }
@@ -368,7 +368,7 @@ mod tests {
             moved < 0.01,
             "unchanged leaves moved {moved} of the diagonal"
         );
-        let q = crate::metrics::quality(&after, &warm);
+        let q = crate::measure::quality(&after, &warm);
         assert!(
             q.area_error_diagram_mean <= params.convergence_ratio,
             "{q:?}"

@@ -321,7 +321,7 @@ mod tests {
     }
 
     #[test]
-    fn match_points_minimises_total_distance() {
+    fn match_points_minimizes_total_distance() {
         let sites = [
             Point::new(0.0, 0.0),
             Point::new(10.0, 0.0),

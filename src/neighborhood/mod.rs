@@ -1,10 +1,9 @@
 //! Neighbourhood preservation, the data side: similarity between nodes, the
 //! preparation of a hierarchy (virtual nodes, aggregation), the constraint
-//! pipeline of the paper (method-reference §3), 2-D projections, assignment
-//! (Kuhn–Munkres) and level-wide adjacency with the paper's metrics. Pure: no I/O.
-
-/// Level-wide cell adjacency from polygons, graph distances and Table 2 metrics.
-pub mod adjacency;
+//! pipeline of the paper (method-reference §3), 2-D projections and assignment
+//! (Kuhn–Munkres). Knows datasets, not layouts (adjacency of cells is
+//! [`crate::geom::adjacency`]'s, the paper's metrics [`crate::measure`]'s).
+//! Pure: no I/O.
 /// Binning and filtering of similarities into constraints (stages A to E).
 pub mod constraints;
 /// Kuhn–Munkres assignment (minimum-cost perfect matching).

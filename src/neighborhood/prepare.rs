@@ -50,7 +50,7 @@ pub fn prepare(dataset: &Dataset) -> Dataset {
         let mut spec = NodeSpec::new(node.id.clone()).label(node.label.clone());
         spec.parent = node.parent.map(|p| nodes[p].id.clone());
         spec.weight = if is_short_leaf { None } else { node.weight };
-        spec.color = node.color.clone();
+        spec.color = node.color;
         spec.features = features[index].clone();
         spec.relations = node
             .relations
@@ -70,7 +70,7 @@ pub fn prepare(dataset: &Dataset) -> Dataset {
             let mut spec = NodeSpec::new(id.clone())
                 .label(node.label.clone())
                 .parent(parent_id);
-            spec.color = node.color.clone();
+            spec.color = node.color;
             spec.features = features[leaf].clone();
             if step + 1 == length {
                 spec.weight = node.weight;
@@ -211,7 +211,7 @@ mod tests {
                 .parent("r")
                 .weight(2.0)
                 .features(vec![1.0, 0.0])
-                .color("#f00"),
+                .color(nptreemap_formats::Rgb::new(0xff, 0, 0)),
             NodeSpec::new("b").parent("r"),
             NodeSpec::new("c").parent("b"),
             NodeSpec::new("e")
@@ -260,7 +260,7 @@ mod tests {
         assert_eq!(virtuals, ["adepth1", "adepth1depth2", "edepth2"]);
         let v = p.node(p.find("adepth1depth2").expect("exists"));
         assert_eq!(v.label, "a");
-        assert_eq!(v.color.as_deref(), Some("#f00"));
+        assert_eq!(v.color, Some(nptreemap_formats::Rgb::new(0xff, 0, 0)));
         assert_eq!(v.features, Some(vec![1.0, 0.0]));
         assert!(v.relations.is_empty());
     }

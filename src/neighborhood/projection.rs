@@ -800,7 +800,7 @@ mod tests {
     }
 
     #[test]
-    fn pca_is_deterministic_and_sign_normalised() {
+    fn pca_is_deterministic_and_sign_normalized() {
         let mut rng = Rng::new(99);
         let vectors: Vec<Vec<f64>> = (0..300)
             .map(|_| (0..20).map(|_| rng.next_f64()).collect())

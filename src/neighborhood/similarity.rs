@@ -7,7 +7,11 @@ use nptreemap_formats::{Dataset, SimilarityHint};
 /// How the similarity of two nodes is measured. Every measure gives a value in
 /// [0, 1]; undefined cases (zero vectors, two empty supports, a missing vector,
 /// vectors of different lengths, constant series) give 0 (method-reference §10 #3).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+///
+/// Named in configs (`similarity:`) and on the command line (`--similarity`)
+/// as `cosine`, `jaccard`, `binary`, `neighbors` and `pearson`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
 pub enum SimilarityKind {
     /// Cosine of the feature vectors, rescaled from [-1, 1] to [0, 1].
     Cosine,
@@ -18,6 +22,8 @@ pub enum SimilarityKind {
     /// 1 when the second node is among the first node's relations, else 0.
     /// Directed, as the prototype's `useNeighborLeafs` flag (§1.4); the constraint
     /// pipeline symmetrises later (§3.6).
+    #[serde(rename = "neighbors")]
+    #[value(name = "neighbors")]
     NeighborList,
     /// Pearson correlation of the feature vectors (for example rows of a time
     /// series), rescaled from [-1, 1] to [0, 1].
@@ -160,9 +166,9 @@ impl<'a> NodeFeatures<'a> {
                 } else {
                     sum / values.len() as f64
                 };
-                let centred: Vec<f64> = values.iter().map(|&v| v - mean).collect();
-                result.norm = squared_norm(&centred).sqrt();
-                result.values = Some(Cow::Owned(centred));
+                let centered: Vec<f64> = values.iter().map(|&v| v - mean).collect();
+                result.norm = squared_norm(&centered).sqrt();
+                result.values = Some(Cow::Owned(centered));
             }
         }
         result

@@ -6,8 +6,8 @@
 
 use rayon::prelude::*;
 
-use super::clip::{dominates, ClipOutcome, LabelledPolygon, CLIP_EDGE};
-use super::{Cell, Neighbour, Site};
+use super::clip::{dominates, ClipOutcome, LabeledPolygon, CLIP_EDGE};
+use super::{Cell, Neighbor, Site};
 use crate::geom::{ConvexPolygon, Point};
 
 /// Shared edges shorter than this fraction of the clip's diameter are dropped:
@@ -94,7 +94,7 @@ fn shadows(sites: &[Site], usable: &[bool]) -> Vec<Option<usize>> {
 /// One cell under construction: the polygon so far and the nearest dominating
 /// site seen so far.
 pub(crate) struct CellBuilder {
-    pub(crate) poly: LabelledPolygon,
+    pub(crate) poly: LabeledPolygon,
     i: usize,
     p: Point,
     wi: f64,
@@ -103,7 +103,7 @@ pub(crate) struct CellBuilder {
 }
 
 impl CellBuilder {
-    pub(crate) fn new(poly: LabelledPolygon) -> Self {
+    pub(crate) fn new(poly: LabeledPolygon) -> Self {
         CellBuilder {
             poly,
             i: 0,
@@ -162,7 +162,7 @@ impl CellBuilder {
                 polygon: Some(clip.clone()),
                 area: clip.area(),
                 centroid: clip.centroid(),
-                neighbours: Vec::new(),
+                neighbors: Vec::new(),
                 dominated_by,
             };
         }
@@ -183,15 +183,15 @@ impl CellBuilder {
         // (first on ties, which is deterministic since the vertex order is).
         edges.sort_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
         edges.dedup_by_key(|e| e.0);
-        let neighbours = edges
+        let neighbors = edges
             .into_iter()
-            .map(|(site, _, edge)| Neighbour { site, edge })
+            .map(|(site, _, edge)| Neighbor { site, edge })
             .collect();
         Cell {
             area: polygon.area(),
             centroid: polygon.centroid(),
             polygon: Some(polygon),
-            neighbours,
+            neighbors,
             dominated_by,
         }
     }
@@ -221,7 +221,7 @@ pub(crate) fn empty_cell(position: Point, dominated_by: Option<usize>) -> Cell {
         polygon: None,
         area: 0.0,
         centroid: position,
-        neighbours: Vec::new(),
+        neighbors: Vec::new(),
         dominated_by,
     }
 }
@@ -234,7 +234,7 @@ pub(crate) fn empty_cell(position: Point, dominated_by: Option<usize>) -> Cell {
 pub(crate) fn symmetrize(cells: &mut [Cell], parallel: bool) {
     let nonempty: Vec<bool> = cells.iter().map(|c| c.polygon.is_some()).collect();
     let keep_live = |c: &mut Cell| {
-        c.neighbours
+        c.neighbors
             .retain(|nb| nonempty.get(nb.site).copied().unwrap_or(false));
     };
     if parallel {
@@ -242,19 +242,19 @@ pub(crate) fn symmetrize(cells: &mut [Cell], parallel: bool) {
     } else {
         cells.iter_mut().for_each(keep_live);
     }
-    let missing = |(i, c): (usize, &Cell)| -> Vec<(usize, Neighbour)> {
-        c.neighbours
+    let missing = |(i, c): (usize, &Cell)| -> Vec<(usize, Neighbor)> {
+        c.neighbors
             .iter()
             .filter(|nb| {
                 cells[nb.site]
-                    .neighbours
+                    .neighbors
                     .binary_search_by_key(&i, |x| x.site)
                     .is_err()
             })
             .map(|nb| {
                 (
                     nb.site,
-                    Neighbour {
+                    Neighbor {
                         site: i,
                         edge: [nb.edge[1], nb.edge[0]],
                     },
@@ -264,7 +264,7 @@ pub(crate) fn symmetrize(cells: &mut [Cell], parallel: bool) {
     };
     // Collected in site order either way, so the result does not depend on
     // `parallel`.
-    let additions: Vec<(usize, Neighbour)> = if parallel {
+    let additions: Vec<(usize, Neighbor)> = if parallel {
         cells
             .par_iter()
             .enumerate()
@@ -274,7 +274,7 @@ pub(crate) fn symmetrize(cells: &mut [Cell], parallel: bool) {
         cells.iter().enumerate().flat_map(missing).collect()
     };
     for (j, nb) in additions {
-        let list = &mut cells[j].neighbours;
+        let list = &mut cells[j].neighbors;
         if let Err(at) = list.binary_search_by_key(&nb.site, |x| x.site) {
             list.insert(at, nb);
         }
@@ -301,28 +301,28 @@ mod tests {
     fn symmetrize_adds_the_missing_side() {
         let p = |x: f64, y: f64| Point::new(x, y);
         let sq = ConvexPolygon::rectangle(0.0, 0.0, 1.0, 1.0).ok();
-        let mk = |nbs: Vec<Neighbour>| Cell {
+        let mk = |nbs: Vec<Neighbor>| Cell {
             polygon: sq.clone(),
             area: 1.0,
             centroid: p(0.5, 0.5),
-            neighbours: nbs,
+            neighbors: nbs,
             dominated_by: None,
         };
         let mut cells = vec![
-            mk(vec![Neighbour {
+            mk(vec![Neighbor {
                 site: 1,
                 edge: [p(1.0, 0.0), p(1.0, 1.0)],
             }]),
             mk(vec![]),
             empty_cell(p(0.0, 0.0), Some(0)),
         ];
-        cells[1].neighbours.push(Neighbour {
+        cells[1].neighbors.push(Neighbor {
             site: 2,
             edge: [p(0.0, 0.0), p(1.0, 0.0)],
         });
         symmetrize(&mut cells, false);
-        assert_eq!(cells[1].neighbours.len(), 1);
-        assert_eq!(cells[1].neighbours[0].site, 0);
-        assert_eq!(cells[1].neighbours[0].edge, [p(1.0, 1.0), p(1.0, 0.0)]);
+        assert_eq!(cells[1].neighbors.len(), 1);
+        assert_eq!(cells[1].neighbors[0].site, 0);
+        assert_eq!(cells[1].neighbors[0].edge, [p(1.0, 1.0), p(1.0, 0.0)]);
     }
 }

@@ -51,7 +51,7 @@ pub enum DiagramError {
     /// A neighbour list is unsorted, lists the cell itself, an unknown index or
     /// an empty cell, or belongs to an empty cell.
     #[error("cell {cell}: malformed neighbour list")]
-    NeighbourList {
+    NeighborList {
         /// The offending cell.
         cell: usize,
     },
@@ -106,8 +106,8 @@ impl PowerDiagram {
                 {
                     return Err(DiagramError::Measures { cell: i });
                 }
-                if !cell.neighbours.is_empty() {
-                    return Err(DiagramError::NeighbourList { cell: i });
+                if !cell.neighbors.is_empty() {
+                    return Err(DiagramError::NeighborList { cell: i });
                 }
                 continue;
             };
@@ -128,9 +128,9 @@ impl PowerDiagram {
             {
                 return Err(DiagramError::OutsideClip { cell: i });
             }
-            let list = &cell.neighbours;
+            let list = &cell.neighbors;
             if list.windows(2).any(|w| w[0].site >= w[1].site) {
-                return Err(DiagramError::NeighbourList { cell: i });
+                return Err(DiagramError::NeighborList { cell: i });
             }
             for nb in list {
                 let j = nb.site;
@@ -140,10 +140,10 @@ impl PowerDiagram {
                     .filter(|_| j != i)
                     .and_then(|c| c.polygon.as_ref())
                 else {
-                    return Err(DiagramError::NeighbourList { cell: i });
+                    return Err(DiagramError::NeighborList { cell: i });
                 };
                 if self.cells[j]
-                    .neighbours
+                    .neighbors
                     .binary_search_by_key(&i, |x| x.site)
                     .is_err()
                 {
@@ -267,14 +267,14 @@ mod tests {
         good.sanity_check(&sites, &clip).expect("sane");
 
         let mut d = good.clone();
-        d.cells[1].neighbours.clear();
+        d.cells[1].neighbors.clear();
         assert_eq!(
             d.sanity_check(&sites, &clip),
             Err(DiagramError::Asymmetric { a: 0, b: 1 })
         );
 
         let mut d = good.clone();
-        d.cells[0].neighbours[0].edge[0].x += 0.1;
+        d.cells[0].neighbors[0].edge[0].x += 0.1;
         assert!(matches!(
             d.sanity_check(&sites, &clip),
             Err(DiagramError::EdgeOffBoundary { .. })
@@ -284,8 +284,8 @@ mod tests {
         d.cells[1].polygon = None;
         d.cells[1].area = 0.0;
         d.cells[1].centroid = sites[1].position;
-        d.cells[1].neighbours.clear();
-        d.cells[0].neighbours.clear();
+        d.cells[1].neighbors.clear();
+        d.cells[0].neighbors.clear();
         assert!(matches!(
             d.sanity_check(&sites, &clip),
             Err(DiagramError::AreaSum { .. })

@@ -41,7 +41,7 @@ pub(crate) enum ClipOutcome {
 /// [`CLIP_EDGE`]). Holds its own scratch buffers so clipping allocates only
 /// while a cell grows beyond every earlier cell.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct LabelledPolygon {
+pub(crate) struct LabeledPolygon {
     /// Vertices, positively oriented, relative to the cell's site.
     pub(crate) verts: Vec<Point>,
     /// One label per edge, same indexing as `verts`.
@@ -56,7 +56,7 @@ pub(crate) struct LabelledPolygon {
     out_labels: Vec<usize>,
 }
 
-impl LabelledPolygon {
+impl LabeledPolygon {
     /// Resets to `clip` translated by `-origin`, every edge labelled as clip boundary.
     pub(crate) fn reset(&mut self, clip: &[Point], origin: Point) {
         self.verts.clear();
@@ -197,8 +197,8 @@ pub(crate) fn local_twice_area(verts: &[Point]) -> f64 {
 mod tests {
     use super::*;
 
-    fn unit_square() -> LabelledPolygon {
-        let mut p = LabelledPolygon::default();
+    fn unit_square() -> LabeledPolygon {
+        let mut p = LabeledPolygon::default();
         let sq = [
             Point::new(0.0, 0.0),
             Point::new(1.0, 0.0),

@@ -6,7 +6,7 @@
 use rayon::prelude::*;
 
 use super::assemble::{cannot_cut, empty_cell, symmetrize, CellBuilder, Prepared};
-use super::clip::LabelledPolygon;
+use super::clip::LabeledPolygon;
 use super::grid::Grid;
 use super::{Cell, PowerDiagram, Site};
 use crate::geom::{ConvexPolygon, Point};
@@ -99,7 +99,7 @@ struct Walker {
 impl Walker {
     fn new() -> Self {
         Walker {
-            builder: CellBuilder::new(LabelledPolygon::default()),
+            builder: CellBuilder::new(LabeledPolygon::default()),
             candidates: Vec::new(),
             stack: Vec::new(),
         }

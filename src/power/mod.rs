@@ -54,7 +54,7 @@ pub struct Cell {
     /// Area centroid of `polygon`; the site's position when empty.
     pub centroid: Point,
     /// Adjacent cells, sorted by site index; the relation is symmetric.
-    pub neighbours: Vec<Neighbour>,
+    pub neighbors: Vec<Neighbor>,
     /// `Some(j)` when the site's own position lies strictly outside its cell
     /// because `w_j − w_i > |p_i − p_j|²` (or `j` is a coincident site of equal
     /// weight and lower index); `j` is the nearest such site, the lowest index
@@ -66,7 +66,7 @@ pub struct Cell {
 
 /// One shared boundary segment between two cells.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Neighbour {
+pub struct Neighbor {
     /// Index of the adjacent site.
     pub site: usize,
     /// The shared segment, in the orientation of the cell that lists it (its
@@ -103,11 +103,11 @@ mod tests {
         for d in both(&sites, &square()) {
             assert!((d.cells[0].area - 8.0).abs() < 1e-12);
             assert!((d.cells[1].area - 8.0).abs() < 1e-12);
-            let e = d.cells[0].neighbours[0].edge;
-            assert_eq!(d.cells[0].neighbours[0].site, 1);
+            let e = d.cells[0].neighbors[0].edge;
+            assert_eq!(d.cells[0].neighbors[0].site, 1);
             assert!((e[0].x - 2.0).abs() < 1e-12 && (e[1].x - 2.0).abs() < 1e-12);
             assert!((e[0] - e[1]).length() > 3.999);
-            assert_eq!(d.cells[1].neighbours[0].site, 0);
+            assert_eq!(d.cells[1].neighbors[0].site, 0);
             assert_eq!(d.cells[0].dominated_by, None);
         }
     }
@@ -120,7 +120,7 @@ mod tests {
         for d in both(&sites, &square()) {
             assert!((d.cells[0].area - 4.0 * 2.25).abs() < 1e-12);
             assert!((d.cells[1].area - 4.0 * 1.75).abs() < 1e-12);
-            for x in d.cells[0].neighbours[0].edge {
+            for x in d.cells[0].neighbors[0].edge {
                 assert!((x.x - 2.25).abs() < 1e-12);
             }
         }
@@ -141,7 +141,7 @@ mod tests {
             // Symmetry about x = 2.
             assert!((d.cells[0].area - d.cells[1].area).abs() < 1e-12);
             for c in &d.cells {
-                assert_eq!(c.neighbours.len(), 2);
+                assert_eq!(c.neighbors.len(), 2);
             }
             let hits = d.cells[2]
                 .polygon
@@ -168,8 +168,8 @@ mod tests {
             assert_eq!(d.cells[1].area, 0.0);
             assert_eq!(d.cells[1].centroid, sites[1].position);
             assert_eq!(d.cells[1].dominated_by, Some(0));
-            assert!(d.cells[1].neighbours.is_empty());
-            assert!(d.cells[0].neighbours.iter().all(|nb| nb.site != 1));
+            assert!(d.cells[1].neighbors.is_empty());
+            assert!(d.cells[0].neighbors.iter().all(|nb| nb.site != 1));
         }
     }
 
@@ -179,7 +179,7 @@ mod tests {
         let sites = [site(10.0, 10.0, 3.0)];
         for d in both(&sites, &clip) {
             assert_eq!(d.cells[0].polygon.as_ref(), Some(&clip));
-            assert!(d.cells[0].neighbours.is_empty());
+            assert!(d.cells[0].neighbors.is_empty());
         }
     }
 
@@ -243,7 +243,7 @@ mod tests {
             for (k, c) in d.cells.iter().enumerate() {
                 assert!((c.area - 0.4).abs() < 1e-9, "cell {k}: {}", c.area);
                 let expect = if k == 0 || k == 39 { 1 } else { 2 };
-                assert_eq!(c.neighbours.len(), expect);
+                assert_eq!(c.neighbors.len(), expect);
             }
         }
     }
@@ -263,7 +263,7 @@ mod tests {
         ];
         for d in both(&sites, &clip) {
             assert!((d.cells[0].area - 1.0).abs() < 1e-9, "{}", d.cells[0].area);
-            assert_eq!(d.cells[0].neighbours.len(), 4);
+            assert_eq!(d.cells[0].neighbors.len(), 4);
             assert!(
                 (d.cells[1].area - 999_999.75).abs() < 1e-6,
                 "{}",
@@ -356,8 +356,8 @@ mod tests {
         for (a, b) in d.cells.iter().zip(&naive.cells) {
             assert_eq!(a.dominated_by, b.dominated_by);
             assert!((a.area - b.area).abs() < 1e-9 * 1e4);
-            let sa: Vec<usize> = a.neighbours.iter().map(|x| x.site).collect();
-            let sb: Vec<usize> = b.neighbours.iter().map(|x| x.site).collect();
+            let sa: Vec<usize> = a.neighbors.iter().map(|x| x.site).collect();
+            let sb: Vec<usize> = b.neighbors.iter().map(|x| x.site).collect();
             assert_eq!(sa, sb);
         }
     }

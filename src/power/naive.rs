@@ -3,7 +3,7 @@
 //! layouts and may not diverge from the fast path's conventions.
 
 use super::assemble::{symmetrize, CellBuilder, Prepared};
-use super::clip::LabelledPolygon;
+use super::clip::LabeledPolygon;
 use super::{Cell, PowerDiagram, Site};
 use crate::geom::ConvexPolygon;
 
@@ -13,7 +13,7 @@ use crate::geom::ConvexPolygon;
 /// coincident sites and `dominated_by`.
 pub fn power_diagram_naive(sites: &[Site], clip: &ConvexPolygon) -> PowerDiagram {
     let input = Prepared::new(sites, clip);
-    let mut builder = CellBuilder::new(LabelledPolygon::default());
+    let mut builder = CellBuilder::new(LabeledPolygon::default());
     let mut cells: Vec<Cell> = (0..input.len())
         .map(|i| {
             if !input.active[i] {

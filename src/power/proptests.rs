@@ -64,10 +64,10 @@ fn assert_same(fast: &PowerDiagram, naive: &PowerDiagram, clip: &ConvexPolygon) 
             assert_eq!(f.polygon.is_some(), n.polygon.is_some(), "cell {i}");
         }
         for (a, b) in [(f, n), (n, f)] {
-            for nb in &a.neighbours {
+            for nb in &a.neighbors {
                 if nb.edge[0].distance(nb.edge[1]) > edge_tol {
                     assert!(
-                        b.neighbours.iter().any(|x| x.site == nb.site),
+                        b.neighbors.iter().any(|x| x.site == nb.site),
                         "cell {i}: neighbour {} missing on one side",
                         nb.site
                     );

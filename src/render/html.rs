@@ -2,12 +2,15 @@
 //! SVG with inline style, inline script and the node data as JSON, for the hover
 //! behaviour of the paper's prototype (method reference §8.5). Owns the page's
 //! structure, its style and script and the escaping of the data block; may not
-//! build the SVG or the node data, do I/O, or reference anything over the network.
+//! build the SVG, do I/O, or reference anything over the network.
 //! Output is deterministic: identical input gives identical bytes.
 
 use serde::Serialize;
 
-use super::svg::escape;
+use super::picture::{picture, Style};
+use super::svg::{cell_colors, escape, path_data};
+use crate::layout::Computed;
+use nptreemap_formats::Dataset;
 
 /// What the page knows about the map beyond its picture.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -46,8 +49,10 @@ pub struct HtmlNode {
     pub depth: usize,
     /// Whether the node is a leaf (only leaves react to hovering).
     pub leaf: bool,
-    /// Ids of the cells at the same depth sharing an edge with this one.
-    pub neighbours: Vec<String>,
+    /// Ids of the cells at the same depth sharing an edge with this one
+    /// (`neighbours` in the page's data, which its script reads).
+    #[serde(rename = "neighbours")]
+    pub neighbors: Vec<String>,
     /// Ids of the node's constraint partners, each with whether the constraint
     /// is realised (the two cells share an edge).
     pub partners: Vec<(String, bool)>,
@@ -223,6 +228,83 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
     out
 }
 
+/// The interactive page of a finished computation: the picture (its
+/// unrealised links drawn, for the page's checkbox to show or hide), and per
+/// cell its path from the root, weight, neighbours and constraint partners for
+/// the hover highlight.
+pub fn html_page(computed: &Computed, style: &Style) -> String {
+    let dataset = &computed.dataset;
+    // The links are always drawn on the page; its checkbox shows or hides them.
+    let mut page_style = style.clone();
+    page_style.overlay.show_unrealized = true;
+    let svg_text = picture(computed, &page_style);
+    let adjacency = computed.adjacency();
+    let mut partners: Vec<Vec<(String, bool)>> = vec![Vec::new(); dataset.len()];
+    for (c, r) in computed.constraints.iter().zip(&computed.realized) {
+        partners[c.a].push((dataset.node(c.b).id.clone(), *r));
+        partners[c.b].push((dataset.node(c.a).id.clone(), *r));
+    }
+    let nodes = dataset
+        .nodes()
+        .iter()
+        .enumerate()
+        .map(|(i, node)| HtmlNode {
+            id: node.id.clone(),
+            label: node.label.clone(),
+            path: path_labels(dataset, i),
+            weight: node.value,
+            depth: node.depth,
+            leaf: node.children.is_empty(),
+            neighbors: adjacency[node.depth]
+                .neighbors(i)
+                .iter()
+                .map(|j| dataset.node(*j).id.clone())
+                .collect(),
+            partners: std::mem::take(&mut partners[i]),
+        })
+        .collect();
+    let title = style
+        .title
+        .clone()
+        .unwrap_or_else(|| dataset.node(dataset.root()).label.clone());
+    let colors = cell_colors(dataset);
+    let frames = computed
+        .report
+        .frames
+        .iter()
+        .map(|f| HtmlFrame {
+            label: format!("level {}: {}", f.depth, f.label),
+            cells: f
+                .cells
+                .iter()
+                .map(|(i, polygon)| {
+                    let mut d = String::new();
+                    path_data(&mut d, polygon);
+                    let fill = colors[*i].map_or("#cccccc".to_string(), |c| c.to_string());
+                    (dataset.node(*i).id.clone(), d, fill)
+                })
+                .collect(),
+        })
+        .collect();
+    html(
+        &svg_text,
+        &HtmlData {
+            title,
+            nodes,
+            frames,
+        },
+    )
+}
+
+/// The labels from the root to node `i`, both included: the tooltip's text.
+fn path_labels(dataset: &Dataset, i: usize) -> Vec<String> {
+    dataset
+        .path(i)
+        .iter()
+        .map(|k| dataset.node(*k).label.clone())
+        .collect()
+}
+
 /// `data` as JSON safe inside a `<script>` element: every `<` becomes the JSON
 /// escape `\u003c`, so neither `</script` nor `<!--` can appear, and the text
 /// still parses to the same value.
@@ -238,7 +320,6 @@ mod tests {
     use super::*;
     use crate::render::svg::{svg, SvgStyle};
     use crate::render::test_support::sample;
-    use nptreemap_formats::Dataset;
 
     /// Page data for the sample: every node, neighbours and partners made up.
     fn sample_data(dataset: &Dataset, title: &str) -> HtmlData {
@@ -247,12 +328,8 @@ mod tests {
             .iter()
             .enumerate()
             .map(|(i, node)| {
-                let path: Vec<String> = dataset
-                    .path(i)
-                    .iter()
-                    .map(|k| dataset.node(*k).label.clone())
-                    .collect();
-                let (neighbours, partners) = match node.id.as_str() {
+                let path = path_labels(dataset, i);
+                let (neighbors, partners) = match node.id.as_str() {
                     "A1" => (vec!["A2".into(), "B".into()], vec![("B".into(), true)]),
                     "A3" => (vec!["A2".into()], vec![("A1".into(), false)]),
                     _ => (Vec::new(), Vec::new()),
@@ -264,7 +341,7 @@ mod tests {
                     weight: node.value,
                     depth: node.depth,
                     leaf: dataset.is_leaf(i),
-                    neighbours,
+                    neighbors,
                     partners,
                 }
             })

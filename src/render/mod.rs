@@ -1,13 +1,12 @@
-//! Rendering: a finished [`Layout`](crate::layout::Layout) and a style become
-//! bytes (layout JSON, SVG text, PNG). PURE: may not run or alter a layout, read
+//! Rendering: a finished layout ([`Computed`](crate::layout::Computed)) and a
+//! style become pictures (SVG text, PNG, an interactive HTML page; the layout
+//! JSON is [`crate::layout_json`]'s). PURE: may not run or alter a layout, read
 //! or write files; every renderer is a function of finished data and gives
 //! identical bytes for identical input. Only PNG can fail, and then on a bug
 //! (its input is our own SVG) or an absurd pixel size.
 
 /// Interactive HTML page: the SVG with inline hover script, style and node data.
 pub mod html;
-/// Layout JSON in the `nptreemap-layout/1` format of `shared/spec/layout-json.md`.
-pub mod json;
 /// The legend band: top-level groups and the overlay's glyphs.
 pub mod legend;
 /// Interlocking tabs and unrealised-link markers drawn over the treemap.
@@ -22,10 +21,9 @@ pub mod png;
 pub mod svg;
 
 #[cfg(test)]
-mod test_support;
+pub(crate) mod test_support;
 
-pub use html::{html, HtmlData, HtmlFrame, HtmlNode};
-pub use json::{layout_json, ConstraintOut, JsonExtras};
+pub use html::{html, html_page, HtmlData, HtmlFrame, HtmlNode};
 pub use palette::Rgb;
 pub use picture::{picture, Border, Style};
 pub use png::{png, PngError};

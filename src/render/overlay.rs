@@ -4,12 +4,12 @@
 //! dashed red links between the cells plus an "unlinked" count on the cell
 //! (§8.4). Pure: a finished layout and its constraints in, SVG text out. The
 //! tabs go under the picture's labels, the rest over them
-//! ([`picture`](crate::render::picture::picture) places the two layers).
+//! ([`compose`](crate::render::picture::compose) places the two layers).
 
 use super::svg::{cell_colors, escape, num};
+use crate::geom::shared_edge::{shared_segments, PERPENDICULAR_TOL};
 use crate::geom::Point;
 use crate::layout::Layout;
-use crate::neighborhood::adjacency::{layout_diagonal, shared_segments, PERPENDICULAR_TOL};
 use nptreemap_formats::Dataset;
 
 /// One constraint to draw.
@@ -72,7 +72,7 @@ fn scale(layout: &Layout) -> f64 {
 /// Where a tab goes: the longest shared segment of the two cells, when it is at
 /// least one tab wide. Returns its end points.
 pub fn tab_edge(layout: &Layout, link: &Link) -> Option<[Point; 2]> {
-    let tol = PERPENDICULAR_TOL * layout_diagonal(layout);
+    let tol = PERPENDICULAR_TOL * layout.diagonal();
     let width = TAB_WIDTH_PX * scale(layout);
     shared_segments(
         &layout.cells[link.a].polygon,
@@ -268,7 +268,7 @@ mod tests {
     }
 
     #[test]
-    fn one_tab_per_realised_link_with_room_centred_on_its_edge() {
+    fn one_tab_per_realized_link_with_room_centered_on_its_edge() {
         let (ds, layout) = sample();
         let (a, b, c, d) = (1, 2, 3, 4);
         let links = vec![

@@ -1,19 +1,9 @@
-//! Colours for the pictures: the [`Rgb`] type with hex parsing and formatting, the
-//! Tableau 10 / Tableau 20 categorical palettes, and lightness variations in HSL.
-//! Owns colour arithmetic only; may not know about nodes, layouts or SVG.
+//! Colours for the pictures: the Tableau 10 / Tableau 20 categorical palettes
+//! and lightness variations in HSL, over the model's [`Rgb`] (parsed once, by
+//! the formats crate). Owns colour arithmetic only; may not know about nodes,
+//! layouts or SVG.
 
-use std::fmt;
-
-/// An opaque sRGB colour, 8 bits per channel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Rgb {
-    /// Red, 0..=255.
-    pub r: u8,
-    /// Green, 0..=255.
-    pub g: u8,
-    /// Blue, 0..=255.
-    pub b: u8,
-}
+pub use nptreemap_formats::Rgb;
 
 /// White, the default background and stroke colour.
 pub const WHITE: Rgb = Rgb::new(0xff, 0xff, 0xff);
@@ -62,93 +52,57 @@ const SHADE_DARKEST: f64 = -0.18;
 /// towards light because dark text with a white halo reads on light fills.
 const SHADE_LIGHTEST: f64 = 0.32;
 
-impl Rgb {
-    /// A colour from its three channels.
-    pub const fn new(r: u8, g: u8, b: u8) -> Self {
-        Self { r, g, b }
-    }
-
-    /// Parses `#rrggbb` or `#rgb` (either case; the `#` is required). `None` for
-    /// anything else, so a bad colour in the data falls back to the palette.
-    pub fn from_hex(s: &str) -> Option<Self> {
-        let hex = s.strip_prefix('#')?;
-        if !hex.bytes().all(|c| c.is_ascii_hexdigit()) {
-            return None;
-        }
-        let digit = |i: usize| u8::from_str_radix(&hex[i..=i], 16).ok();
-        match hex.len() {
-            3 => Some(Self::new(digit(0)? * 17, digit(1)? * 17, digit(2)? * 17)),
-            6 => {
-                let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).ok();
-                Some(Self::new(byte(0)?, byte(2)?, byte(4)?))
-            }
-            _ => None,
-        }
-    }
-
-    /// `#rrggbb` in lower case; the same as `to_string()`.
-    pub fn to_hex(self) -> String {
-        self.to_string()
-    }
-
-    /// Relative luminance (WCAG 2), 0 for black to 1 for white.
-    pub fn luminance(self) -> f64 {
-        let lin = |c: u8| {
-            let c = f64::from(c) / 255.0;
-            if c <= 0.04045 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            }
-        };
-        0.2126 * lin(self.r) + 0.7152 * lin(self.g) + 0.0722 * lin(self.b)
-    }
-
-    fn to_hsl(self) -> (f64, f64, f64) {
-        let r = f64::from(self.r) / 255.0;
-        let g = f64::from(self.g) / 255.0;
-        let b = f64::from(self.b) / 255.0;
-        let max = r.max(g).max(b);
-        let min = r.min(g).min(b);
-        let l = 0.5 * (max + min);
-        let d = max - min;
-        if d == 0.0 {
-            return (0.0, 0.0, l);
-        }
-        let s = d / (1.0 - (2.0 * l - 1.0).abs());
-        let h = if max == r {
-            ((g - b) / d).rem_euclid(6.0)
-        } else if max == g {
-            (b - r) / d + 2.0
+/// Relative luminance (WCAG 2), 0 for black to 1 for white.
+pub fn luminance(c: Rgb) -> f64 {
+    let lin = |c: u8| {
+        let c = f64::from(c) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
         } else {
-            (r - g) / d + 4.0
-        };
-        (h * 60.0, s, l)
-    }
-
-    fn from_hsl(h: f64, s: f64, l: f64) -> Self {
-        let c = (1.0 - (2.0 * l - 1.0).abs()) * s;
-        let hp = h.rem_euclid(360.0) / 60.0;
-        let x = c * (1.0 - (hp.rem_euclid(2.0) - 1.0).abs());
-        let (r, g, b) = match hp as u32 {
-            0 => (c, x, 0.0),
-            1 => (x, c, 0.0),
-            2 => (0.0, c, x),
-            3 => (0.0, x, c),
-            4 => (x, 0.0, c),
-            _ => (c, 0.0, x),
-        };
-        let m = l - 0.5 * c;
-        // Clamped before the cast so round-off can never wrap a channel.
-        let ch = |v: f64| ((v + m) * 255.0).round().clamp(0.0, 255.0) as u8;
-        Self::new(ch(r), ch(g), ch(b))
-    }
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    0.2126 * lin(c.r) + 0.7152 * lin(c.g) + 0.0722 * lin(c.b)
 }
 
-impl fmt::Display for Rgb {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "#{:02x}{:02x}{:02x}", self.r, self.g, self.b)
+fn to_hsl(c: Rgb) -> (f64, f64, f64) {
+    let r = f64::from(c.r) / 255.0;
+    let g = f64::from(c.g) / 255.0;
+    let b = f64::from(c.b) / 255.0;
+    let max = r.max(g).max(b);
+    let min = r.min(g).min(b);
+    let l = 0.5 * (max + min);
+    let d = max - min;
+    if d == 0.0 {
+        return (0.0, 0.0, l);
     }
+    let s = d / (1.0 - (2.0 * l - 1.0).abs());
+    let h = if max == r {
+        ((g - b) / d).rem_euclid(6.0)
+    } else if max == g {
+        (b - r) / d + 2.0
+    } else {
+        (r - g) / d + 4.0
+    };
+    (h * 60.0, s, l)
+}
+
+fn from_hsl(h: f64, s: f64, l: f64) -> Rgb {
+    let c = (1.0 - (2.0 * l - 1.0).abs()) * s;
+    let hp = h.rem_euclid(360.0) / 60.0;
+    let x = c * (1.0 - (hp.rem_euclid(2.0) - 1.0).abs());
+    let (r, g, b) = match hp as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let m = l - 0.5 * c;
+    // Clamped before the cast so round-off can never wrap a channel.
+    let ch = |v: f64| ((v + m) * 255.0).round().clamp(0.0, 255.0) as u8;
+    Rgb::new(ch(r), ch(g), ch(b))
 }
 
 /// Changes the HSL lightness of `color`, keeping hue and saturation. `amount` in
@@ -165,13 +119,13 @@ pub fn lighten(color: Rgb, amount: f64) -> Rgb {
     } else {
         0.0
     };
-    let (h, s, l) = color.to_hsl();
+    let (h, s, l) = to_hsl(color);
     let l = if amount >= 0.0 {
         l + (1.0 - l) * amount
     } else {
         l * (1.0 + amount)
     };
-    Rgb::from_hsl(h, s, l.clamp(0.0, 1.0))
+    from_hsl(h, s, l.clamp(0.0, 1.0))
 }
 
 /// The colour of child `index` of `count` siblings under a parent of colour
@@ -247,8 +201,8 @@ mod tests {
         let c = TABLEAU10[0];
         assert_eq!(lighten(c, 1.0), WHITE);
         assert_eq!(lighten(c, -1.0), Rgb::new(0, 0, 0));
-        assert!(lighten(c, 0.3).luminance() > c.luminance());
-        assert!(lighten(c, -0.3).luminance() < c.luminance());
+        assert!(luminance(lighten(c, 0.3)) > luminance(c));
+        assert!(luminance(lighten(c, -0.3)) < luminance(c));
         assert_eq!(lighten(c, f64::NAN), c);
     }
 
@@ -265,7 +219,7 @@ mod tests {
             }
         }
         // Neighbours in index order alternate dark/light.
-        assert!(shades[0].luminance() < shades[1].luminance());
-        assert!(shades[1].luminance() > shades[2].luminance());
+        assert!(luminance(shades[0]) < luminance(shades[1]));
+        assert!(luminance(shades[1]) > luminance(shades[2]));
     }
 }

@@ -13,7 +13,7 @@ use super::legend::{legend, LegendItem};
 use super::overlay::{overlay, tab_edge, Link, OverlayStyle};
 use super::palette::Rgb;
 use super::svg::{cell_colors, escape, num, push_cells, push_labels, SvgStyle};
-use crate::layout::Layout;
+use crate::layout::{Computed, Layout};
 
 /// How the picture looks, beyond the geometry of its layout.
 #[derive(Clone, Debug, PartialEq)]
@@ -73,10 +73,32 @@ fn unit(layout: &Layout) -> f64 {
 /// Smallest canvas scale for the frame's text (see [`unit`]).
 const MIN_UNIT: f64 = 0.75;
 
+/// The SVG picture of a finished computation: the treemap with, when there are
+/// constraints, the interlocking tabs and unrealised-link markers of its
+/// deepest level (where the paper draws them, method-reference §8.2–8.4),
+/// framed as `style` says. Identical input gives identical bytes.
+pub fn picture(computed: &Computed, style: &Style) -> String {
+    let (dataset, layout) = (&computed.dataset, &computed.layout);
+    let deepest = dataset.max_depth();
+    let links: Vec<Link> = computed
+        .constraints
+        .iter()
+        .zip(&computed.realized)
+        .filter(|(c, _)| dataset.node(c.a).depth == deepest)
+        .map(|(c, r)| Link {
+            a: c.a,
+            b: c.b,
+            similarity: c.similarity,
+            realized: *r,
+        })
+        .collect();
+    compose(dataset, layout, &links, style)
+}
+
 /// Draws the picture of `layout` (cells indexed like `dataset`) with the
-/// constraint `links` of its deepest level. Identical input gives identical
-/// bytes.
-pub fn picture(dataset: &Dataset, layout: &Layout, links: &[Link], style: &Style) -> String {
+/// constraint `links` of its deepest level: the tabs under the labels, the
+/// rest over them. Identical input gives identical bytes.
+pub fn compose(dataset: &Dataset, layout: &Layout, links: &[Link], style: &Style) -> String {
     let (cw, ch) = (layout.canvas.width, layout.canvas.height);
     let u = unit(layout);
     let shown: Vec<Link> = links
@@ -224,7 +246,7 @@ mod tests {
     #[test]
     fn title_and_legend_extend_the_view_without_moving_cells() {
         let (ds, layout) = sample();
-        let plain = picture(
+        let plain = compose(
             &ds,
             &layout,
             &[],
@@ -234,7 +256,7 @@ mod tests {
             },
         );
         assert_eq!(view_box(&plain), vec![0.0, 0.0, 400.0, 200.0]);
-        let framed = picture(
+        let framed = compose(
             &ds,
             &layout,
             &[],
@@ -273,11 +295,11 @@ mod tests {
             },
             ..Style::default()
         };
-        let s = picture(&ds, &layout, &[], &style);
+        let s = compose(&ds, &layout, &[], &style);
         assert!(s.contains("class=\"np-border\""));
         assert!(s.contains("stroke=\"#333333\" stroke-width=\"2.00\""));
         assert!(!s.contains("<rect y="), "no background rectangle");
-        let s = picture(&ds, &layout, &[], &Style::default());
+        let s = compose(&ds, &layout, &[], &Style::default());
         assert!(!s.contains("np-border"));
         assert!(s.contains("<rect y=\"0.00\" width=\"400.00\""));
     }
@@ -292,10 +314,10 @@ mod tests {
             similarity: 0.9,
             realized: true,
         };
-        let with = picture(&ds, &layout, std::slice::from_ref(&link), &Style::default());
+        let with = compose(&ds, &layout, std::slice::from_ref(&link), &Style::default());
         assert_eq!(with.matches("class=\"np-tab\"").count(), 1);
         assert!(with.contains("class=\"np-legend-tab\""));
-        let without = picture(
+        let without = compose(
             &ds,
             &layout,
             &[link],
@@ -315,8 +337,8 @@ mod tests {
             title: Some("T & <t>".to_string()),
             ..Style::default()
         };
-        let a = picture(&ds, &layout, &[], &style);
-        assert_eq!(a, picture(&ds, &layout, &[], &style));
+        let a = compose(&ds, &layout, &[], &style);
+        assert_eq!(a, compose(&ds, &layout, &[], &style));
         resvg::usvg::Tree::from_str(&a, &resvg::usvg::Options::default()).expect("valid SVG");
     }
 }

@@ -185,7 +185,7 @@ fn stroke_width(top: f64, depth: usize) -> f64 {
 /// by sibling index and deeper nodes a lightness variation of their parent's
 /// colour ([`palette::child_shade`]). The root has none unless it is a leaf.
 pub(crate) fn cell_colors(dataset: &Dataset) -> Vec<Option<Rgb>> {
-    let own = |i: usize| dataset.node(i).color.as_deref().and_then(Rgb::from_hex);
+    let own = |i: usize| dataset.node(i).color;
     let mut colors: Vec<Option<Rgb>> = vec![None; dataset.len()];
     let root = dataset.root();
     if root < dataset.len() && dataset.is_leaf(root) {
@@ -448,7 +448,7 @@ mod tests {
     }
 
     #[test]
-    fn colours_follow_the_hierarchy() {
+    fn colors_follow_the_hierarchy() {
         let (dataset, layout) = sample();
         let colors = cell_colors(&dataset);
         let idx = |id: &str| dataset.nodes().iter().position(|n| n.id == id).unwrap();

@@ -4,7 +4,7 @@
 //! The dataset comes from `nptreemap_formats::DatasetBuilder`; adapt `sample()`
 //! here (and only here) if that builder's API differs.
 
-use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
+use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec, Rgb};
 
 use crate::geom::ConvexPolygon;
 use crate::layout::{Canvas, Layout, LayoutCell};
@@ -30,7 +30,7 @@ pub(crate) fn sample() -> (Dataset, Layout) {
             NodeSpec::new("B")
                 .parent("root")
                 .weight(32000.0)
-                .color("#ff0000")
+                .color(Rgb::new(0xff, 0, 0))
                 .label("<script>alert(1)</script> \"q\""),
         )
         .add(NodeSpec::new("A1").parent("A").weight(24000.0))

@@ -39,7 +39,7 @@ struct Page {
     path: Vec<String>,
     weight: f64,
     polygon: Vec<[f64; 2]>,
-    neighbours: BTreeSet<String>,
+    neighbors: BTreeSet<String>,
     /// Constraint partners, each with whether the constraint is realised.
     partners: BTreeMap<String, bool>,
 }
@@ -86,7 +86,7 @@ impl Page {
             }
             partners
         };
-        let neighbours_of = |id: &str| -> BTreeSet<String> {
+        let neighbors_of = |id: &str| -> BTreeSet<String> {
             page_nodes[id]["neighbours"]
                 .as_array()
                 .expect("neighbours")
@@ -98,7 +98,7 @@ impl Page {
             .iter()
             .map(|n| n["id"].as_str().expect("id"))
             .filter(|id| leaves.contains(*id) && by_id[id]["virtual"] != true)
-            .filter(|id| !neighbours_of(id).is_empty() && !partners_of(id).is_empty())
+            .filter(|id| !neighbors_of(id).is_empty() && !partners_of(id).is_empty())
             .collect();
         let target = candidates
             .iter()
@@ -128,7 +128,7 @@ impl Page {
                 .iter()
                 .map(|p| [p[0].as_f64().expect("x"), p[1].as_f64().expect("y")])
                 .collect(),
-            neighbours: neighbours_of(&target),
+            neighbors: neighbors_of(&target),
             partners: partners_of(&target),
             leaves,
             target,
@@ -148,13 +148,13 @@ impl Page {
             cx += (x0 + x1) * cross;
             cy += (y0 + y1) * cross;
         }
-        let centre = [cx / (3.0 * area), cy / (3.0 * area)];
-        let mut points = vec![centre];
+        let center = [cx / (3.0 * area), cy / (3.0 * area)];
+        let mut points = vec![center];
         for t in [0.5, 0.25, 0.75] {
             for [x, y] in &self.polygon {
                 points.push([
-                    centre[0] + t * (x - centre[0]),
-                    centre[1] + t * (y - centre[1]),
+                    center[0] + t * (x - center[0]),
+                    center[1] + t * (y - center[1]),
                 ]);
             }
         }
@@ -359,7 +359,7 @@ fn hover_point(browser: &mut Browser, page: &Page) -> (f64, f64) {
 /// The hover state is the page's documented behaviour for `page.target`.
 fn check_hovered(state: &Value, page: &Page) -> Result<(), String> {
     let dimmed = id_set(&state["dimmed"]);
-    let expected: BTreeSet<String> = page.leaves.difference(&page.neighbours).cloned().collect();
+    let expected: BTreeSet<String> = page.leaves.difference(&page.neighbors).cloned().collect();
     if dimmed != expected {
         return Err(format!("dimmed {dimmed:?}, expected {expected:?}"));
     }

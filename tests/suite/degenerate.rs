@@ -6,7 +6,7 @@
 use nptreemap::geom::{ConvexPolygon, Point};
 use nptreemap::layout::map::{MapSettings, MapSimulation};
 use nptreemap::layout::{layout, Outline, Params};
-use nptreemap::metrics;
+use nptreemap::measure;
 use nptreemap::rng::Rng;
 use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
 
@@ -84,7 +84,7 @@ fn ten_thousand_children_in_one_parent() {
     let ds = flat(&weights);
     let (l, report) = layout(&ds, &Params::default()).expect("layout");
     l.sanity_check(&ds).expect("sane");
-    let q = metrics::quality(&ds, &l);
+    let q = measure::quality(&ds, &l);
     assert!(q.area_error_diagram_mean <= 0.01, "{q:?} {report:?}");
 }
 
@@ -98,7 +98,7 @@ fn weight_ratio_of_a_million() {
     let (l, _) = layout(&ds, &params).expect("layout");
     l.sanity_check(&ds).expect("sane");
     assert!(share(&ds, &l, "n0") > 0.0);
-    let q = metrics::quality(&ds, &l);
+    let q = measure::quality(&ds, &l);
     assert!(q.area_error_diagram_mean <= 0.01, "{q:?}");
 }
 
@@ -145,7 +145,7 @@ fn outlines_hold_their_children() {
         };
         let (l, _) = layout(&ds, &params).expect("layout");
         l.sanity_check(&ds).expect("sane");
-        assert!(metrics::quality(&ds, &l).area_error_diagram_mean <= 0.01);
+        assert!(measure::quality(&ds, &l).area_error_diagram_mean <= 0.01);
     }
 }
 

@@ -82,8 +82,8 @@ fn number(node: roxmltree::Node, name: &str) -> f64 {
         .unwrap_or_else(|| panic!("<{}> has a numeric {name}", node.tag_name().name()))
 }
 
-fn hex(colour: &str) -> [u8; 3] {
-    let h = colour.strip_prefix('#').expect("#rrggbb");
+fn hex(color: &str) -> [u8; 3] {
+    let h = color.strip_prefix('#').expect("#rrggbb");
     let c = |k: usize| u8::from_str_radix(&h[k..k + 2], 16).expect("hex");
     [c(0), c(2), c(4)]
 }
@@ -93,7 +93,7 @@ struct Picture {
     /// The cell labels (not the overlay's unlinked counts).
     labels: Vec<Label>,
     /// Their fill colour.
-    text_colour: [u8; 3],
+    text_color: [u8; 3],
     /// Every filled cell's and tab's colour.
     fills: Vec<[u8; 3]>,
     /// Width of the viewBox, to convert SVG units to pixels.
@@ -122,7 +122,7 @@ fn parse(svg: &str) -> Picture {
         .descendants()
         .filter(|n| n.has_tag_name("text") && in_labels(*n))
         .collect();
-    let text_colour = texts
+    let text_color = texts
         .first()
         .and_then(|t| t.ancestors().find_map(|a| a.attribute("fill")))
         .map(hex)
@@ -145,7 +145,7 @@ fn parse(svg: &str) -> Picture {
         .collect();
     Picture {
         labels,
-        text_colour,
+        text_color,
         fills,
         view_width,
     }
@@ -204,7 +204,7 @@ fn countries_png_shows_its_labels() {
     let picture = parse(&built.svg);
     // Preconditions: the labels are ink-coloured and nothing else drawn is,
     // so ink pixels can only be glyphs.
-    assert!(ink(picture.text_colour), "labels are dark grey");
+    assert!(ink(picture.text_color), "labels are dark grey");
     for fill in &picture.fills {
         assert!(!ink(*fill), "a cell or tab colour {fill:?} looks like ink");
     }

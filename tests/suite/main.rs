@@ -17,6 +17,7 @@ mod paper_data;
 mod random_hierarchies;
 mod render_refs;
 mod similarity_paths;
+mod single_dataset;
 mod tabs;
 mod warm_start;
 mod watch;

@@ -53,7 +53,7 @@ fn evaluate(file: &str, method: &str, seed: u64, constraints: u64) -> serde_json
     report
 }
 
-fn median_realised(file: &str, method: &str, constraints: u64) -> u64 {
+fn median_realized(file: &str, method: &str, constraints: u64) -> u64 {
     median(
         (1..=5)
             .map(|seed| {
@@ -67,13 +67,13 @@ fn median_realised(file: &str, method: &str, constraints: u64) -> u64 {
 
 /// The paper's floor for `neighbor`, then every baseline below it.
 fn table2_row(file: &str, constraints: u64, paper_best: u64) {
-    let ours = median_realised(file, "neighbor", constraints);
+    let ours = median_realized(file, "neighbor", constraints);
     assert!(
         ours >= paper_best,
         "{file}: neighbor realises {ours} (median), paper {paper_best}"
     );
     for baseline in ["plain", "random-cvt", "proj-scale"] {
-        let theirs = median_realised(file, baseline, constraints);
+        let theirs = median_realized(file, baseline, constraints);
         assert!(
             theirs < ours,
             "{file}: {baseline} realises {theirs}, neighbor {ours}"

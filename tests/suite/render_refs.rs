@@ -151,7 +151,7 @@ fn plain_hierarchy() {
 /// neighbours, which no planar layout realises): interlocking tabs on shared
 /// edges and the red "unlinked" counts on cells with unrealised constraints.
 #[test]
-fn neighbour_tabs_and_unlinked_markers() {
+fn neighbor_tabs_and_unlinked_markers() {
     check("neighbours", &[]);
 }
 

@@ -3,7 +3,7 @@
 //! one dataset, each ending with `sanity_check`.
 
 use nptreemap::layout::{compute, Method, Request};
-use nptreemap::metrics;
+use nptreemap::measure;
 use nptreemap::neighborhood::SimilarityKind;
 use nptreemap_formats::{DatasetBuilder, NodeSpec};
 
@@ -27,7 +27,7 @@ fn ring() -> nptreemap_formats::Dataset {
 }
 
 #[test]
-fn relations_without_vectors_use_mds_and_realise_constraints() {
+fn relations_without_vectors_use_mds_and_realize_constraints() {
     let ds = ring();
     let request = Request {
         similarity: Some(SimilarityKind::NeighborList),
@@ -36,7 +36,7 @@ fn relations_without_vectors_use_mds_and_realise_constraints() {
     let c = compute(&ds, &request).expect("layout");
     assert_eq!(c.method, Method::Neighbor);
     c.layout.sanity_check(&c.dataset).expect("sane");
-    assert!(metrics::quality(&c.dataset, &c.layout).area_error_diagram_mean <= 0.01);
+    assert!(measure::quality(&c.dataset, &c.layout).area_error_diagram_mean <= 0.01);
     let leaf_depth = c.dataset.max_depth();
     let leaf: Vec<bool> = c
         .constraints
@@ -47,8 +47,8 @@ fn relations_without_vectors_use_mds_and_realise_constraints() {
         .collect();
     // A ring of 12 borders: the constraint pipeline keeps each of them.
     assert_eq!(leaf.len(), 12);
-    let realised = leaf.iter().filter(|r| **r).count();
-    assert!(realised >= 9, "only {realised} of 12 ring borders realised");
+    let realized = leaf.iter().filter(|r| **r).count();
+    assert!(realized >= 9, "only {realized} of 12 ring borders realised");
 }
 
 #[test]
@@ -63,7 +63,7 @@ fn every_method_gives_a_sound_layout() {
         let c = compute(&ds, &request).expect("layout");
         assert_eq!(c.method, method);
         c.layout.sanity_check(&c.dataset).expect("sane");
-        let q = metrics::quality(&c.dataset, &c.layout);
+        let q = measure::quality(&c.dataset, &c.layout);
         assert!(
             q.area_error_diagram_mean <= 0.01,
             "{}: {q:?}",

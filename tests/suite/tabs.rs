@@ -195,7 +195,7 @@ fn check(name: &str) -> usize {
 }
 
 #[test]
-fn tabs_are_the_realised_constraints_with_room_on_their_edges() {
+fn tabs_are_the_realized_constraints_with_room_on_their_edges() {
     let countries = check("country_pop_50M_AUS");
     let movies = check("imdb_100_genre_sim_2child");
     assert!(countries > 5 && movies > 5, "{countries} and {movies} tabs");

@@ -121,7 +121,7 @@ fn a_small_edit_moves_a_warm_layout_little_and_stays_checker_clean() {
 }
 
 #[test]
-fn neighbourhoods_survive_a_warm_edit() {
+fn neighborhoods_survive_a_warm_edit() {
     let dir = support::temp_dir("warm_similar");
     let input = dir.join("similar.json");
     let status = std::process::Command::new("python3")

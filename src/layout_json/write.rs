@@ -1,8 +1,7 @@
-//! Layout JSON, format `nptreemap-layout/1` (`shared/spec/layout-json.md`): a
-//! finished [`Layout`](crate::layout::Layout) and its
-//! [`Dataset`](nptreemap_formats::Dataset) become one JSON document. Owns the
-//! document's shape and number formatting; may not compute geometry, decide which
-//! constraints are realized, or do I/O.
+//! The layout-JSON writer: a finished [`Layout`](crate::layout::Layout) and its
+//! [`Dataset`](nptreemap_formats::Dataset) become one `nptreemap-layout/1`
+//! document. Owns the document's shape and number formatting; may not compute
+//! geometry, decide which constraints are realized, or do I/O.
 //!
 //! The outer structure is written by hand so that each node sits on its own line
 //! (diffs of two layouts then show which nodes moved); each node, constraint and
@@ -11,46 +10,15 @@
 use nptreemap_formats::Dataset;
 use serde::{Serialize, Serializer};
 
+use super::extras::JsonExtras;
+use super::FORMAT;
 use crate::geom::Point;
 use crate::layout::Layout;
-
-/// The value of the `format` field.
-pub const FORMAT: &str = "nptreemap-layout/1";
 
 /// Decimal places kept in coordinates. Rounding gives stable diffs (round-off
 /// noise in the last bits does not show up as a change) and smaller files; 1e-6
 /// canvas units is far below the checker's containment and shared-edge tolerances.
 const COORD_DECIMALS: i32 = 6;
-
-/// One neighbourhood constraint as written to the `constraints` array.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ConstraintOut {
-    /// Id of one node (same depth as `b`); the pair is undirected and listed once.
-    pub a: String,
-    /// Id of the other node.
-    pub b: String,
-    /// Value of the similarity function, in `[0, 1]`.
-    pub similarity: f64,
-    /// 1 (weak) to 3 (strong): the bin the constraint came from.
-    pub strength: u8,
-    /// True when the two cells share an edge in this layout.
-    pub realized: bool,
-}
-
-/// What the layout JSON carries beyond the dataset and the geometry.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct JsonExtras {
-    /// The `constraints` array, written in this order. Default: empty.
-    pub constraints: Vec<ConstraintOut>,
-    /// The producer's own figures, written as the `metrics` object in this order
-    /// (keys should be unique); the field is left out when empty. Default: empty.
-    pub metrics: Vec<(String, f64)>,
-    /// Write coordinates in full precision instead of rounding them to
-    /// [`COORD_DECIMALS`] places: for the layout kept for warm starts (issue
-    /// 6), which must reproduce the cells bit for bit so that a rebuild of
-    /// unchanged data gives unchanged bytes. Default: false.
-    pub exact: bool,
-}
 
 /// Writes the layout JSON document for `layout`, whose cells are indexed like
 /// `dataset`'s nodes. Ends with a newline. Identical input gives identical bytes.
@@ -230,6 +198,7 @@ fn finite(v: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::extras::ConstraintOut;
     use super::*;
     use crate::render::test_support::sample;
     use serde_json::Value;

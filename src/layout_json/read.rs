@@ -1,8 +1,8 @@
-//! Reads layout JSON (`nptreemap-layout/1`, `shared/spec/layout-json.md`) back
-//! into a [`Previous`] layout, so that a file alone can seed a warm start
-//! (issue 6). Owns the reading of that text and its error messages, which name
-//! the offending field (`nodes[3].site`); may not open files (the caller passes
-//! the text) or decide whether the layout fits a run ([`Previous::fits`]).
+//! The layout-JSON reader: a `nptreemap-layout/1` document back into a
+//! [`Previous`] layout, so that a file alone can seed a warm start (issue 6).
+//! Owns the reading of that text and its error messages, which name the
+//! offending field (`nodes[3].site`); may not open files (the caller passes the
+//! text) or decide whether the layout fits a run ([`Previous::fits`]).
 //!
 //! Hostile input is an error, never a panic: the text goes through
 //! `serde_json` (which limits nesting) into a `Value` that is walked with
@@ -10,13 +10,13 @@
 
 use serde_json::{Map, Value};
 
+use super::FORMAT;
 use crate::geom::{ConvexPolygon, Point};
 use crate::layout::{Canvas, Previous, PreviousNode};
-use crate::render::json::FORMAT;
 
 /// Why layout JSON could not be read as a previous layout.
 #[derive(Debug, thiserror::Error)]
-pub enum PreviousError {
+pub enum ReadError {
     /// The text is not JSON.
     #[error("not JSON: {0}")]
     Json(#[from] serde_json::Error),
@@ -30,77 +30,75 @@ pub enum PreviousError {
     },
 }
 
-impl Previous {
-    /// Reads layout JSON (`nptreemap-layout/1`) text, as written by
-    /// [`crate::render::layout_json`]. Each node needs `id`, `parent`,
-    /// `weight`, `site` and `polygon`; `power_weight` is used when present
-    /// (files from before it existed still warm-start, in more steps).
-    /// `constraints` is optional; only its `a`, `b` and `realized` are read.
-    ///
-    /// A layout made for another canvas or outline reads fine; it is then not
-    /// used, and the layout starts cold ([`Previous::fits`]).
-    pub fn from_layout_json(text: &str) -> Result<Previous, PreviousError> {
-        let doc: Value = serde_json::from_str(text)?;
-        let top = object(&doc, "the document")?;
-        match top.get("format").and_then(Value::as_str) {
-            Some(FORMAT) => {}
-            Some(other) => {
-                return Err(bad(
-                    "format",
-                    format!("expected {FORMAT:?}, found {other:?}"),
-                ));
-            }
-            None => return Err(bad("format", format!("missing; expected {FORMAT:?}"))),
+/// Reads layout JSON (`nptreemap-layout/1`) text, as written by
+/// [`super::write`]. Each node needs `id`, `parent`, `weight`, `site` and
+/// `polygon`; `power_weight` is used when present (files from before it
+/// existed still warm-start, in more steps). `constraints` is optional; only
+/// its `a`, `b` and `realized` are read.
+///
+/// A layout made for another canvas or outline reads fine; it is then not
+/// used, and the layout starts cold ([`Previous::fits`]).
+pub fn previous(text: &str) -> Result<Previous, ReadError> {
+    let doc: Value = serde_json::from_str(text)?;
+    let top = object(&doc, "the document")?;
+    match top.get("format").and_then(Value::as_str) {
+        Some(FORMAT) => {}
+        Some(other) => {
+            return Err(bad(
+                "format",
+                format!("expected {FORMAT:?}, found {other:?}"),
+            ));
         }
-        let canvas = field(top, "canvas", "canvas")?;
-        let canvas = object(canvas, "canvas")?;
-        let canvas = Canvas {
-            width: positive(field(canvas, "width", "canvas.width")?, "canvas.width")?,
-            height: positive(field(canvas, "height", "canvas.height")?, "canvas.height")?,
-        };
-        let nodes = array(field(top, "nodes", "nodes")?, "nodes")?;
-        let nodes = nodes
-            .iter()
-            .enumerate()
-            .map(|(i, v)| node(v, &format!("nodes[{i}]")))
-            .collect::<Result<Vec<_>, _>>()?;
-        check_tree(&nodes)?;
-        let realized = match top.get("constraints") {
-            None | Some(Value::Null) => Vec::new(),
-            Some(v) => realized_pairs(v)?,
-        };
-        Ok(Previous::new(canvas, nodes, realized))
+        None => return Err(bad("format", format!("missing; expected {FORMAT:?}"))),
     }
+    let canvas = field(top, "canvas", "canvas")?;
+    let canvas = object(canvas, "canvas")?;
+    let canvas = Canvas {
+        width: positive(field(canvas, "width", "canvas.width")?, "canvas.width")?,
+        height: positive(field(canvas, "height", "canvas.height")?, "canvas.height")?,
+    };
+    let nodes = array(field(top, "nodes", "nodes")?, "nodes")?;
+    let nodes = nodes
+        .iter()
+        .enumerate()
+        .map(|(i, v)| node(v, &format!("nodes[{i}]")))
+        .collect::<Result<Vec<_>, _>>()?;
+    check_tree(&nodes)?;
+    let realized = match top.get("constraints") {
+        None | Some(Value::Null) => Vec::new(),
+        Some(v) => realized_pairs(v)?,
+    };
+    Ok(Previous::new(canvas, nodes, realized))
 }
 
-fn bad(field: impl Into<String>, reason: impl Into<String>) -> PreviousError {
-    PreviousError::Field {
+fn bad(field: impl Into<String>, reason: impl Into<String>) -> ReadError {
+    ReadError::Field {
         field: field.into(),
         reason: reason.into(),
     }
 }
 
-fn object<'a>(v: &'a Value, at: &str) -> Result<&'a Map<String, Value>, PreviousError> {
+fn object<'a>(v: &'a Value, at: &str) -> Result<&'a Map<String, Value>, ReadError> {
     v.as_object().ok_or_else(|| bad(at, "expected an object"))
 }
 
-fn array<'a>(v: &'a Value, at: &str) -> Result<&'a Vec<Value>, PreviousError> {
+fn array<'a>(v: &'a Value, at: &str) -> Result<&'a Vec<Value>, ReadError> {
     v.as_array().ok_or_else(|| bad(at, "expected an array"))
 }
 
-fn field<'a>(obj: &'a Map<String, Value>, key: &str, at: &str) -> Result<&'a Value, PreviousError> {
+fn field<'a>(obj: &'a Map<String, Value>, key: &str, at: &str) -> Result<&'a Value, ReadError> {
     obj.get(key).ok_or_else(|| bad(at, "missing"))
 }
 
 /// A finite number. serde_json never yields a non-finite one, but the check
 /// keeps that assumption out of the geometry.
-fn number(v: &Value, at: &str) -> Result<f64, PreviousError> {
+fn number(v: &Value, at: &str) -> Result<f64, ReadError> {
     v.as_f64()
         .filter(|x| x.is_finite())
         .ok_or_else(|| bad(at, "expected a number"))
 }
 
-fn positive(v: &Value, at: &str) -> Result<f64, PreviousError> {
+fn positive(v: &Value, at: &str) -> Result<f64, ReadError> {
     let x = number(v, at)?;
     if x > 0.0 {
         Ok(x)
@@ -109,14 +107,14 @@ fn positive(v: &Value, at: &str) -> Result<f64, PreviousError> {
     }
 }
 
-fn point(v: &Value, at: &str) -> Result<Point, PreviousError> {
+fn point(v: &Value, at: &str) -> Result<Point, ReadError> {
     match v.as_array().map(Vec::as_slice) {
         Some([x, y]) => Ok(Point::new(number(x, at)?, number(y, at)?)),
         _ => Err(bad(at, "expected [x, y]")),
     }
 }
 
-fn node(v: &Value, at: &str) -> Result<PreviousNode, PreviousError> {
+fn node(v: &Value, at: &str) -> Result<PreviousNode, ReadError> {
     let obj = object(v, at)?;
     let sub = |key: &str| format!("{at}.{key}");
     let id = field(obj, "id", &sub("id"))?
@@ -151,7 +149,7 @@ fn node(v: &Value, at: &str) -> Result<PreviousNode, PreviousError> {
 }
 
 /// Unique ids, exactly one root, and every parent id naming a node.
-fn check_tree(nodes: &[PreviousNode]) -> Result<(), PreviousError> {
+fn check_tree(nodes: &[PreviousNode]) -> Result<(), ReadError> {
     let mut seen = std::collections::HashSet::new();
     for (i, n) in nodes.iter().enumerate() {
         if !seen.insert(n.id.as_str()) {
@@ -183,7 +181,7 @@ fn check_tree(nodes: &[PreviousNode]) -> Result<(), PreviousError> {
 }
 
 /// The `(a, b)` id pairs of the constraints marked realised.
-fn realized_pairs(v: &Value) -> Result<Vec<(String, String)>, PreviousError> {
+fn realized_pairs(v: &Value) -> Result<Vec<(String, String)>, ReadError> {
     let mut out = Vec::new();
     for (i, c) in array(v, "constraints")?.iter().enumerate() {
         let at = format!("constraints[{i}]");
@@ -209,7 +207,6 @@ fn realized_pairs(v: &Value) -> Result<Vec<(String, String)>, PreviousError> {
 mod tests {
     use super::*;
     use crate::layout::{compute, Params, Request};
-    use crate::render::layout_json;
     use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
 
     fn dataset() -> Dataset {
@@ -231,7 +228,7 @@ mod tests {
     fn sample_text() -> (Dataset, String) {
         let ds = dataset();
         let c = compute(&ds, &Request::default()).expect("layout");
-        let text = layout_json(&c.dataset, &c.layout, &crate::pipeline::json_extras(&c));
+        let text = super::super::document(&c);
         (ds, text)
     }
 
@@ -239,7 +236,7 @@ mod tests {
     fn reads_what_the_writer_writes() {
         let (ds, text) = sample_text();
         let c = compute(&ds, &Request::default()).expect("layout");
-        let prev = Previous::from_layout_json(&text).expect("reads");
+        let prev = previous(&text).expect("reads");
         assert_eq!(prev.nodes().len(), ds.len());
         assert_eq!(prev.canvas(), Params::default().canvas);
         assert_eq!(prev.root().map(|r| r.id.as_str()), Some("root"));
@@ -255,8 +252,8 @@ mod tests {
 
     /// The error for `text`, which must name `field`.
     fn error_names(text: &str, field: &str) {
-        match Previous::from_layout_json(text) {
-            Err(PreviousError::Field { field: f, .. }) => assert_eq!(f, field, "{text}"),
+        match previous(text) {
+            Err(ReadError::Field { field: f, .. }) => assert_eq!(f, field, "{text}"),
             other => panic!("expected an error at {field}, got {other:?}"),
         }
     }
@@ -316,7 +313,7 @@ mod tests {
             "{\"format\": \"nptreemap-layout/1\", \"canvas\": {\"width\": 1, \"height\": 1}, \"nodes\": []}",
             "{\"format\": \"nptreemap-layout/1\", \"canvas\": {\"width\": 1, \"height\": 1}, \"nodes\": [{}]}",
         ] {
-            assert!(Previous::from_layout_json(text).is_err(), "{text:.60}");
+            assert!(previous(text).is_err(), "{text:.60}");
         }
     }
 
@@ -327,7 +324,7 @@ mod tests {
         for n in v["nodes"].as_array_mut().expect("nodes") {
             n.as_object_mut().expect("object").remove("power_weight");
         }
-        let prev = Previous::from_layout_json(&v.to_string()).expect("reads");
+        let prev = previous(&v.to_string()).expect("reads");
         assert!(prev.nodes().iter().all(|n| n.power_weight.is_none()));
         prev.fits(&ds, &Params::default()).expect("fits");
     }

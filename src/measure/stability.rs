@@ -1,15 +1,12 @@
 //! Stability figures between a previous layout and a new one (issue 6): how far
 //! the leaves that are in both moved, and how many of the previously realised
-//! constraints are still realised. Pure; owns these two figures only and may
-//! not lay anything out (the caller brings both layouts).
+//! constraints are still realised. Owns these two figures only and may not lay
+//! anything out (the caller brings both layouts).
 
 use std::collections::BTreeMap;
 
 use crate::geom::Point;
-use crate::layout::compute::MIN_SHARED;
-use crate::layout::{Layout, Previous};
-use crate::neighborhood::adjacency::level_adjacency;
-use nptreemap_formats::Dataset;
+use crate::layout::{Computed, Previous};
 
 /// How much a layout changed against the previous one.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -41,9 +38,11 @@ impl Stability {
     }
 }
 
-/// Compares `layout` of `dataset` (cells indexed like its nodes) with `previous`.
-/// Nodes are matched by id; centroids are the cells' area centroids.
-pub fn stability(previous: &Previous, dataset: &Dataset, layout: &Layout) -> Stability {
+/// Compares a finished computation with `previous`. Nodes are matched by id;
+/// centroids are the cells' area centroids; "still realised" reads the
+/// computation's own adjacency.
+pub fn stability(previous: &Previous, computed: &Computed) -> Stability {
+    let (dataset, layout) = (&computed.dataset, &computed.layout);
     let diagonal = Point::new(layout.canvas.width, layout.canvas.height).length();
     let mut out = Stability::default();
     let (mut sum, mut sum_unchanged) = (0.0, 0.0);
@@ -78,11 +77,9 @@ pub fn stability(previous: &Previous, dataset: &Dataset, layout: &Layout) -> Sta
             }
         }
     }
+    let adjacency = computed.adjacency();
     for (depth, pairs) in by_depth {
-        let level: Vec<usize> = (0..dataset.len())
-            .filter(|&i| dataset.node(i).depth == depth)
-            .collect();
-        let adjacency = level_adjacency(layout, &level, MIN_SHARED);
+        let adjacency = &adjacency[depth];
         out.realized_before += pairs.len();
         out.kept += pairs
             .iter()
@@ -96,7 +93,7 @@ pub fn stability(previous: &Previous, dataset: &Dataset, layout: &Layout) -> Sta
 mod tests {
     use super::*;
     use crate::layout::{compute, Request};
-    use nptreemap_formats::{DatasetBuilder, NodeSpec, SimilarityHint};
+    use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec, SimilarityHint};
 
     fn dataset(scale_first: f64) -> Dataset {
         let mut b = DatasetBuilder::new();
@@ -125,8 +122,7 @@ mod tests {
     #[test]
     fn the_same_layout_is_perfectly_stable() {
         let c = compute(&dataset(1.0), &Request::default()).expect("layout");
-        let prev = Previous::from_computed(&c);
-        let s = stability(&prev, &c.dataset, &c.layout);
+        let s = stability(&c.previous(), &c);
         assert_eq!(s.leaves, 15);
         assert_eq!(s.unchanged, 15);
         assert_eq!(s.displacement_max, 0.0);
@@ -138,11 +134,7 @@ mod tests {
     fn a_weight_change_is_seen() {
         let before = compute(&dataset(1.0), &Request::default()).expect("layout");
         let after = compute(&dataset(3.0), &Request::default()).expect("layout");
-        let s = stability(
-            &Previous::from_computed(&before),
-            &after.dataset,
-            &after.layout,
-        );
+        let s = stability(&before.previous(), &after);
         assert_eq!((s.leaves, s.unchanged), (15, 14));
         assert!(s.displacement_max > 0.0);
         assert!(s.kept <= s.realized_before);

@@ -1,0 +1,45 @@
+//! Layout JSON, format `nptreemap-layout/1` (the layout-JSON contract): the
+//! one home of that format. [`write`] turns a finished layout into the
+//! document, [`read`] turns a document back into the [`Previous`] layout a warm
+//! start begins from, and [`extras`] chooses what beyond the geometry goes in.
+//! Pure: text in, text out; the caller reads and writes the files.
+
+/// What a document carries beyond the geometry: constraints and metrics.
+pub mod extras;
+/// The reader: a document back into a previous layout, naming the bad field.
+pub mod read;
+/// The writer: a finished layout into a document, deterministic bytes.
+pub mod write;
+
+use crate::layout::{Computed, Previous};
+
+pub use extras::{ConstraintOut, JsonExtras};
+pub use read::ReadError;
+pub use write::layout_json;
+
+/// The value of the `format` field.
+pub const FORMAT: &str = "nptreemap-layout/1";
+
+/// The document of a finished computation, as the `.json` output: its
+/// constraints and quality figures, coordinates rounded to six places.
+pub fn document(computed: &Computed) -> String {
+    layout_json(
+        &computed.dataset,
+        &computed.layout,
+        &JsonExtras::of(computed),
+    )
+}
+
+/// The document kept beside the outputs for the next warm start: the same as
+/// [`document`] but in full precision, so the cells come back bit for bit.
+pub fn state(computed: &Computed) -> String {
+    let mut extras = JsonExtras::of(computed);
+    extras.exact = true;
+    layout_json(&computed.dataset, &computed.layout, &extras)
+}
+
+/// Reads a document (as written by [`document`] or [`state`], or by another
+/// producer of the format) into the previous layout a warm start begins from.
+pub fn read(text: &str) -> Result<Previous, ReadError> {
+    read::previous(text)
+}
