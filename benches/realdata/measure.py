@@ -426,7 +426,7 @@ def main():
                         rows.append({"dataset": ds["name"], "method": method, "seed": seed, "skipped": capped})
                         continue
                     if args.keep:
-                        workdir = Path(args.keep) / f"{ds['name']}-{method}-{seed}"
+                        workdir = Path(args.keep).resolve() / f"{ds['name']}-{method}-{seed}"
                         workdir.mkdir(parents=True, exist_ok=True)
                         cleanup = False
                     else:
