@@ -32,6 +32,7 @@ Only the Python standard library is used.
 
 usage: measure.py [CONFIG_OR_FOLDER ...] [--seeds 1-5] [--methods plain,neighbor]
                   [--bin target/release/nptreemap] [--json FILE] [--keep DIR]
+       measure.py --from-json FILE      # the tables of an earlier run
 """
 import argparse
 import json
@@ -241,6 +242,8 @@ def eval_has_config(binary):
 
 def error_line(stderr):
     """The most telling line of a failed run's stderr."""
+    # Paths relative to the working folder, so tables do not carry this machine's layout.
+    stderr = stderr.replace(str(Path.cwd()) + os.sep, "")
     lines = [l.strip() for l in stderr.splitlines() if l.strip()]
     for l in lines:
         if "error" in l.lower():
@@ -348,7 +351,7 @@ def run_table(rows):
 
 def summary_table(rows):
     """Per dataset and method: runs, failures, median time, realised share range."""
-    out = ["| dataset | leaves | method | runs ok / failed / skipped | median time s | leaf constraints | "
+    out = ["| dataset | leaves | method | runs ok / failed / skipped | median time s (all runs) | leaf constraints | "
            "realised % mean (min–max) | aspect mean | area err mean | check-layout ok |",
            "|---|---|---|---|---|---|---|---|---|---|"]
     keys = []
@@ -406,7 +409,12 @@ def main():
                     help="after a run slower than this, skip the dataset's remaining seeds for that method")
     ap.add_argument("--json", help="write every run's figures to this file")
     ap.add_argument("--keep", help="keep each run's outputs (and a PNG of the first seed) under this folder")
+    ap.add_argument("--from-json", help="print the tables of an earlier --json file instead of running")
     args = ap.parse_args()
+    if args.from_json:
+        rows = json.loads(Path(args.from_json).read_text(encoding="utf-8"))
+        print(f"Runs from {args.from_json}.\n\n### Summary\n\n{summary_table(rows)}\n\n### Every run\n\n{run_table(rows)}")
+        return 0
     if not Path(args.bin).exists():
         ap.error(f"{args.bin} not found: cargo build --release first")
     seeds = parse_seeds(args.seeds)
