@@ -265,7 +265,7 @@ impl Daemon<'_> {
         request.previous = match &state.computed {
             Some(computed) => Some(Arc::new(computed.previous())),
             None if reason == Reason::Start && self.options.cold => None,
-            None => pipeline::stored_layout(&d),
+            None => pipeline::stored_layout(&d).previous,
         };
         let style = self.config.style(&d);
         let read_ms = ms_since(started);

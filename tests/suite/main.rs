@@ -16,6 +16,7 @@ mod neighborhood;
 mod paper_data;
 mod random_hierarchies;
 mod render_refs;
+mod safety;
 mod similarity_paths;
 mod single_dataset;
 mod tabs;
