@@ -731,3 +731,83 @@ fn group_values_with_slashes_do_not_collide() {
     assert_eq!(a, ["North", "Asia/East"], "a's groups");
     assert_eq!(b, ["East", "Asia"], "b's groups");
 }
+
+/// Issue 11 item 15: what is read but probably not meant is a warning in
+/// `check` (and `build`), naming the file and line; the exit code stays 0.
+#[test]
+fn check_warns_about_silent_acceptance() {
+    let run = |tag: &str, nodes: &str, pairs: &str, state: Option<&str>| -> String {
+        let dir = support::temp_dir(&format!("warn_{tag}"));
+        std::fs::write(dir.join("nptreemap.yaml"), border_config("")).expect("config");
+        std::fs::write(dir.join("nodes.csv"), nodes).expect("nodes");
+        std::fs::write(dir.join("pairs.csv"), pairs).expect("pairs");
+        if let Some(state) = state {
+            std::fs::create_dir_all(dir.join(".nptreemap")).expect("state dir");
+            std::fs::write(dir.join(".nptreemap/c.layout.json"), state).expect("state");
+        }
+        let out = support::output_within(
+            support::bin().arg("check").arg(dir.join("nptreemap.yaml")),
+            60,
+        );
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(0), "{tag}: {stderr}");
+        stderr
+    };
+    let header_only = run(
+        "header_only",
+        "iso,name,population,continent\n",
+        "a,b\n",
+        None,
+    );
+    assert!(
+        header_only.contains("warning: ")
+            && header_only.contains("nodes.csv: line 1")
+            && header_only.contains("no rows"),
+        "{header_only}"
+    );
+    let twice = run(
+        "column_twice",
+        &NODES
+            .lines()
+            .enumerate()
+            .map(|(i, l)| {
+                let extra = if i == 0 { "name" } else { "x" };
+                format!("{l},{extra}\n")
+            })
+            .collect::<String>(),
+        PAIRS,
+        None,
+    );
+    assert!(
+        twice.contains("nodes.csv: line 1") && twice.contains("\"name\""),
+        "{twice}"
+    );
+    let self_pair = run("self_pair", NODES, "a,b\nCN,IN\nFR,FR\n", None);
+    assert!(
+        self_pair.contains("pairs.csv: line 3") && self_pair.contains("itself"),
+        "{self_pair}"
+    );
+    let contradicting = run(
+        "strengths",
+        NODES,
+        "a,b,strength\nCN,IN,1\nFR,DE,2\nIN,CN,5\n",
+        None,
+    );
+    assert!(
+        contradicting.contains("pairs.csv: line 4") && contradicting.contains("line 2"),
+        "{contradicting}"
+    );
+    // The same strength twice is only a repeat: no warning.
+    let repeat = run("repeat", NODES, "a,b,strength\nCN,IN,1\nIN,CN,1\n", None);
+    assert!(!repeat.contains("warning"), "{repeat}");
+    let truncated = run(
+        "state",
+        NODES,
+        PAIRS,
+        Some("{\"format\": \"nptreemap-layout/1\", \"canv"),
+    );
+    assert!(
+        truncated.contains("c.layout.json") && truncated.contains("cold"),
+        "{truncated}"
+    );
+}

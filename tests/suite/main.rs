@@ -8,6 +8,7 @@ mod bad_input;
 mod browser;
 mod build;
 mod cli_errors;
+mod crash;
 mod degenerate;
 mod determinism;
 mod escaping;

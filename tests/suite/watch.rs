@@ -80,8 +80,9 @@ impl Daemon {
         let mut child = support::bin()
             .arg("watch")
             .arg(config)
+            .env("RUST_LOG", "nptreemap=debug")
             .stdout(Stdio::piped())
-            .stderr(Stdio::null())
+            .stderr(std::fs::File::create(config.with_extension("log")).expect("log"))
             .spawn()
             .expect("start nptreemap watch");
         let stdout = child.stdout.take().expect("piped stdout");
@@ -335,7 +336,12 @@ fn the_daemon_follows_edits_and_survives_bad_ones() {
     let tmp = dir.join("data/.nodes.csv.swp");
     std::fs::write(&tmp, nodes_csv(&leaves)).expect("temp");
     std::fs::rename(&tmp, &nodes).expect("rename");
-    daemon.expect(&["grid: data: nodes.csv", "wrote"]);
+    let line = daemon.expect(&["grid: ", "data: nodes.csv", "wrote"]);
+    // The error of step 4 was reported, so its fix is announced.
+    assert!(
+        line.starts_with("grid: ok again, data: nodes.csv"),
+        "{line}"
+    );
     assert_outputs_match(&out, &leaves);
 
     // 6. An invalid config keeps the previous one; its fix applies.
@@ -583,7 +589,11 @@ fn sigterm_during_a_long_rebuild_ends_within_a_second() {
     std::thread::sleep(Duration::from_millis(800));
     assert!(daemon.child.try_wait().expect("try_wait").is_none());
     let sent = Instant::now();
-    signal(&daemon.child, "TERM");
+    // Directly, not through python3 (whose start-up takes a while on a busy
+    // machine and would be counted).
+    // SAFETY: kill(2) with the pid of our own child and a valid signal.
+    let sent_ok = unsafe { libc::kill(daemon.child.id() as libc::pid_t, libc::SIGTERM) };
+    assert_eq!(sent_ok, 0, "kill");
     let status = loop {
         if let Some(status) = daemon.child.try_wait().expect("try_wait") {
             break status;
@@ -618,6 +628,14 @@ fn status_lines_tell_the_truth() {
     let nodes = dir.join("data/nodes.csv");
     let mut daemon = Daemon::start(&config);
     daemon.expect(&["grid: start", "wrote"]);
+    // The stored layout is written after the status line: wait for it, so
+    // the folder is not removed while the daemon still writes in it.
+    let state = out.join(".nptreemap/grid.layout.json");
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while !state.exists() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(200));
     std::fs::remove_dir_all(&out).expect("rm out");
     std::fs::write(&out, "not a folder").expect("out as a file");
     let mut leaves = initial_leaves();
