@@ -174,14 +174,14 @@ pub(crate) mod test_data {
         ($name:literal) => {
             include_bytes!(concat!(
                 env!("CARGO_MANIFEST_DIR"),
-                "/../shared/paper-data/",
+                "/tests/data/paper/",
                 $name
             ))
             .as_slice()
         };
     }
 
-    /// The bytes of a file in `/work/shared/paper-data`.
+    /// The bytes of a file in `tests/data/paper`.
     pub(crate) fn bytes(name: &str) -> &'static [u8] {
         match name {
             "country_pop_50M_AUS.json" => paper_file!("country_pop_50M_AUS.json"),
