@@ -12,6 +12,7 @@ mod crash;
 mod degenerate;
 mod determinism;
 mod escaping;
+mod fuzz;
 mod labels;
 mod neighborhood;
 mod paper_data;
