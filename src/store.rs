@@ -137,7 +137,7 @@ fn may_be_running(pid: u32, modified: Option<std::time::SystemTime>) -> bool {
         return proc.join(pid.to_string()).exists();
     }
     let age = modified.and_then(|m| m.elapsed().ok());
-    !age.is_some_and(|a| a > std::time::Duration::from_secs(3600))
+    age.is_none_or(|a| a <= std::time::Duration::from_secs(3600))
 }
 
 /// Removes the temp files that runs killed mid-write (`kill -9`, a power
