@@ -4,6 +4,7 @@
 mod support;
 
 mod architecture;
+mod battery;
 mod bad_input;
 mod browser;
 mod build;
