@@ -45,11 +45,11 @@ struct Page {
 }
 
 impl Page {
-    /// Lays out `shared/paper-data/<name>.json` into `<name>.html` and
+    /// Lays out `tests/data/paper/<name>.json` into `<name>.html` and
     /// `<name>.json` under `dir`, and picks the first leaf (in file order) that
     /// has neighbours and partners, preferring one with an unrealised partner.
     fn build(dir: &Path, name: &str, extra: &[&str]) -> Page {
-        let input = support::shared().join(format!("paper-data/{name}.json"));
+        let input = support::paper_data().join(format!("{name}.json"));
         let html = dir.join(format!("{name}.html"));
         let json = dir.join(format!("{name}.json"));
         support::layout(&input, &[&html, &json], extra);

@@ -113,7 +113,7 @@ fn tabs_in(svg: &str) -> Vec<(String, String, P)> {
 
 fn check(name: &str) -> usize {
     let dir = support::temp_dir(&format!("tabs_{name}"));
-    let input = support::shared().join(format!("paper-data/{name}.json"));
+    let input = support::paper_data().join(format!("{name}.json"));
     let (svg_path, json_path) = (dir.join("map.svg"), dir.join("map.json"));
     support::layout(&input, &[&svg_path, &json_path], &[]);
     let layout: Value =
