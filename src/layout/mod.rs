@@ -21,10 +21,10 @@ pub mod method;
 pub mod neighbor;
 /// Run parameters and their defaults.
 pub mod params;
-/// Progress reports and the stop they can ask for.
-pub mod progress;
 /// The previous layout of a dataset, keyed by node id: a warm start's input.
 pub mod previous;
+/// Progress reports and the stop they can ask for.
+pub mod progress;
 /// Start positions and weights for one diagram.
 pub mod seed;
 /// Top-down recursion over the hierarchy.
@@ -42,8 +42,8 @@ pub use frames::Frame;
 pub use method::Method;
 pub use neighbor::NeighborParams;
 pub use params::{Canvas, Outline, Params};
-pub use progress::{Progress, ProgressFn, ProgressSink};
 pub use previous::{Previous, PreviousNode, WarmRefusal};
+pub use progress::{Progress, ProgressFn, ProgressSink};
 pub use treemap::layout;
 
 /// The finished geometry of one node.

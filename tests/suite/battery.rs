@@ -84,7 +84,10 @@ fn grouped(
 /// Clustered embeddings: each group has a centre, leaves scatter around it.
 fn clustered(groups: &[usize], dim: usize, seed: u64) -> serde_json::Map<String, Value> {
     let mut rng = Rng::new(seed);
-    let centers: Vec<Vec<f64>> = groups.iter().map(|_| random_vector(dim, &mut rng)).collect();
+    let centers: Vec<Vec<f64>> = groups
+        .iter()
+        .map(|_| random_vector(dim, &mut rng))
+        .collect();
     grouped(groups, |g, _| {
         let w = 1.0 + 9.0 * rng.next_f64();
         (w, near(&centers[g], 0.6, &mut rng))
@@ -128,7 +131,9 @@ fn many_identical_vectors() {
 fn all_identical_vectors() {
     let v = vec![0.3, -0.2, 0.9, 0.1];
     let mut rng = Rng::new(14);
-    let root = grouped(&[80, 50, 20], |_, _| (1.0 + 9.0 * rng.next_f64(), v.clone()));
+    let root = grouped(&[80, 50, 20], |_, _| {
+        (1.0 + 9.0 * rng.next_f64(), v.clone())
+    });
     run("all_identical", Value::Object(root));
 }
 
@@ -183,7 +188,10 @@ fn isolated_nodes() {
         if i % 2 == 1 {
             Vec::new()
         } else {
-            vec![format!("g{g}n{}", (i + 2) % 60), format!("g{}n{i}", (g + 1) % 3)]
+            vec![
+                format!("g{g}n{}", (i + 2) % 60),
+                format!("g{}n{i}", (g + 1) % 3),
+            ]
         }
     });
     run("isolated", root);
@@ -227,7 +235,12 @@ fn real_debian_packages_at_five_seeds() {
         let out = dir.join(format!("debian_{seed}.json"));
         let run = support::bin()
             .args(["layout", "--config", config.to_str().expect("utf8")])
-            .args(["--seed", &seed.to_string(), "--out", out.to_str().expect("utf8")])
+            .args([
+                "--seed",
+                &seed.to_string(),
+                "--out",
+                out.to_str().expect("utf8"),
+            ])
             .output()
             .expect("run nptreemap");
         assert!(

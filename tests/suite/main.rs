@@ -4,8 +4,8 @@
 mod support;
 
 mod architecture;
-mod battery;
 mod bad_input;
+mod battery;
 mod browser;
 mod build;
 mod cli_errors;

@@ -87,12 +87,7 @@ impl LevelCtx<'_> {
     }
 }
 
-fn snapshot(
-    diagrams: &[Diagram],
-    links: &LevelLinks,
-    scale: f64,
-    np: &NeighborParams,
-) -> Snapshot {
+fn snapshot(diagrams: &[Diagram], links: &LevelLinks, scale: f64, np: &NeighborParams) -> Snapshot {
     let m = links.nodes.len();
     let mut site = vec![Point::ZERO; m];
     let mut centroid = vec![Point::ZERO; m];

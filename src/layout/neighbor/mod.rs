@@ -188,7 +188,12 @@ fn descend(
 ) -> Result<Descent, LayoutError> {
     let dataset = ctx.dataset;
     if depth >= dataset.max_depth() {
-        return Ok((leaf_score(ctx, depth, &cells), cells, Report::default(), 0.0));
+        return Ok((
+            leaf_score(ctx, depth, &cells),
+            cells,
+            Report::default(),
+            0.0,
+        ));
     }
     let n = dataset.len();
     let parents: Vec<usize> = (0..n)

@@ -136,14 +136,16 @@ pub(super) fn optimize_level(
                     // The areas fell behind the moves: let them catch up.
                     sim.lloyd_tick();
                 } else {
-                    let positions =
-                        attraction_moves(children, sim, lv.links, &snap, &limits, true);
+                    let positions = attraction_moves(children, sim, lv.links, &snap, &limits, true);
                     sim.step_with_positions(&positions);
                 }
             }
         });
         if let Some(r) = recorder.as_deref_mut().filter(|r| r.wants(tick)) {
-            r.take(format!("tick {}", tick + 1), super::level::frame_cells(&diagrams));
+            r.take(
+                format!("tick {}", tick + 1),
+                super::level::frame_cells(&diagrams),
+            );
         }
         if !tick_done(tick + 1) {
             return Err(Stopped);
@@ -194,8 +196,7 @@ fn keep_if_best(
     area_error: f64,
     diagrams: &[Diagram],
 ) {
-    if area_error <= CANDIDATE_ERROR && best.as_ref().is_none_or(|b| score.value() >= b.0.value())
-    {
+    if area_error <= CANDIDATE_ERROR && best.as_ref().is_none_or(|b| score.value() >= b.0.value()) {
         *best = Some((*score, save(diagrams)));
     }
 }

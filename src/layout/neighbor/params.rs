@@ -139,7 +139,11 @@ impl Distances {
             // at seed 1 without it); the gentler pull on every cell replaces it.
             idle_step: 0.0,
             pull,
-            max_offset: if pull > 0.0 { MAX_OFFSET } else { f64::INFINITY },
+            max_offset: if pull > 0.0 {
+                MAX_OFFSET
+            } else {
+                f64::INFINITY
+            },
         }
     }
 

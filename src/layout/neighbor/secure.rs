@@ -107,14 +107,8 @@ fn plain(like: &Diagram, settings: MapSettings, seed: u64) -> Diagram {
     // elsewhere: a different stream from the diagram's own.
     let mut rng = Rng::new(seed ^ 0x5eed_fa11_bac4 ^ children[0] as u64);
     let positions = seed::halton_positions(&clip, children.len(), &mut rng);
-    let mut plain = MapSimulation::new(
-        clip,
-        sim.targets().to_vec(),
-        positions,
-        None,
-        settings,
-        rng,
-    );
+    let mut plain =
+        MapSimulation::new(clip, sim.targets().to_vec(), positions, None, settings, rng);
     plain.run();
     Diagram::Sim {
         children: children.clone(),

@@ -207,7 +207,11 @@ mod tests {
         let d = crate::power::power_diagram(&sites, &clip);
         let share = clip.area() / 30.0;
         for c in &d.cells {
-            assert!((c.area - share).abs() < 0.05 * share, "{} vs {share}", c.area);
+            assert!(
+                (c.area - share).abs() < 0.05 * share,
+                "{} vs {share}",
+                c.area
+            );
         }
     }
 }
