@@ -462,6 +462,8 @@ impl Config {
             },
             // The caller that keeps previous layouts (the daemon) adds its own.
             previous: None,
+            // So does a caller that shows progress (the command line).
+            progress: None,
         }
     }
 }

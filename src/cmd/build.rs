@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::progress::Progress;
+use super::progress::LayoutBar;
 use nptreemap::config::Config;
 use nptreemap::pipeline::{self, BuildError};
 
@@ -29,17 +29,16 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
     let (reads, writes) = pipeline::files_of(&args.config, &config.datasets);
     pipeline::check_outputs(&reads, &writes)?;
     pipeline::remove_stale_temps(&writes);
-    let progress = Progress::new(config.datasets.len());
     let mut built = Vec::new();
+    let total = config.datasets.len();
     for (i, d) in config.datasets.iter().enumerate() {
-        progress.step(i, &d.name);
-        let result = pipeline::build(d, &config.request(d), &config.style(d), args.cold);
-        if result.is_err() {
-            progress.finish();
-        }
+        let mut request = config.request(d);
+        let label = format!("{} ({}/{total})", d.name, i + 1);
+        let bar = LayoutBar::attach(&mut request, &label);
+        let result = pipeline::build(d, &request, &config.style(d), args.cold);
+        drop(bar);
         built.push((d, result?));
     }
-    progress.finish();
     for (d, b) in &built {
         for line in &b.warnings {
             super::warn(line);

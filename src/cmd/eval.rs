@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use clap::Args;
 
+use super::progress::LayoutBar;
 use super::{LayoutOptions, UsageError};
 use nptreemap::config::DatasetConfig;
 use nptreemap::layout::{Computed, Method, Previous, Request, Start};
@@ -147,9 +148,13 @@ fn timed(
     dataset: &Dataset,
     request: &Request,
 ) -> anyhow::Result<(Computed, f64)> {
+    let mut request = request.clone();
+    let bar = LayoutBar::attach(&mut request, &d.name);
     let t = Instant::now();
-    let computed = pipeline::lay_out(d, dataset, request)?;
-    Ok((computed, t.elapsed().as_secs_f64() * 1000.0))
+    let computed = pipeline::lay_out(d, dataset, &request)?;
+    let time_ms = t.elapsed().as_secs_f64() * 1000.0;
+    drop(bar);
+    Ok((computed, time_ms))
 }
 
 /// The warm and the cold row against `previous`; `done` is the layout of

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use super::progress::LayoutBar;
 use super::{LayoutOptions, UsageError};
 use nptreemap::config::{kind_of, OutputConfig};
 use nptreemap::layout::{Method, Start};
@@ -61,7 +62,9 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
     let mut job = args.options.job(args.method)?;
     job.check_outputs(&args.out)?;
     job.request.previous = args.options.warm_start()?;
+    let bar = LayoutBar::attach(&mut job.request, &job.config.name);
     let computed = pipeline::lay_out(&job.config, &job.dataset, &job.request)?;
+    drop(bar);
     if let Start::Refused(why) = &computed.start {
         super::note(format_args!(
             "previous layout not used ({why}); laid out cold"

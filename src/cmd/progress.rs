@@ -1,46 +1,58 @@
-//! Progress for long builds: a single updating line on stderr when stderr is a
-//! terminal, nothing otherwise (logs and CI stay clean).
+//! Progress bars for layouts (issue 12 item 4): an indicatif bar on stderr fed
+//! by the layout core's progress callback, shown only when stderr is a
+//! terminal and only once a layout has run for about a second; nothing
+//! otherwise, so logs, pipes and CI stay clean.
 
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
+use std::ops::ControlFlow;
+use std::time::{Duration, Instant};
 
-/// A progress line over `total` steps.
-pub(crate) struct Progress {
-    total: usize,
-    enabled: bool,
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use nptreemap::layout::{ProgressSink, Request};
+
+/// Steps of the bar: the layout's [`fraction`](nptreemap::layout::Progress::fraction)
+/// in thousandths.
+const STEPS: u64 = 1000;
+
+/// A layout shorter than this shows no bar at all.
+const QUIET_FOR: Duration = Duration::from_secs(1);
+
+/// A bar attached to one layout request; cleared when dropped.
+pub(crate) struct LayoutBar {
+    bar: ProgressBar,
 }
 
-impl Progress {
-    pub(crate) fn new(total: usize) -> Self {
-        Self {
-            total,
-            enabled: std::io::stderr().is_terminal() && total > 0,
+impl LayoutBar {
+    /// Attaches a bar labelled `what` to `request` when stderr is a terminal;
+    /// `None` (and `request` untouched) otherwise. The bar only ever
+    /// continues: it never stops a layout.
+    pub(crate) fn attach(request: &mut Request, what: &str) -> Option<Self> {
+        if !std::io::stderr().is_terminal() {
+            return None;
         }
+        let bar = ProgressBar::with_draw_target(Some(STEPS), ProgressDrawTarget::hidden());
+        if let Ok(style) =
+            ProgressStyle::with_template("{prefix} [{bar:30}] {percent:>3}% {msg} {elapsed}")
+        {
+            bar.set_style(style.progress_chars("#>-"));
+        }
+        bar.set_prefix(what.to_string());
+        let shown = bar.clone();
+        let started = Instant::now();
+        request.progress = Some(ProgressSink::new(move |p| {
+            if shown.is_hidden() && started.elapsed() >= QUIET_FOR {
+                shown.set_draw_target(ProgressDrawTarget::stderr());
+            }
+            shown.set_message(format!("level {}/{}", p.level, p.levels));
+            shown.set_position((p.fraction() * STEPS as f64) as u64);
+            ControlFlow::Continue(())
+        }));
+        Some(Self { bar })
     }
+}
 
-    /// Shows step `done` of the total, working on `what`.
-    pub(crate) fn step(&self, done: usize, what: &str) {
-        if !self.enabled {
-            return;
-        }
-        let width = 24;
-        let filled = width * done / self.total;
-        let mut err = std::io::stderr().lock();
-        let _ = write!(
-            err,
-            "\r\x1b[2K[{}{}] {done}/{} {what}",
-            "#".repeat(filled),
-            "-".repeat(width - filled),
-            self.total
-        );
-        let _ = err.flush();
-    }
-
-    /// Clears the line.
-    pub(crate) fn finish(&self) {
-        if self.enabled {
-            let mut err = std::io::stderr().lock();
-            let _ = write!(err, "\r\x1b[2K");
-            let _ = err.flush();
-        }
+impl Drop for LayoutBar {
+    fn drop(&mut self) {
+        self.bar.finish_and_clear();
     }
 }

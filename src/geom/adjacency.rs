@@ -75,9 +75,9 @@ pub fn level_adjacency<'a>(
         .collect();
     ids.sort_unstable();
     ids.dedup();
-    let Some(&last) = ids.last() else {
+    if ids.is_empty() {
         return LevelAdjacency::default();
-    };
+    }
     let cell = |i: usize| polygon(i).expect("filtered to indices with a cell");
 
     let diag = scale;
@@ -99,35 +99,52 @@ pub fn level_adjacency<'a>(
         shared_length(cell(a), cell(b), tol) >= threshold
     });
     let pairs: Vec<(usize, usize)> = pairs.into_iter().map(|(k, m)| (ids[k], ids[m])).collect();
+    LevelAdjacency::from_pairs(ids, pairs)
+}
 
-    // Neighbour lists in CSR form, indexed by node index.
-    let universe = last + 1;
-    let mut offsets = vec![0usize; universe + 1];
-    for &(i, j) in &pairs {
-        offsets[i + 1] += 1;
-        offsets[j + 1] += 1;
-    }
-    for i in 0..universe {
-        offsets[i + 1] += offsets[i];
-    }
-    let mut fill = offsets.clone();
-    let mut neighbors = vec![0usize; offsets[universe]];
-    for &(i, j) in &pairs {
-        neighbors[fill[i]] = j;
-        fill[i] += 1;
-        neighbors[fill[j]] = i;
-        fill[j] += 1;
-    }
-    // Pairs are sorted, so the lists already are; sorting again is cheap and
-    // keeps `are_adjacent`'s binary search correct without that argument.
-    for i in 0..universe {
-        neighbors[offsets[i]..offsets[i + 1]].sort_unstable();
-    }
-    LevelAdjacency {
-        nodes: ids,
-        pairs,
-        offsets,
-        neighbors,
+impl LevelAdjacency {
+    /// The graph on `nodes` with the edges `pairs` (node indices, each pair
+    /// `(i, j)` with `i < j`), for callers that know which cells touch without
+    /// comparing polygons (a power diagram lists its cells' neighbours).
+    /// Duplicates are dropped; every pair's ends must be in `nodes`.
+    pub fn from_pairs(mut nodes: Vec<usize>, mut pairs: Vec<(usize, usize)>) -> Self {
+        nodes.sort_unstable();
+        nodes.dedup();
+        pairs.sort_unstable();
+        pairs.dedup();
+        debug_assert!(pairs.iter().all(|&(i, j)| i < j));
+        let Some(&last) = nodes.last() else {
+            return Self::default();
+        };
+        // Neighbour lists in CSR form, indexed by node index.
+        let universe = last + 1;
+        let mut offsets = vec![0usize; universe + 1];
+        for &(i, j) in &pairs {
+            offsets[i + 1] += 1;
+            offsets[j + 1] += 1;
+        }
+        for i in 0..universe {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut fill = offsets.clone();
+        let mut neighbors = vec![0usize; offsets[universe]];
+        for &(i, j) in &pairs {
+            neighbors[fill[i]] = j;
+            fill[i] += 1;
+            neighbors[fill[j]] = i;
+            fill[j] += 1;
+        }
+        // Pairs are sorted, so the lists already are; sorting again is cheap and
+        // keeps `are_adjacent`'s binary search correct without that argument.
+        for i in 0..universe {
+            neighbors[offsets[i]..offsets[i + 1]].sort_unstable();
+        }
+        Self {
+            nodes,
+            pairs,
+            offsets,
+            neighbors,
+        }
     }
 }
 

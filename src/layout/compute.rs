@@ -8,9 +8,10 @@
 use std::sync::{Arc, OnceLock};
 
 use super::method::Method;
-use super::neighbor::{layout_similar, projection_of, NeighborParams};
+use super::neighbor::{layout_similar_with, projection_of, NeighborParams};
 use super::previous::{Previous, WarmRefusal};
-use super::warm::layout_warm;
+use super::progress::{Monitor, ProgressSink};
+use super::warm::layout_warm_with;
 use super::{treemap, Layout, LayoutError, Params, Report};
 use crate::geom::LevelAdjacency;
 use crate::neighborhood::similarity::similarity;
@@ -97,12 +98,20 @@ pub struct Request {
     /// cold start. Used only when it [fits](Previous::fits) the run; the
     /// outcome is in [`Computed::start`]. Shared, not copied, between runs.
     pub previous: Option<Arc<Previous>>,
+    /// Called with the run's [`Progress`](super::Progress) (level, diagram,
+    /// tick) as it goes, possibly from several threads at once; when it
+    /// returns `ControlFlow::Break(())` the run stops at its next check and
+    /// [`compute`] returns [`LayoutError::Cancelled`] (a signal handler, a
+    /// user's Ctrl-C). Reporting never changes the layout: with or without a
+    /// callback the bytes are the same. `None`: no reports.
+    pub progress: Option<ProgressSink>,
 }
 
 /// Runs the layout step.
 pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutError> {
     // Every method relies on a canvas in range; check before any of them runs.
     request.params.validate()?;
+    let monitor = Monitor::new(request.progress.as_ref());
     let kind = request
         .similarity
         .or_else(|| dataset.similarity_hint().map(SimilarityKind::from_hint));
@@ -120,9 +129,9 @@ pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutE
         let start = warm_start_for(dataset, request);
         let (layout, report) = match &request.previous {
             Some(previous) if matches!(start, Start::Warm { .. }) => {
-                layout_warm(dataset, &request.params, previous, None)?
+                layout_warm_with(dataset, &request.params, previous, None, &monitor)?
             }
-            _ => treemap::layout(dataset, &request.params)?,
+            _ => treemap::layout_with(dataset, &request.params, &monitor)?,
         };
         return Ok(Computed {
             dataset: dataset.clone(),
@@ -146,18 +155,19 @@ pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutE
         .filter(|_| matches!(start, Start::Warm { .. }));
     let (layout, report) = if let Some(previous) = warm_from {
         let sim = |a: usize, b: usize| similarity(kind, &prepared, a, b);
-        layout_warm(&prepared, &request.params, previous, Some(&sim))?
+        layout_warm_with(&prepared, &request.params, previous, Some(&sim), &monitor)?
     } else if method == Method::Plain {
-        treemap::layout(&prepared, &request.params)?
+        treemap::layout_with(&prepared, &request.params, &monitor)?
     } else {
         let projection = projection_of(&prepared, |a, b| similarity(kind, &prepared, a, b));
-        layout_similar(
+        layout_similar_with(
             &prepared,
             &constraints,
             &projection,
             method,
             &request.params,
             &request.neighbor,
+            &monitor,
         )?
     };
     let adjacency = levels_adjacency(&prepared, &layout);

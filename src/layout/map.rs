@@ -61,9 +61,40 @@ pub struct MapSimulation {
     damping: f64,
 }
 
+/// A saved state of a [`MapSimulation`]: its sites and counters, not its
+/// diagram, which the sites determine ([`MapSimulation::restore`] recomputes
+/// it, bit for bit). Much smaller than a copy of the simulation, so an
+/// optimiser can keep its best state every tick.
+#[derive(Clone, Debug)]
+pub struct Checkpoint {
+    sites: Vec<Site>,
+    iteration: usize,
+    error: f64,
+    ended: bool,
+    rng: Rng,
+    damping: f64,
+}
+
 /// Repair rounds per diagram evaluation. One round fixes every empty cell seen;
 /// more than a handful means pathological input, where the next tick goes on.
-const REPAIR_ROUNDS: usize = 8;
+const REPAIR_ROUNDS: usize = 4;
+
+/// Rounds of the quick repair (a dominated site's weight raised just below its
+/// dominator's) before empty cells get [`MapSimulation::restart_site`]. The
+/// quick fix is local but can cascade through chains of tiny cells beside huge
+/// ones (weights 1:85,000 in the Debian packages of `tests/data/real`).
+const QUICK_REPAIR_ROUNDS: usize = 2;
+
+/// Rounds of [`MapSimulation::restart_empty`].
+const RESTART_ROUNDS: usize = 3;
+
+/// Random points tried by [`MapSimulation::restart_site`] after the site's own
+/// position and its dominator's centroid.
+const RESTART_TRIES: usize = 8;
+
+/// A weight gap (upper minus lower bound, a squared length) wide enough to
+/// stop [`MapSimulation::restart_site`]'s search, as a share of the clip's area.
+const RESTART_MIN_GAP: f64 = 1e-9;
 
 /// A dominated site's weight is raised to leave this share of the squared site
 /// distance as margin, so the repaired site lies strictly inside its cell
@@ -167,6 +198,19 @@ impl MapSimulation {
         }
     }
 
+    /// [`Self::tick`]'s Lloyd and weight steps whether or not the simulation
+    /// has ended, without its stopping rules and flicker damping: for an
+    /// optimiser that drives the simulation itself (the neighbourhood layout
+    /// lets cells grow to their areas with it).
+    pub fn lloyd_tick(&mut self) {
+        self.move_to_centroids();
+        self.recompute();
+        self.newton_weights();
+        self.recompute();
+        self.iteration += 1;
+        self.error = self.area_error();
+    }
+
     /// One step with positions chosen by the caller (the neighbourhood
     /// optimiser's attraction moves) instead of the Lloyd step: the new
     /// positions, a diagram, a Newton weight step, a diagram. Positions must lie
@@ -180,6 +224,90 @@ impl MapSimulation {
         self.recompute();
         self.iteration += 1;
         self.error = self.area_error();
+    }
+
+    /// One step with positions chosen by the caller, usually for one power
+    /// diagram instead of [`Self::tick_with_positions`]'s two: the Newton
+    /// weight step is taken from the current diagram (linearised at the old
+    /// positions) together with the move, then the diagram is recomputed once;
+    /// only when that leaves the area error above the convergence target does
+    /// a second weight step follow. The state stays consistent (the diagram is
+    /// always that of the current sites). Positions must lie inside the clip.
+    /// Counts as a tick but never ends the simulation.
+    pub fn step_with_positions(&mut self, positions: &[Point]) {
+        let step = self.newton_direction();
+        for (site, p) in self.sites.iter_mut().zip(positions) {
+            site.position = *p;
+        }
+        if let Some((x, alpha)) = step {
+            for (site, dx) in self.sites.iter_mut().zip(&x) {
+                site.weight += alpha * dx;
+            }
+        }
+        self.recompute();
+        self.error = self.area_error();
+        if self.error > self.settings.convergence_ratio {
+            // The areas fell behind (a move too big for the step taken from
+            // the old diagram): a second weight step from the new one.
+            self.newton_weights();
+            self.recompute();
+            self.error = self.area_error();
+        }
+        self.iteration += 1;
+    }
+
+    /// A damped Lloyd step for [`Self::step_with_positions`]: every site goes
+    /// `share` of the way to its cell's centroid (a site with an empty cell
+    /// that nothing dominates, i.e. one on top of another, to a fresh random
+    /// point, as in [`Self::tick`]).
+    pub fn relax_step(&mut self, share: f64) {
+        let positions: Vec<Point> = self
+            .sites
+            .iter()
+            .zip(&self.diagram.cells)
+            .map(|(s, c)| {
+                if c.polygon.is_some() {
+                    s.position + (c.centroid - s.position) * share
+                } else if c.dominated_by.is_none() {
+                    self.clip.sample(self.rng.next_f64(), self.rng.next_f64())
+                } else {
+                    s.position
+                }
+            })
+            .collect();
+        self.step_with_positions(&positions);
+    }
+
+    /// The number of sites whose cell is empty.
+    pub fn empty_cells(&self) -> usize {
+        self.diagram
+            .cells
+            .iter()
+            .filter(|c| c.polygon.is_none())
+            .count()
+    }
+
+    /// Gives every site with an empty cell a new start ([`Self::restart_site`])
+    /// and recomputes the diagram, a few rounds at most; returns how many
+    /// sites were restarted. For the end of an optimisation, where a cell left
+    /// empty would make the layout fail.
+    pub fn restart_empty(&mut self) -> usize {
+        let mut restarted = 0;
+        for _ in 0..RESTART_ROUNDS {
+            let empty: Vec<usize> = (0..self.sites.len())
+                .filter(|&i| self.diagram.cells[i].polygon.is_none())
+                .collect();
+            if empty.is_empty() {
+                break;
+            }
+            for &i in &empty {
+                self.restart_site(i);
+            }
+            restarted += empty.len();
+            self.diagram = power_diagram(&self.sites, &self.clip);
+        }
+        self.error = self.area_error();
+        restarted
     }
 
     /// One step of the paper prototype's schedule (method-reference §5.9), for
@@ -269,6 +397,32 @@ impl MapSimulation {
         self.targets = targets;
         self.error = self.area_error();
         self.ended = false;
+    }
+
+    /// The current state, to [`Self::restore`] later.
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            sites: self.sites.clone(),
+            iteration: self.iteration,
+            error: self.error,
+            ended: self.ended,
+            rng: self.rng.clone(),
+            damping: self.damping,
+        }
+    }
+
+    /// Goes back to a state saved by [`Self::checkpoint`] on this simulation
+    /// (the same clip and targets), recomputing its diagram: the same diagram
+    /// as when it was saved, since every diagram this simulation holds is the
+    /// power diagram of its sites.
+    pub fn restore(&mut self, saved: &Checkpoint) {
+        self.sites.clone_from(&saved.sites);
+        self.iteration = saved.iteration;
+        self.error = saved.error;
+        self.ended = saved.ended;
+        self.rng = saved.rng.clone();
+        self.damping = saved.damping;
+        self.diagram = power_diagram(&self.sites, &self.clip);
     }
 
     /// The target areas.
@@ -376,11 +530,19 @@ impl MapSimulation {
     /// next diagram: fixing them here cascades (a raised site dominates the
     /// next), costing a full diagram per round.
     fn repair(&mut self) {
-        for _ in 0..REPAIR_ROUNDS {
+        for round in 0..REPAIR_ROUNDS {
             let mut changed = false;
             for i in 0..self.sites.len() {
                 let cell = &self.diagram.cells[i];
                 if cell.polygon.is_some() {
+                    continue;
+                }
+                if round >= QUICK_REPAIR_ROUNDS {
+                    // The quick fix cascades (a raised site swallows the
+                    // next); give what is still empty a start that provably
+                    // has a cell.
+                    self.restart_site(i);
+                    changed = true;
                     continue;
                 }
                 let dominator = cell.dominated_by.map(|j| {
@@ -407,6 +569,72 @@ impl MapSimulation {
             }
             self.diagram = power_diagram(&self.sites, &self.clip);
         }
+    }
+
+    /// Gives site `i` a weight, and if need be a position, at which it owns a
+    /// cell without swallowing any other site. At a point `p`, site `i` holds
+    /// `p` against every other site `k` when `w_i > max_k (w_k − |p − p_k|²)`
+    /// (the lower bound `lo`) and takes no other site's own point when `w_i <
+    /// min_k (w_k + |p − p_k|²)` (the upper bound `hi`). The site stays where
+    /// it is when the bounds leave room there; else it moves to the first of
+    /// its dominator's centroid and a few seeded random points where they do
+    /// (the widest gap if none is wide). O(n) per site, and only for sites
+    /// whose cell the quick repair could not keep.
+    fn restart_site(&mut self, i: usize) {
+        let bounds = |sites: &[Site], p: Point| -> (f64, f64) {
+            let mut lo = f64::NEG_INFINITY;
+            let mut hi = f64::INFINITY;
+            for (k, s) in sites.iter().enumerate() {
+                if k == i || !(s.weight.is_finite() && s.position.is_finite()) {
+                    continue;
+                }
+                let d2 = p.distance_squared(s.position);
+                lo = lo.max(s.weight - d2);
+                hi = hi.min(s.weight + d2);
+            }
+            (lo, hi)
+        };
+        let wide = RESTART_MIN_GAP * self.clip_area;
+        let mut candidates = Vec::with_capacity(2);
+        let here = self.sites[i].position;
+        if here.is_finite() && self.clip.contains(here) {
+            candidates.push(here);
+        }
+        if let Some(j) = self.diagram.cells[i].dominated_by {
+            if self.diagram.cells[j].polygon.is_some() {
+                candidates.push(self.diagram.cells[j].centroid);
+            }
+        }
+        let mut best: Option<(f64, Point, f64)> = None;
+        for k in 0..candidates.len() + RESTART_TRIES {
+            let p = match candidates.get(k) {
+                Some(p) => *p,
+                None => self.clip.sample(self.rng.next_f64(), self.rng.next_f64()),
+            };
+            let (lo, hi) = bounds(&self.sites, p);
+            // Infinite when there is no other site: any weight will do.
+            let gap = hi - lo;
+            if best.is_none_or(|b| gap > b.0) {
+                best = Some((gap, p, lo));
+            }
+            if gap > wide {
+                break;
+            }
+        }
+        let Some((gap, p, lo)) = best else {
+            return;
+        };
+        // Above the lower bound by what a free disc of the target area needs
+        // (|x − p|² < w_i − lo), and never past half the gap.
+        let weight = if gap.is_infinite() {
+            0.0
+        } else {
+            lo + (self.targets[i] / std::f64::consts::PI).min(0.5 * gap.max(0.0))
+        };
+        self.sites[i] = Site {
+            position: p,
+            weight,
+        };
     }
 
     /// Newton step on the power weights: solve `L Δw = A* − A` where `L` is the

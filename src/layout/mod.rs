@@ -23,6 +23,8 @@ pub mod neighbor;
 pub mod params;
 /// The previous layout of a dataset, keyed by node id: a warm start's input.
 pub mod previous;
+/// Progress reports and the stop they can ask for.
+pub mod progress;
 /// Start positions and weights for one diagram.
 pub mod seed;
 /// Top-down recursion over the hierarchy.
@@ -41,6 +43,7 @@ pub use method::Method;
 pub use neighbor::NeighborParams;
 pub use params::{Canvas, Outline, Params};
 pub use previous::{Previous, PreviousNode, WarmRefusal};
+pub use progress::{Progress, ProgressFn, ProgressSink};
 pub use treemap::layout;
 
 /// The finished geometry of one node.
@@ -84,6 +87,13 @@ pub struct Report {
     /// Cells the optimiser left empty and that got a stand-in sliver; 0 unless
     /// the input is pathological. Such a layout fails `sanity_check`.
     pub degenerate: usize,
+    /// Diagrams of a similarity layout in which cells had emptied and were
+    /// mended by restarting their sites (issue 12: repaired, never an error).
+    pub repaired: usize,
+    /// Diagrams of a similarity layout that could not be mended and fell back
+    /// to their matched-and-swapped start, or to a plain layout of that one
+    /// diagram.
+    pub fallbacks: usize,
     /// Snapshots of the optimisation, level by level, when asked for
     /// ([`NeighborParams::frames`]); empty otherwise.
     pub frames: Vec<Frame>,
@@ -125,7 +135,9 @@ impl Layout {
 }
 
 /// Errors a layout run can return. Bad data never reaches here (the dataset is
-/// validated when built); these are about parameters.
+/// validated when built), and valid data always gets a layout (cells that
+/// empty are repaired, see [`Report::repaired`]); these are about parameters,
+/// or a stop the caller asked for.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum LayoutError {
     /// A parameter is out of its range.
@@ -144,11 +156,8 @@ pub enum LayoutError {
         /// The method asked for.
         method: &'static str,
     },
-    /// Cells stayed empty despite repair (pathological input); the layout
-    /// would not be a partition.
-    #[error("{cells} cells stayed empty; the layout is degenerate")]
-    Degenerate {
-        /// How many.
-        cells: usize,
-    },
+    /// The progress callback asked the run to stop
+    /// ([`Request::progress`](compute::Request::progress)).
+    #[error("the layout was cancelled")]
+    Cancelled,
 }

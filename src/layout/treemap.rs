@@ -4,9 +4,12 @@
 //! its randomness from the run seed and its own node id, so the result does not
 //! depend on scheduling.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use rayon::prelude::*;
 
 use super::map::{MapSettings, MapSimulation};
+use super::progress::{Monitor, Progress};
 use super::{seed, Canvas, Layout, LayoutCell, LayoutError, Params, Report};
 use crate::geom::{ConvexPolygon, Point};
 use crate::rng::Rng;
@@ -29,8 +32,17 @@ pub(super) struct Division {
 /// when every child of a node weighs zero they share its cell equally. A node
 /// with one child hands it its own cell unchanged.
 pub fn layout(dataset: &Dataset, params: &Params) -> Result<(Layout, Report), LayoutError> {
+    layout_with(dataset, params, &Monitor::silent())
+}
+
+/// [`layout`] reporting to `monitor`, which may stop it.
+pub(crate) fn layout_with(
+    dataset: &Dataset,
+    params: &Params,
+    monitor: &Monitor<'_>,
+) -> Result<(Layout, Report), LayoutError> {
     let settings = map_settings(params);
-    top_down(dataset, params, |parent, polygon| {
+    top_down(dataset, params, monitor, |parent, polygon| {
         divide(dataset, params, settings, parent, polygon)
     })
 }
@@ -47,9 +59,12 @@ pub(super) fn map_settings(params: &Params) -> MapSettings {
 /// The top-down pass shared by the cold and the warm layout: the root takes
 /// the outline, a node with one child hands it its own cell, and every node
 /// with several children has its cell split by `divide(parent, cell)`.
+/// Every finished diagram is reported to `monitor`; once it asks to stop, no
+/// further diagram starts and the run ends with [`LayoutError::Cancelled`].
 pub(super) fn top_down(
     dataset: &Dataset,
     params: &Params,
+    monitor: &Monitor<'_>,
     divide: impl Fn(usize, ConvexPolygon) -> Division + Sync,
 ) -> Result<(Layout, Report), LayoutError> {
     params.validate()?;
@@ -66,7 +81,25 @@ pub(super) fn top_down(
     let mut report = Report::default();
     let mut error_sum = 0.0;
     let mut frontier = vec![root];
+    let mut level = 0;
     while !frontier.is_empty() {
+        level += 1;
+        let diagrams = frontier
+            .iter()
+            .filter(|p| dataset.node(**p).children.len() > 1)
+            .count();
+        let done = AtomicUsize::new(0);
+        let progress = |diagram: usize| Progress {
+            level,
+            levels: dataset.max_depth(),
+            diagram,
+            diagrams,
+            tick: 0,
+            ticks: 0,
+        };
+        if !monitor.report(progress(0)) {
+            return Err(LayoutError::Cancelled);
+        }
         let divisions: Vec<Division> = frontier
             .par_iter()
             .filter(|p| !dataset.node(**p).children.is_empty())
@@ -77,10 +110,21 @@ pub(super) fn top_down(
                     .expect("invariant: a level's cells are set before the next level");
                 match dataset.node(parent).children.as_slice() {
                     [only] => single_child(*only, polygon),
-                    _ => divide(parent, polygon),
+                    // After a stop the rest are skipped (cheap stand-ins that
+                    // are never used: the run returns an error).
+                    _ if monitor.stopped() => single_child(parent, polygon),
+                    _ => {
+                        let division = divide(parent, polygon);
+                        let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
+                        monitor.report(progress(finished));
+                        division
+                    }
                 }
             })
             .collect();
+        if monitor.stopped() {
+            return Err(LayoutError::Cancelled);
+        }
         let mut next = Vec::new();
         for d in divisions {
             if d.optimized {
@@ -243,7 +287,7 @@ pub(super) fn division_of(
 /// step makes this unreachable in practice; [`Report::degenerate`] counts it): a
 /// triangle of a millionth of the parent's size between the site and the
 /// parent's centroid, so the node still has a drawable cell inside its parent.
-fn sliver(parent: &ConvexPolygon, at: Point) -> ConvexPolygon {
+pub(super) fn sliver(parent: &ConvexPolygon, at: Point) -> ConvexPolygon {
     let c = parent.centroid();
     let a = at + (c - at) * 0.5;
     let e = 1e-6 * parent.diameter_bound();

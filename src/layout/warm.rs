@@ -27,6 +27,7 @@
 
 use super::map::{MapSettings, MapSimulation};
 use super::previous::{same_cell_tolerance, same_polygon, Previous};
+use super::progress::Monitor;
 use super::treemap::{child_targets, divide, division_of, map_settings, top_down, Division};
 use super::{seed, Layout, LayoutCell, LayoutError, Params, Report};
 use crate::geom::{ConvexPolygon, Point};
@@ -68,13 +69,24 @@ pub fn layout_warm(
     previous: &Previous,
     similarity: Option<SimilarityFn<'_>>,
 ) -> Result<(Layout, Report), LayoutError> {
+    layout_warm_with(dataset, params, previous, similarity, &Monitor::silent())
+}
+
+/// [`layout_warm`] reporting to `monitor`, which may stop it.
+pub(crate) fn layout_warm_with(
+    dataset: &Dataset,
+    params: &Params,
+    previous: &Previous,
+    similarity: Option<SimilarityFn<'_>>,
+    monitor: &Monitor<'_>,
+) -> Result<(Layout, Report), LayoutError> {
     let settings = MapSettings {
         // Warm diagrams skip the shape-relaxation ticks: they start from
         // relaxed cells, and Lloyd steps would move the picture.
         min_iterations: 0,
         ..map_settings(params)
     };
-    top_down(dataset, params, |parent, polygon| {
+    top_down(dataset, params, monitor, |parent, polygon| {
         if let Some(division) = reused(dataset, params, previous, parent, &polygon) {
             return division;
         }

@@ -5,6 +5,7 @@ mod support;
 
 mod architecture;
 mod bad_input;
+mod battery;
 mod browser;
 mod build;
 mod cli_errors;

@@ -1,0 +1,477 @@
+//! Similarity-driven layouts, level by level from the root down: the paper's
+//! initialisation (a CVT per parent, Kuhn–Munkres matching of projected nodes to
+//! CVT sites, greedy swaps; method-reference §4), its two baselines (§6.2), and
+//! the joint per-level optimisation of Algorithms 1 and 2 (§5). This file is the
+//! level loop; each stage has its own file:
+//! - [`params`]: the settings and the distance rules;
+//! - [`links`]: a level's constraints and what an arrangement scores;
+//! - [`level`]: a level's diagrams and the snapshot every step reads;
+//! - [`start`]: CVT, matching and the baselines' starts;
+//! - [`swap`]: greedy swap rounds and the small levels' exhaustive polish;
+//! - [`attract`]: the attraction moves;
+//! - [`optimize`]: our schedule (progress-driven tick budget, relaxation, polish);
+//! - [`prototype`]: the paper prototype's schedule;
+//! - [`secure`]: repairs and fallbacks, so that a level never fails.
+//!
+//! Where this departs from the prototype, and why:
+//! - Cells track their target areas during the whole optimisation (a Newton
+//!   weight step every tick, see [`super::map`]) instead of growing in the last
+//!   30% of ticks: growth at the end undoes neighbourhoods the attraction has
+//!   just built. The final weight-only settling keeps the arrangement.
+//! - Distance constants are relative to the level's typical cell size instead of
+//!   screen pixels (method-reference §10 row 1), so the method behaves the same
+//!   on any canvas and at any depth.
+//! - Diagrams of a level read cousins at their start-of-round positions (§5.2),
+//!   so they are independent within a round and run in parallel.
+//! - A level stops when its score plateaus instead of after a fixed 150 ticks,
+//!   and every site is pulled towards its centroid while it moves (round
+//!   cells; issue 12).
+
+mod attract;
+mod level;
+mod links;
+mod optimize;
+mod params;
+mod prototype;
+mod secure;
+mod start;
+mod swap;
+
+use rayon::prelude::*;
+
+use self::level::{frame_cells, settle, Diagram, LevelCtx};
+use self::links::LevelLinks;
+use self::optimize::optimize_level;
+use self::params::{prototype_root_area, Distances};
+use self::prototype::optimize_prototype;
+use self::secure::secure_level;
+use self::start::{init_diagram, sim_targets, starts_for};
+use super::frames::{Frame, Recorder};
+use super::map::MapSettings;
+use super::method::Method;
+use super::progress::{Monitor, Progress};
+use super::treemap::{finish, sliver};
+use super::{Layout, LayoutCell, LayoutError, Params, Report};
+use crate::geom::{ConvexPolygon, Point};
+use crate::neighborhood::{projection, Constraint};
+use nptreemap_formats::Dataset;
+
+pub use params::{NeighborParams, CENTROID_PULL, SHAPE_WEIGHT};
+
+/// Candidates per level followed down the tree when looking ahead.
+const LOOKAHEAD_CANDIDATES: usize = 3;
+
+/// 2-D positions for every node of `dataset`, in any scale: PCA of the
+/// feature vectors when every node has one of the same length (after
+/// [`crate::neighborhood::prepare`] internal nodes have the mean of their
+/// children), else classical MDS of `1 − similarity`.
+pub fn projection_of(dataset: &Dataset, similarity: impl Fn(usize, usize) -> f64) -> Vec<Point> {
+    let nodes = dataset.nodes();
+    let dim = nodes
+        .first()
+        .and_then(|n| n.features.as_ref().map(Vec::len));
+    let uniform = dim.is_some_and(|d| {
+        d > 0
+            && nodes
+                .iter()
+                .all(|n| n.features.as_ref().is_some_and(|f| f.len() == d))
+    });
+    if uniform {
+        let vectors: Vec<Vec<f64>> = nodes
+            .iter()
+            .map(|n| n.features.clone().unwrap_or_default())
+            .collect();
+        projection::pca_2d(&vectors)
+    } else {
+        projection::classical_mds_2d(|a, b| 1.0 - similarity(a, b), nodes.len())
+    }
+}
+
+/// Lays out a prepared dataset (uniform depth) with a similarity-driven method.
+/// `constraints` are those of [`crate::neighborhood::build_constraints`];
+/// `projection` has one point per node (see [`projection_of`]).
+pub fn layout_similar(
+    dataset: &Dataset,
+    constraints: &[Constraint],
+    projection: &[Point],
+    method: Method,
+    params: &Params,
+    np: &NeighborParams,
+) -> Result<(Layout, Report), LayoutError> {
+    layout_similar_with(
+        dataset,
+        constraints,
+        projection,
+        method,
+        params,
+        np,
+        &Monitor::silent(),
+    )
+}
+
+/// [`layout_similar`] reporting to `monitor`, which may stop it.
+pub(crate) fn layout_similar_with(
+    dataset: &Dataset,
+    constraints: &[Constraint],
+    projection: &[Point],
+    method: Method,
+    params: &Params,
+    np: &NeighborParams,
+    monitor: &Monitor<'_>,
+) -> Result<(Layout, Report), LayoutError> {
+    params.validate()?;
+    let root_polygon = params.outline.polygon(params.canvas)?;
+    let mut cells: Vec<Option<LayoutCell>> = vec![None; dataset.len()];
+    cells[dataset.root()] = Some(LayoutCell {
+        site: root_polygon.centroid(),
+        power_weight: 0.0,
+        polygon: root_polygon.clone(),
+    });
+    let root_box = root_polygon.bbox();
+    let ctx = Context {
+        dataset,
+        constraints,
+        projection,
+        method,
+        params,
+        np,
+        root_box,
+        scale: (root_box.1 - root_box.0).length(),
+        settings: MapSettings {
+            convergence_ratio: params.convergence_ratio,
+            max_iterations: params.max_iterations,
+            min_iterations: params.min_iterations.min(params.max_iterations),
+        },
+        lookahead: method == Method::Neighbor
+            && !np.prototype
+            && dataset.len() <= np.lookahead_max_nodes,
+        prototype_scale: (root_polygon.area() / prototype_root_area()).sqrt(),
+        monitor,
+    };
+    let (_, cells, mut report, error_sum) = descend(&ctx, 0, cells)?;
+    if report.diagrams > 0 {
+        report.area_error_mean = error_sum / report.diagrams as f64;
+    }
+    Ok((finish(dataset, params.canvas, cells), report))
+}
+
+/// Everything a level needs that does not change from level to level.
+struct Context<'a> {
+    dataset: &'a Dataset,
+    constraints: &'a [Constraint],
+    projection: &'a [Point],
+    method: Method,
+    params: &'a Params,
+    np: &'a NeighborParams,
+    root_box: (Point, Point),
+    /// The layout's length scale: the root's bounding-box diagonal.
+    scale: f64,
+    settings: MapSettings,
+    /// Choose among a level's best candidates by laying out everything below
+    /// each (small hierarchies only).
+    lookahead: bool,
+    /// Root size against the prototype's (for `NeighborParams::prototype`).
+    prototype_scale: f64,
+    monitor: &'a Monitor<'a>,
+}
+
+/// What [`descend`] returns: the score of the deepest level, the cells, the
+/// report and the sum of per-diagram errors.
+type Descent = (f64, Vec<Option<LayoutCell>>, Report, f64);
+
+/// Lays out level `depth + 1` and everything below it, given the cells down to
+/// `depth`.
+fn descend(
+    ctx: &Context<'_>,
+    depth: usize,
+    cells: Vec<Option<LayoutCell>>,
+) -> Result<Descent, LayoutError> {
+    let dataset = ctx.dataset;
+    if depth >= dataset.max_depth() {
+        return Ok((
+            leaf_score(ctx, depth, &cells),
+            cells,
+            Report::default(),
+            0.0,
+        ));
+    }
+    let n = dataset.len();
+    let parents: Vec<usize> = (0..n)
+        .filter(|&i| dataset.node(i).depth == depth && !dataset.node(i).children.is_empty())
+        .collect();
+    let level: Vec<usize> = parents
+        .iter()
+        .flat_map(|p| dataset.node(*p).children.iter().copied())
+        .collect();
+    let projected = projection::fit_into(
+        &level.iter().map(|i| ctx.projection[*i]).collect::<Vec<_>>(),
+        ctx.root_box.0,
+        ctx.root_box.1,
+    );
+    let mut proj_of = vec![Point::ZERO; n];
+    for (i, p) in level.iter().zip(projected) {
+        proj_of[*i] = p;
+    }
+    let links = LevelLinks::new(dataset, &level, ctx.constraints, depth + 1);
+    let lv = LevelCtx {
+        links: &links,
+        scale: ctx.scale,
+        np: ctx.np,
+    };
+    let polygons: Vec<ConvexPolygon> = parents
+        .iter()
+        .map(|&p| {
+            cells[p]
+                .as_ref()
+                .map(|c| c.polygon.clone())
+                .expect("invariant: parents are laid out before their children")
+        })
+        .collect();
+    let starts = if ctx.method == Method::Neighbor && !ctx.np.prototype {
+        starts_for(level.len(), ctx.np)
+    } else {
+        1
+    };
+    let diagrams_here = parents
+        .iter()
+        .filter(|p| dataset.node(**p).children.len() > 1)
+        .count();
+    let progress = |tick: usize| Progress {
+        level: depth + 1,
+        levels: dataset.max_depth(),
+        diagram: 0,
+        diagrams: diagrams_here,
+        tick,
+        ticks: ctx.np.ticks,
+    };
+    if !ctx.monitor.report(progress(0)) {
+        return Err(LayoutError::Cancelled);
+    }
+    let tick_done = |tick: usize| ctx.monitor.report(progress(tick));
+    let mut candidates: Vec<(f64, Vec<Diagram>, Vec<Diagram>, Vec<Frame>)> = Vec::new();
+    for start in 0..starts {
+        let mut recorder = Recorder::new(depth + 1, ctx.np.frames, ctx.np.ticks);
+        let (score, diagrams, initial) = run_level(
+            ctx,
+            &parents,
+            &polygons,
+            &proj_of,
+            &lv,
+            depth,
+            start,
+            recorder.as_mut(),
+            &tick_done,
+        )?;
+        let frames = recorder.map(Recorder::into_frames).unwrap_or_default();
+        candidates.push((score, diagrams, initial, frames));
+    }
+    // Best first; the stable sort keeps earlier starts first among equals.
+    candidates.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let keep = if ctx.lookahead {
+        LOOKAHEAD_CANDIDATES
+    } else {
+        1
+    };
+    candidates.truncate(keep);
+    let mut best: Option<Descent> = None;
+    for (_, mut diagrams, initial, frames) in candidates {
+        if ctx.method == Method::Neighbor && !ctx.np.prototype {
+            swap::exhaustive_polish(&mut diagrams, &lv);
+        }
+        let repairs = secure_level(
+            &mut diagrams,
+            &initial,
+            ctx.np,
+            ctx.settings,
+            ctx.params.seed,
+        );
+        let mut cells = cells.clone();
+        let (mut report, error_sum) = apply_level(diagrams, &mut cells);
+        report.repaired = repairs.repaired;
+        report.fallbacks = repairs.fallbacks;
+        report.frames = frames;
+        let (score, cells, below, below_sum) = descend(ctx, depth + 1, cells)?;
+        if best.as_ref().is_none_or(|b| score > b.0) {
+            best = Some((
+                score,
+                cells,
+                add_reports(report, below),
+                error_sum + below_sum,
+            ));
+        }
+    }
+    Ok(best.unwrap_or((0.0, cells, Report::default(), 0.0)))
+}
+
+/// The realised constraints of the deepest level (the lookahead's measure).
+fn leaf_score(ctx: &Context<'_>, depth: usize, cells: &[Option<LayoutCell>]) -> f64 {
+    let dataset = ctx.dataset;
+    let leaves: Vec<usize> = (0..dataset.len())
+        .filter(|&i| dataset.node(i).depth == depth)
+        .collect();
+    if !ctx.lookahead || leaves.iter().any(|i| cells[*i].is_none()) {
+        return 0.0;
+    }
+    let links = LevelLinks::new(dataset, &leaves, ctx.constraints, depth);
+    let layout = Layout {
+        canvas: ctx.params.canvas,
+        cells: leaves.iter().filter_map(|i| cells[*i].clone()).collect(),
+    };
+    let all: Vec<usize> = (0..leaves.len()).collect();
+    links.realized(&layout.level_adjacency(&all)) as f64
+}
+
+/// Writes a level's diagrams into `cells`; returns its report and error sum.
+/// A cell still empty after [`secure_level`] (not seen in practice) gets a
+/// sliver, as in the plain layout, counted in [`Report::degenerate`].
+fn apply_level(diagrams: Vec<Diagram>, cells: &mut [Option<LayoutCell>]) -> (Report, f64) {
+    let mut report = Report::default();
+    let mut error_sum = 0.0;
+    for d in diagrams {
+        match d {
+            Diagram::Single { child, polygon } => {
+                cells[child] = Some(LayoutCell {
+                    site: polygon.centroid(),
+                    power_weight: 0.0,
+                    polygon,
+                });
+            }
+            Diagram::Sim { children, sim } => {
+                let state = sim.state();
+                report.diagrams += 1;
+                report.iterations += state.iteration_count;
+                error_sum += state.convergence_ratio;
+                report.area_error_max = report.area_error_max.max(state.convergence_ratio);
+                if !sim.converged() {
+                    report.unconverged += 1;
+                }
+                let clip = sim.clip().clone();
+                let (sites, diagram) = sim.into_parts();
+                for ((child, site), cell) in children.iter().zip(&sites).zip(diagram.cells) {
+                    let polygon = cell.polygon.unwrap_or_else(|| {
+                        report.degenerate += 1;
+                        sliver(&clip, site.position)
+                    });
+                    cells[*child] = Some(LayoutCell {
+                        site: site.position,
+                        power_weight: site.weight,
+                        polygon,
+                    });
+                }
+            }
+        }
+    }
+    (report, error_sum)
+}
+
+fn add_reports(a: Report, b: Report) -> Report {
+    Report {
+        diagrams: a.diagrams + b.diagrams,
+        iterations: a.iterations + b.iterations,
+        area_error_mean: 0.0,
+        area_error_max: a.area_error_max.max(b.area_error_max),
+        unconverged: a.unconverged + b.unconverged,
+        reused: a.reused + b.reused,
+        degenerate: a.degenerate + b.degenerate,
+        repaired: a.repaired + b.repaired,
+        fallbacks: a.fallbacks + b.fallbacks,
+        frames: a.frames.into_iter().chain(b.frames).collect(),
+    }
+}
+
+/// Lays out one level from one start: initialise every diagram, swap, aim at
+/// the real areas, optimise by `method`. Returns the level's score, its
+/// diagrams, and the diagrams as they were when the optimisation began (the
+/// fallback of [`secure_level`]).
+#[allow(clippy::too_many_arguments)]
+fn run_level(
+    ctx: &Context<'_>,
+    parents: &[usize],
+    polygons: &[ConvexPolygon],
+    proj_of: &[Point],
+    lv: &LevelCtx<'_>,
+    depth: usize,
+    start: usize,
+    mut recorder: Option<&mut Recorder>,
+    tick_done: &dyn Fn(usize) -> bool,
+) -> Result<(f64, Vec<Diagram>, Vec<Diagram>), LayoutError> {
+    let (dataset, method, params, np) = (ctx.dataset, ctx.method, ctx.params, ctx.np);
+    let mut run_params = params.clone();
+    run_params.seed = params
+        .seed
+        .wrapping_add((start as u64).wrapping_mul(0x9e37_79b9));
+    let mut diagrams: Vec<Diagram> = parents
+        .par_iter()
+        .zip(polygons.par_iter())
+        .map(|(&parent, polygon)| {
+            init_diagram(
+                dataset,
+                parent,
+                polygon.clone(),
+                proj_of,
+                method,
+                &run_params,
+                np,
+                ctx.settings,
+            )
+        })
+        .collect();
+    if matches!(method, Method::MatchSwap | Method::Neighbor) {
+        for _ in 0..np.swap_rounds {
+            swap::swap_round(&mut diagrams, lv);
+        }
+    }
+    if let Some(r) = recorder.as_deref_mut() {
+        let label = match method {
+            Method::MatchSwap | Method::Neighbor => "matched and swapped",
+            _ => "initial",
+        };
+        r.take(label, frame_cells(&diagrams));
+    }
+    // Swaps compared cells of the equal-area CVT; from here on cells aim for
+    // their real areas.
+    diagrams.par_iter_mut().for_each(|d| {
+        if let Diagram::Sim { children, sim } = d {
+            let targets = sim_targets(dataset, sim.clip(), children, params);
+            sim.set_targets(targets);
+        }
+    });
+    let initial = diagrams.clone();
+    let stopped = |_| LayoutError::Cancelled;
+    let score = match method {
+        Method::Neighbor if !np.prototype => {
+            let (score, chosen) = optimize_level(diagrams, lv, recorder.as_deref_mut(), tick_done)
+                .map_err(stopped)?;
+            diagrams = chosen;
+            score.value()
+        }
+        Method::Neighbor => {
+            let limits = Distances::prototype(ctx.prototype_scale, depth + 1);
+            optimize_prototype(
+                &mut diagrams,
+                lv,
+                &limits,
+                recorder.as_deref_mut(),
+                tick_done,
+            )
+            .map_err(stopped)?;
+            0.0
+        }
+        Method::MatchSwap => {
+            diagrams.par_iter_mut().for_each(|d| settle(d, np));
+            0.0
+        }
+        _ => {
+            diagrams.par_iter_mut().for_each(|d| {
+                if let Diagram::Sim { sim, .. } = d {
+                    sim.run();
+                }
+            });
+            0.0
+        }
+    };
+    if let Some(r) = recorder {
+        r.take("final", frame_cells(&diagrams));
+    }
+    Ok((score, diagrams, initial))
+}

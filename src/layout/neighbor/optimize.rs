@@ -1,0 +1,242 @@
+//! Our joint optimisation of one level (paper Algorithm 1, with the changes
+//! of method-reference §10): every tick the level's neighbourhoods are read
+//! from one snapshot and every diagram makes one step, each cell an attraction
+//! move (Algorithm 2) plus a pull towards its centroid, with the Newton weight
+//! step that keeps areas at their targets, usually one power diagram per step.
+//!
+//! The tick budget follows progress: the snapshot every tick reads gives the
+//! level's score for free, the best state is kept (as a checkpoint of its
+//! sites, not a copy of its cells), and the level stops once the score has not
+//! risen by a meaningful step for a while ([`patience`]). Then a damped Lloyd
+//! relaxation is kept while the score holds, swap rounds are kept while they
+//! raise it, and the areas are settled.
+
+use rayon::prelude::*;
+
+use super::attract::attraction_moves;
+use super::level::{settle, settle_to, Diagram, LevelCtx};
+use super::links::Score;
+use super::params::Distances;
+use super::swap::swap_round;
+use super::NeighborParams;
+use crate::layout::frames::Recorder;
+use crate::layout::map::Checkpoint;
+
+/// Most Lloyd ticks per diagram that let the cells grow from the equal-area CVT
+/// to their real areas before attraction starts, and the area error that ends
+/// them. With weights 1:85,000 (`tests/data/real/debian-packages`) the weights
+/// alone cannot get there: a cell that must grow 900-fold has its neighbours'
+/// sites in the way, and the Newton step's bisector cap shrinks to a few
+/// percent; Lloyd steps move the sites out of the way, keeping the matched
+/// arrangement, as the plain layout does from its start.
+const GROW_TICKS: usize = 40;
+const GROWN_ERROR: f64 = 0.02;
+/// A state is a candidate for the best only once every diagram's area error
+/// is at most this: before the weights have caught up with the real targets,
+/// neighbourhoods are not yet those of the finished cells.
+const CANDIDATE_ERROR: f64 = 0.05;
+/// A tick counts as progress when it lifts the best score by at least half a
+/// constraint, or by this share of the score on large levels (where single
+/// constraints keep trickling in long after the arrangement has settled).
+const PLATEAU_SHARE: f64 = 0.002;
+/// Levels of up to this many cells get the whole tick budget (patience grows
+/// as levels shrink, see [`patience`]): their best moment is often brief and
+/// late, and their ticks are cheap.
+const PATIENT_CELLS: usize = 256;
+/// Most Lloyd ticks of the final relaxation, and the share of the way to the
+/// centroid each goes.
+const RELAX_TICKS: usize = 30;
+const RELAX_STEP: f64 = 0.5;
+/// Swap rounds tried on the final state (each kept only if it helps).
+const POLISH_ROUNDS: usize = 4;
+/// The finished level's areas are settled to this share of the run's area
+/// target (the cells are final; the target is for diagrams still moving).
+const FINAL_SHARE: f64 = 0.1;
+
+/// Why an optimisation stopped early: the progress callback said so.
+#[derive(Debug)]
+pub(super) struct Stopped;
+
+/// A level's state, diagram by diagram (`None` for only children).
+type Saved = Vec<Option<Checkpoint>>;
+
+fn save(diagrams: &[Diagram]) -> Saved {
+    diagrams
+        .par_iter()
+        .map(|d| match d {
+            Diagram::Sim { sim, .. } => Some(sim.checkpoint()),
+            Diagram::Single { .. } => None,
+        })
+        .collect()
+}
+
+fn restore(diagrams: &mut [Diagram], saved: &Saved) {
+    diagrams
+        .par_iter_mut()
+        .zip(saved.par_iter())
+        .for_each(|(d, s)| {
+            if let (Diagram::Sim { sim, .. }, Some(s)) = (d, s) {
+                sim.restore(s);
+            }
+        });
+}
+
+/// Ticks without progress after which a level of `cells` cells stops:
+/// `np.patience` on large levels, the whole budget on small ones, in between
+/// in proportion.
+fn patience(cells: usize, np: &NeighborParams) -> usize {
+    if np.patience == 0 {
+        return usize::MAX;
+    }
+    let scaled = np.ticks * PATIENT_CELLS / cells.max(1);
+    np.patience.max(scaled)
+}
+
+/// Optimises one level from its matched-and-swapped start (targets already
+/// set to the real areas) and returns the score and diagrams of the best state
+/// found, relaxed, polished and settled. `tick_done(t)` is told after every
+/// tick and returns false to stop.
+pub(super) fn optimize_level(
+    mut diagrams: Vec<Diagram>,
+    lv: &LevelCtx<'_>,
+    mut recorder: Option<&mut Recorder>,
+    tick_done: &dyn Fn(usize) -> bool,
+) -> Result<(Score, Vec<Diagram>), Stopped> {
+    let np = lv.np;
+    // The unit length of the level: square root of its mean cell area.
+    let total: f64 = diagrams.iter().map(|d| d.clip().area()).sum();
+    let cells = lv.links.nodes.len();
+    let unit = (total / cells.max(1) as f64).sqrt();
+    let limits = Distances::relative(unit, np);
+    grow(&mut diagrams);
+    let patience = patience(cells, np);
+    let mut best: Option<(Score, Saved)> = None;
+    let mut reference = f64::NEG_INFINITY;
+    let mut idle = 0;
+    for tick in 0..np.ticks {
+        if np.swap_every > 0 && tick > 0 && tick % np.swap_every == 0 && tick + 20 < np.ticks {
+            swap_round(&mut diagrams, lv);
+            grow(&mut diagrams);
+        }
+        let snap = lv.snapshot(&diagrams);
+        keep_if_best(&mut best, &snap.score, snap.area_error, &diagrams);
+        let value = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.0.value());
+        if value >= reference + (PLATEAU_SHARE * reference.abs()).max(0.5) {
+            reference = value;
+            idle = 0;
+        } else {
+            idle += 1;
+        }
+        if idle >= patience {
+            break;
+        }
+        diagrams.par_iter_mut().for_each(|d| {
+            if let Diagram::Sim { children, sim } = d {
+                if sim.state().convergence_ratio > CANDIDATE_ERROR {
+                    // The areas fell behind the moves: let them catch up.
+                    sim.lloyd_tick();
+                } else {
+                    let positions = attraction_moves(children, sim, lv.links, &snap, &limits, true);
+                    sim.step_with_positions(&positions);
+                }
+            }
+        });
+        if let Some(r) = recorder.as_deref_mut().filter(|r| r.wants(tick)) {
+            r.take(
+                format!("tick {}", tick + 1),
+                super::level::frame_cells(&diagrams),
+            );
+        }
+        if !tick_done(tick + 1) {
+            return Err(Stopped);
+        }
+    }
+    let snap = lv.snapshot(&diagrams);
+    keep_if_best(&mut best, &snap.score, snap.area_error, &diagrams);
+    let score = match best {
+        Some((score, saved)) => {
+            restore(&mut diagrams, &saved);
+            score
+        }
+        None => snap.score,
+    };
+    let score = relax(&mut diagrams, score, lv);
+    polish(&mut diagrams, score, lv);
+    diagrams.par_iter_mut().for_each(|d| {
+        if let Diagram::Sim { sim, .. } = d {
+            let target = FINAL_SHARE * sim.settings().convergence_ratio;
+            settle_to(d, np, target);
+        }
+    });
+    let score = lv.snapshot(&diagrams).score;
+    Ok((score, diagrams))
+}
+
+/// Lloyd ticks (the plain optimiser's) for every diagram whose areas are far
+/// from their targets: after the equal-area start, and after swaps.
+fn grow(diagrams: &mut [Diagram]) {
+    diagrams.par_iter_mut().for_each(|d| {
+        if let Diagram::Sim { sim, .. } = d {
+            for _ in 0..GROW_TICKS {
+                if sim.state().convergence_ratio <= GROWN_ERROR {
+                    break;
+                }
+                sim.lloyd_tick();
+            }
+        }
+    });
+}
+
+/// Keeps `diagrams` as the best state when its score is at least the best's
+/// (ties go to the later state, which has had more optimisation) and its
+/// areas are near their targets.
+fn keep_if_best(
+    best: &mut Option<(Score, Saved)>,
+    score: &Score,
+    area_error: f64,
+    diagrams: &[Diagram],
+) {
+    if area_error <= CANDIDATE_ERROR && best.as_ref().is_none_or(|b| score.value() >= b.0.value()) {
+        *best = Some((*score, save(diagrams)));
+    }
+}
+
+/// Rounds the cells: damped Lloyd ticks on the chosen state, each kept only
+/// while the level's score does not drop. The attraction phase moves sites
+/// off their centroids (long cells); this takes back what the arrangement
+/// does not need. Returns the score of the state kept.
+fn relax(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) -> Score {
+    for _ in 0..RELAX_TICKS {
+        let saved = save(diagrams);
+        diagrams.par_iter_mut().for_each(|d| {
+            if let Diagram::Sim { sim, .. } = d {
+                sim.relax_step(RELAX_STEP);
+            }
+        });
+        let snap = lv.snapshot(diagrams);
+        if snap.score.value() < score.value() || snap.area_error > CANDIDATE_ERROR {
+            restore(diagrams, &saved);
+            break;
+        }
+        score = snap.score;
+    }
+    score
+}
+
+/// Swap rounds on the chosen state with its areas settled, each kept only
+/// while it raises the score.
+fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
+    for _ in 0..POLISH_ROUNDS {
+        let saved = save(diagrams);
+        if swap_round(diagrams, lv) == 0 {
+            break;
+        }
+        diagrams.par_iter_mut().for_each(|d| settle(d, lv.np));
+        let snap = lv.snapshot(diagrams);
+        if snap.score.value() <= score.value() {
+            restore(diagrams, &saved);
+            break;
+        }
+        score = snap.score;
+    }
+}
