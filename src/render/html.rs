@@ -7,8 +7,9 @@
 
 use serde::Serialize;
 
-use super::picture::{picture, Style};
-use super::svg::{cell_colors, escape, path_data};
+use super::labels::display_name;
+use super::picture::{colors, picture, Style};
+use super::svg::{escape, path_data};
 use crate::layout::Computed;
 use nptreemap_formats::Dataset;
 
@@ -81,16 +82,18 @@ body.np-hide-unrealized .np-unrealized { display: none; }
 const SCRIPT: &str = r##"(function () {
   "use strict";
   var data = JSON.parse(document.getElementById("nptreemap-data").textContent);
-  var nodes = {};
-  data.nodes.forEach(function (n) { nodes[n.id] = n; });
+  // Maps and sets, never plain objects: ids such as "constructor",
+  // "toString" or "__proto__" are keys like any other (issue 11, item 14).
+  var nodes = new Map();
+  data.nodes.forEach(function (n) { nodes.set(n.id, n); });
   var map = document.getElementById("np-map");
   var tip = document.getElementById("np-tooltip");
-  var cells = {};
+  var cells = new Map();
   var leaves = [];
   Array.prototype.forEach.call(map.querySelectorAll("path[data-id]"), function (el) {
     var id = el.getAttribute("data-id");
-    cells[id] = el;
-    if (nodes[id] && nodes[id].leaf) { leaves.push(el); }
+    cells.set(id, el);
+    if (nodes.has(id) && nodes.get(id).leaf) { leaves.push(el); }
   });
   var current = null;
 
@@ -104,15 +107,16 @@ const SCRIPT: &str = r##"(function () {
   }
 
   function show(el) {
-    var n = nodes[el.getAttribute("data-id")];
+    var n = nodes.get(el.getAttribute("data-id"));
     current = el;
-    var near = {};
-    n.neighbours.forEach(function (id) { near[id] = true; });
+    // The hovered cell and its neighbours stay; every other leaf greys out.
+    var near = new Set(n.neighbours);
+    near.add(n.id);
     leaves.forEach(function (c) {
-      if (!near[c.getAttribute("data-id")]) { c.classList.add("np-dim"); }
+      if (!near.has(c.getAttribute("data-id"))) { c.classList.add("np-dim"); }
     });
     n.partners.forEach(function (p) {
-      var c = cells[p[0]];
+      var c = cells.get(p[0]);
       if (c) {
         c.classList.add("np-partner");
         if (!p[1]) { c.classList.add("np-partner-unrealized"); }
@@ -126,7 +130,7 @@ const SCRIPT: &str = r##"(function () {
     var el = e.target.closest ? e.target.closest("path[data-id]") : null;
     if (el === current) { return; }
     clear();
-    var n = el && nodes[el.getAttribute("data-id")];
+    var n = el && nodes.get(el.getAttribute("data-id"));
     if (n && n.leaf) { show(el); }
   });
   map.addEventListener("mouseleave", clear);
@@ -184,8 +188,8 @@ const SCRIPT: &str = r##"(function () {
 /// The page has no network references: style, script and data are inline. The
 /// data is JSON in `<script type="application/json" id="nptreemap-data">`, with
 /// every `<` written as `\u003c` so no label can close the block. Hovering a
-/// leaf dims every leaf cell outside its neighbour set (itself included, as in
-/// the prototype), outlines its constraint partners (dashed where unrealised)
+/// leaf dims every leaf cell outside its neighbour set (not itself, unlike the
+/// prototype, which greys the hovered cell too), outlines its constraint partners (dashed where unrealised)
 /// and shows its root-to-leaf path and weight in a tooltip; a checkbox "Show
 /// unrealized links" (off by default) shows or hides SVG elements of class
 /// `np-unrealized`. Identical input gives identical bytes.
@@ -250,8 +254,8 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
         .enumerate()
         .map(|(i, node)| HtmlNode {
             id: node.id.clone(),
-            label: node.label.clone(),
-            path: path_labels(dataset, i),
+            label: display_name(dataset, i, &style.cells.labels.names),
+            path: path_labels(dataset, i, &style.cells.labels.names),
             weight: node.value,
             depth: node.depth,
             leaf: node.children.is_empty(),
@@ -267,7 +271,7 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
         .title
         .clone()
         .unwrap_or_else(|| dataset.node(dataset.root()).label.clone());
-    let colors = cell_colors(dataset);
+    let colors = colors(computed, style);
     let frames = computed
         .report
         .frames
@@ -296,12 +300,16 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
     )
 }
 
-/// The labels from the root to node `i`, both included: the tooltip's text.
-fn path_labels(dataset: &Dataset, i: usize) -> Vec<String> {
+/// The names from the root to node `i`, both included: the tooltip's text.
+fn path_labels(
+    dataset: &Dataset,
+    i: usize,
+    names: &std::collections::BTreeMap<String, String>,
+) -> Vec<String> {
     dataset
         .path(i)
         .iter()
-        .map(|k| dataset.node(*k).label.clone())
+        .map(|k| display_name(dataset, *k, names))
         .collect()
 }
 
@@ -328,7 +336,7 @@ mod tests {
             .iter()
             .enumerate()
             .map(|(i, node)| {
-                let path = path_labels(dataset, i);
+                let path = path_labels(dataset, i, &Default::default());
                 let (neighbors, partners) = match node.id.as_str() {
                     "A1" => (vec!["A2".into(), "B".into()], vec![("B".into(), true)]),
                     "A3" => (vec!["A2".into()], vec![("A1".into(), false)]),

@@ -45,14 +45,25 @@ struct Page {
 }
 
 impl Page {
-    /// Lays out `shared/paper-data/<name>.json` into `<name>.html` and
-    /// `<name>.json` under `dir`, and picks the first leaf (in file order) that
-    /// has neighbours and partners, preferring one with an unrealised partner.
+    /// Lays out `shared/paper-data/<name>.json` (see [`Page::build_from`]).
     fn build(dir: &Path, name: &str, extra: &[&str]) -> Page {
         let input = support::shared().join(format!("paper-data/{name}.json"));
+        Page::build_from(dir, &input, name, extra, None)
+    }
+
+    /// Lays out `input` into `<name>.html` and `<name>.json` under `dir`, and
+    /// hovers `target`, or else the first leaf (in file order) that has
+    /// neighbours and partners, preferring one with an unrealised partner.
+    fn build_from(
+        dir: &Path,
+        input: &Path,
+        name: &str,
+        extra: &[&str],
+        target: Option<&str>,
+    ) -> Page {
         let html = dir.join(format!("{name}.html"));
         let json = dir.join(format!("{name}.json"));
-        support::layout(&input, &[&html, &json], extra);
+        support::layout(input, &[&html, &json], extra);
         let data = page_data(&std::fs::read_to_string(&html).expect("read page"));
         let layout: Value =
             serde_json::from_slice(&std::fs::read(&json).expect("read layout")).expect("JSON");
@@ -100,12 +111,15 @@ impl Page {
             .filter(|id| leaves.contains(*id) && by_id[id]["virtual"] != true)
             .filter(|id| !neighbors_of(id).is_empty() && !partners_of(id).is_empty())
             .collect();
-        let target = candidates
-            .iter()
-            .find(|id| partners_of(id).values().any(|r| !r))
-            .or(candidates.first())
-            .unwrap_or_else(|| panic!("{name}: no leaf with neighbours and partners"))
-            .to_string();
+        let target = match target {
+            Some(id) => id.to_owned(),
+            None => candidates
+                .iter()
+                .find(|id| partners_of(id).values().any(|r| !r))
+                .or(candidates.first())
+                .unwrap_or_else(|| panic!("{name}: no leaf with neighbours and partners"))
+                .to_string(),
+        };
 
         let mut path = Vec::new();
         let mut at = by_id[target.as_str()];
@@ -187,6 +201,38 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
         movies.partners.values().any(|r| !r),
         "movies target has an unrealised partner"
     );
+    // Ids that are also names of every JavaScript object's properties
+    // (issue 11, item 14): with plain objects as maps, `constructor` and its
+    // kind counted as everyone's neighbours and never greyed out.
+    let special_input =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/html/special-ids.json");
+    let special: Vec<Page> = ["alpha", "constructor", "__proto__"]
+        .iter()
+        .map(|target| {
+            let name = format!("special-{}", target.trim_matches('_'));
+            Page::build_from(&dir, &special_input, &name, &[], Some(target))
+        })
+        .collect();
+    let greyed: BTreeSet<&String> = special
+        .iter()
+        .flat_map(|p| {
+            p.leaves
+                .iter()
+                .filter(|l| !p.neighbors.contains(*l) && **l != p.target)
+        })
+        .collect();
+    for id in [
+        "constructor",
+        "toString",
+        "__proto__",
+        "hasOwnProperty",
+        "valueOf",
+    ] {
+        assert!(
+            greyed.contains(&id.to_string()),
+            "{id} is to grey out on some hover: {greyed:?}"
+        );
+    }
 
     let mut browser = Browser::launch(&chromium, &dir, BUDGET);
     for domain in ["Page", "Runtime", "Log", "Network"] {
@@ -206,6 +252,10 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
     hover_and_leave(&mut browser, &movies);
     toggle_unrealized_links(&mut browser);
     step_through_frames(&mut browser);
+    for page in &special {
+        browser.open(&page.url);
+        hover_and_leave(&mut browser, page);
+    }
 
     // One more round trip, so every event sent before it has been read.
     browser.eval("0");
@@ -359,7 +409,10 @@ fn hover_point(browser: &mut Browser, page: &Page) -> (f64, f64) {
 /// The hover state is the page's documented behaviour for `page.target`.
 fn check_hovered(state: &Value, page: &Page) -> Result<(), String> {
     let dimmed = id_set(&state["dimmed"]);
-    let expected: BTreeSet<String> = page.leaves.difference(&page.neighbors).cloned().collect();
+    // Every leaf but the hovered one and its neighbours (issue 11, item 14:
+    // the hovered cell used to grey itself out).
+    let mut expected: BTreeSet<String> = page.leaves.difference(&page.neighbors).cloned().collect();
+    expected.remove(&page.target);
     if dimmed != expected {
         return Err(format!("dimmed {dimmed:?}, expected {expected:?}"));
     }

@@ -12,6 +12,7 @@ mod degenerate;
 mod determinism;
 mod escaping;
 mod labels;
+mod legibility;
 mod neighborhood;
 mod paper_data;
 mod random_hierarchies;
