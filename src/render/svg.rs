@@ -127,7 +127,7 @@ pub(crate) fn push_cells(
     }
 
     out.push_str(&format!(
-        "<g stroke=\"{}\" stroke-linejoin=\"round\">\n",
+        "<g class=\"np-cells\" stroke=\"{}\" stroke-linejoin=\"round\">\n",
         style.stroke
     ));
     for (depth, nodes) in by_depth.iter().enumerate().rev() {

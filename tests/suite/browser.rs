@@ -256,6 +256,16 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
         browser.open(&page.url);
         hover_and_leave(&mut browser, page);
     }
+    // Issue 13: a page that fits its container, keyboard focus, two maps in
+    // one document, and the zoom into a group and back.
+    fits_its_width(&mut browser, &countries.url);
+    browser.open(&countries.url);
+    keyboard_focus_behaves_as_hover(&mut browser);
+    browser.open(&countries.url);
+    zoom_into_a_group_and_back(&mut browser, &countries);
+    let both = two_maps_in_one_document(&dir, &countries, &movies);
+    browser.open(&both);
+    two_maps_stay_apart(&mut browser);
 
     // One more round trip, so every event sent before it has been read.
     browser.eval("0");
@@ -301,8 +311,8 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
 /// Everything the hover changes, read from the DOM: which cells carry the
 /// highlight classes, each cell's computed style, and the tooltip.
 const HOVER_STATE: &str = r##"(function () {
-  var map = document.getElementById("np-map");
-  var tip = document.getElementById("np-tooltip");
+  var map = document.querySelector(".np-map");
+  var tip = document.querySelector(".np-tooltip");
   function ids(selector) {
     return Array.prototype.map.call(map.querySelectorAll(selector), function (el) {
       return el.getAttribute("data-id");
@@ -330,7 +340,7 @@ const HOVER_STATE: &str = r##"(function () {
 /// pointer would run out of the window, and checks it is flipped into view.
 fn tooltip_stays_in_view(browser: &mut Browser) {
     const EDGE: &str = r##"(function () {
-      var r = document.querySelector("#np-map svg").getBoundingClientRect();
+      var r = document.querySelector(".np-map svg").getBoundingClientRect();
       return [Math.min(r.right, window.innerWidth) - 6, r.top + 0.3 * r.height];
     })()"##;
     let at = browser.eval(EDGE);
@@ -368,7 +378,7 @@ fn hover_and_leave(browser: &mut Browser, page: &Page) {
 
     // Top-left corner: inside the body's margin, outside the map.
     let outside = browser
-        .eval("!document.getElementById('np-map').contains(document.elementFromPoint(2, 2))");
+        .eval("!document.querySelector('.np-map').contains(document.elementFromPoint(2, 2))");
     assert_eq!(outside, true, "(2, 2) lies outside the map");
     browser.mouse_move(2.0, 2.0);
     browser.wait_for(
@@ -384,7 +394,7 @@ fn hover_point(browser: &mut Browser, page: &Page) -> (f64, f64) {
     let script = format!(
         r##"(function (id, points) {{
   var cell = Array.prototype.find.call(
-    document.querySelectorAll("#np-map path[data-id]"),
+    document.querySelectorAll(".np-map path[data-id]"),
     function (el) {{ return el.getAttribute("data-id") === id; }});
   if (!cell) {{ return "no cell"; }}
   var m = cell.getScreenCTM();
@@ -488,9 +498,9 @@ fn check_cleared(state: &Value, page: &Page) -> Result<(), String> {
 
 /// The checkbox, its effect, and how many unrealised-link shapes are drawn.
 const LINKS_STATE: &str = r##"(function () {
-  var box = document.getElementById("np-unrealized");
+  var box = document.querySelector(".np-unrealized-toggle");
   var shapes = [];
-  Array.prototype.forEach.call(document.querySelectorAll("#np-map .np-unrealized"), function (g) {
+  Array.prototype.forEach.call(document.querySelectorAll(".np-map .np-unrealized"), function (g) {
     Array.prototype.push.apply(shapes, g.children);
   });
   var visible = shapes.filter(function (s) {
@@ -543,12 +553,12 @@ fn toggle_unrealized_links(browser: &mut Browser) {
 /// node of the page) with its caption, and the end shows the finished map.
 fn step_through_frames(browser: &mut Browser) {
     const SET: &str = r##"(function (k) {
-      var slider = document.getElementById("np-frame");
-      var data = JSON.parse(document.getElementById("nptreemap-data").textContent);
+      var slider = document.querySelector(".np-frame");
+      var data = JSON.parse(document.querySelector(".np-data").textContent);
       if (!slider) { return { slider: false }; }
       slider.value = String(k < 0 ? slider.max : k);
       slider.dispatchEvent(new Event("input"));
-      var layer = document.getElementById("np-frame-layer");
+      var layer = document.querySelector(".np-frame-layer");
       var known = {};
       data.nodes.forEach(function (n) { known[n.id] = true; });
       var drawn = Array.prototype.map.call(layer.querySelectorAll("path"), function (p) {
@@ -558,7 +568,7 @@ fn step_through_frames(browser: &mut Browser) {
         slider: true, max: parseInt(slider.max, 10), frames: data.frames.length,
         expected: k < 0 ? 0 : data.frames[k].cells.length,
         drawn: drawn.length, unknown: drawn.filter(function (id) { return !known[id]; }).length,
-        caption: document.getElementById("np-frame-label").textContent
+        caption: document.querySelector(".np-frame-label").textContent
       };
     })"##;
     let first = browser.eval(&format!("{SET}(0)"));
@@ -578,10 +588,231 @@ fn step_through_frames(browser: &mut Browser) {
     assert_eq!(last["caption"], "final layout", "{last}");
 }
 
+/// At several widths the picture fits the window's width without a
+/// horizontal scroll bar, keeps its aspect and shows its legend without
+/// scrolling.
+fn fits_its_width(browser: &mut Browser, url: &str) {
+    const FIT: &str = r##"(function () {
+      var svg = document.querySelector(".np-map svg");
+      var r = svg.getBoundingClientRect();
+      var vb = svg.getAttribute("viewBox").split(" ").map(Number);
+      var legend = svg.querySelector(".np-legend-labels").getBoundingClientRect();
+      return { width: r.width, height: r.height, aspect: vb[2] / vb[3],
+               inner: window.innerWidth, innerHeight: window.innerHeight,
+               scroll: document.documentElement.scrollWidth, legend: legend.bottom };
+    })()"##;
+    for (w, h) in [(420, 900), (800, 700), (1600, 1000)] {
+        browser.call(
+            "Emulation.setDeviceMetricsOverride",
+            json!({"width": w, "height": h, "deviceScaleFactor": 1, "mobile": false}),
+        );
+        browser.open(url);
+        let fit = browser.eval(FIT);
+        let f = |k: &str| fit[k].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            f("width") <= f("inner") && f("scroll") <= f("inner"),
+            "{w}x{h}: {fit}"
+        );
+        // The picture box keeps the view box's aspect (within a pixel).
+        let drawn = f("width") / f("height");
+        let content = f("aspect");
+        assert!(
+            (f("width") - f("height") * content).abs() <= 1.5 || (drawn - content).abs() < 0.01,
+            "{w}x{h}: {fit}"
+        );
+        assert!(
+            f("legend") <= f("innerHeight") + 0.5,
+            "{w}x{h}: legend below the fold: {fit}"
+        );
+    }
+    browser.call(
+        "Emulation.setDeviceMetricsOverride",
+        json!({"width": VIEWPORT.0, "height": VIEWPORT.1, "deviceScaleFactor": 1, "mobile": false}),
+    );
+}
+
+fn press(browser: &mut Browser, key: &str, code: &str, vk: u32) {
+    for kind in ["keyDown", "keyUp"] {
+        browser.call(
+            "Input.dispatchKeyEvent",
+            json!({"type": kind, "key": key, "code": code, "windowsVirtualKeyCode": vk}),
+        );
+    }
+}
+
+/// Tab reaches the cells; the focused cell has a role and a label naming its
+/// path, and it is highlighted as hovered (neighbours kept, the rest greyed,
+/// the tooltip shown); the next Tab moves on to another cell.
+fn keyboard_focus_behaves_as_hover(browser: &mut Browser) {
+    const FOCUS: &str = r##"(function () {
+      var el = document.activeElement;
+      var tip = document.querySelector(".np-tooltip");
+      return { id: el && el.getAttribute ? el.getAttribute("data-id") : null,
+               role: el && el.getAttribute ? el.getAttribute("role") : null,
+               label: el && el.getAttribute ? el.getAttribute("aria-label") : null,
+               dimmed: document.querySelectorAll(".np-map path.np-dim").length,
+               selfDimmed: !!(el && el.classList && el.classList.contains("np-dim")),
+               tip: !tip.hidden };
+    })()"##;
+    let mut first = None;
+    for _ in 0..6 {
+        press(browser, "Tab", "Tab", 9);
+        let state = browser.eval(FOCUS);
+        if state["id"].is_string() {
+            first = Some(state);
+            break;
+        }
+    }
+    let first = first.expect("Tab reaches a cell within six presses");
+    assert_eq!(first["role"], "img", "{first}");
+    assert!(
+        first["label"]
+            .as_str()
+            .is_some_and(|l| l.contains("weight")),
+        "{first}"
+    );
+    assert!(
+        first["dimmed"].as_u64() > Some(0) && first["selfDimmed"] == false,
+        "{first}"
+    );
+    assert_eq!(first["tip"], true, "{first}");
+    press(browser, "Tab", "Tab", 9);
+    let next = browser.eval(FOCUS);
+    assert!(
+        next["id"].is_string() && next["id"] != first["id"],
+        "{next}"
+    );
+    assert_eq!(next["tip"], true, "{next}");
+}
+
+/// A click on a cell zooms into its top-level group: the view box shrinks to
+/// the group, cells outside it fade, the breadcrumb names the group; its
+/// first entry zooms back to the whole map.
+fn zoom_into_a_group_and_back(browser: &mut Browser, page: &Page) {
+    const ZOOM: &str = r##"(function () {
+      var svg = document.querySelector(".np-map svg");
+      return { view: svg.getAttribute("viewBox"),
+               crumbs: Array.prototype.map.call(document.querySelectorAll(".np-crumbs button"),
+                 function (b) { return b.textContent; }),
+               outside: document.querySelectorAll(".np-map path.np-outside").length };
+    })()"##;
+    let before = browser.eval(ZOOM);
+    assert_eq!(before["outside"], 0, "{before}");
+    assert_eq!(
+        before["crumbs"].as_array().map(Vec::len),
+        Some(1),
+        "{before}"
+    );
+    let (x, y) = hover_point(browser, page);
+    browser.click(x, y);
+    let group = page.path[1].clone();
+    let full = before["view"].as_str().unwrap_or("").to_owned();
+    browser.wait_for("the zoom into the group", ZOOM, |state| {
+        let crumbs: Vec<&str> = state["crumbs"]
+            .as_array()
+            .map(|a| a.iter().filter_map(|v| v.as_str()).collect())
+            .unwrap_or_default();
+        let view: Vec<f64> = state["view"]
+            .as_str()
+            .unwrap_or("")
+            .split(' ')
+            .filter_map(|v| v.parse().ok())
+            .collect();
+        let whole: Vec<f64> = full.split(' ').filter_map(|v| v.parse().ok()).collect();
+        if crumbs.len() == 2
+            && crumbs[1] == group
+            && state["outside"].as_u64() > Some(0)
+            && view.len() == 4
+            && view[2] < 0.95 * whole[2]
+        {
+            Ok(())
+        } else {
+            Err(format!("{state}"))
+        }
+    });
+    const BACK: &str = r##"(function () {
+      var b = document.querySelector(".np-crumbs button");
+      var r = b.getBoundingClientRect();
+      return [Math.round(r.left + r.width / 2), Math.round(r.top + r.height / 2)];
+    })()"##;
+    let at = browser.eval(BACK);
+    browser.click(at[0].as_f64().expect("x"), at[1].as_f64().expect("y"));
+    browser.wait_for("the zoom back to the whole map", ZOOM, |state| {
+        if state["view"] == full.as_str() && state["outside"] == 0 {
+            Ok(())
+        } else {
+            Err(format!("{state}"))
+        }
+    });
+}
+
+/// Both pages' map containers in one document, as a docs site would inline them.
+fn two_maps_in_one_document(dir: &Path, a: &Page, b: &Page) -> String {
+    let fragment = |page: &Page| {
+        let path = page.url.trim_start_matches("file://").to_owned();
+        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        let start = text
+            .find("<div class=\"nptreemap\"")
+            .expect("map container");
+        let end = text.rfind("</body>").expect("body end");
+        text[start..end].to_owned()
+    };
+    let doc = format!(
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>two</title></head><body>\n<h1>Two maps</h1>\n{}<p>between</p>\n{}</body></html>\n",
+        fragment(a),
+        fragment(b)
+    );
+    let path = dir.join("two-maps.html");
+    std::fs::write(&path, doc).expect("write");
+    file_url(&path)
+}
+
+/// Two maps in one document have distinct ids, and hovering a cell of the
+/// second greys cells of the second only.
+fn two_maps_stay_apart(browser: &mut Browser) {
+    const IDS: &str = r##"(function () {
+      var ids = Array.prototype.map.call(document.querySelectorAll("[id]"), function (e) { return e.id; });
+      var maps = document.querySelectorAll(".nptreemap");
+      return { ids: ids.length, unique: new Set(ids).size, maps: maps.length };
+    })()"##;
+    let ids = browser.eval(IDS);
+    assert_eq!(ids["maps"], 2, "{ids}");
+    assert_eq!(ids["ids"], ids["unique"], "duplicate ids: {ids}");
+    const POINT: &str = r##"(function () {
+      var map = document.querySelectorAll(".nptreemap")[1];
+      map.scrollIntoView();
+      var cells = map.querySelectorAll("path[tabindex]");
+      for (var i = 0; i < cells.length; i++) {
+        var r = cells[i].getBoundingClientRect();
+        var x = Math.round(r.left + r.width / 2), y = Math.round(r.top + r.height / 2);
+        if (x > 0 && y > 0 && x < innerWidth && y < innerHeight && document.elementFromPoint(x, y) === cells[i]) {
+          return [x, y];
+        }
+      }
+      return null;
+    })()"##;
+    let at = browser.eval(POINT);
+    let (x, y) = (at[0].as_f64().expect("x"), at[1].as_f64().expect("y"));
+    browser.mouse_move(x, y);
+    const DIMS: &str = r##"(function () {
+      var maps = document.querySelectorAll(".nptreemap");
+      return [maps[0].querySelectorAll("path.np-dim").length, maps[1].querySelectorAll("path.np-dim").length,
+              !maps[1].querySelector(".np-tooltip").hidden, !maps[0].querySelector(".np-tooltip").hidden];
+    })()"##;
+    browser.wait_for("the second map's hover", DIMS, |d| {
+        if d[0] == 0 && d[1].as_u64() > Some(0) && d[2] == true && d[3] == false {
+            Ok(())
+        } else {
+            Err(format!("{d}"))
+        }
+    });
+}
+
 /// The JSON node data embedded in a page.
 fn page_data(page: &str) -> Value {
-    let open = "<script type=\"application/json\" id=\"nptreemap-data\">";
-    let start = page.find(open).expect("data block") + open.len();
+    let open = "<script type=\"application/json\" class=\"np-data\"";
+    let at = page.find(open).expect("data block");
+    let start = at + page[at..].find('>').expect("tag end") + 1;
     let len = page[start..].find("</script>").expect("end of data block");
     serde_json::from_str(&page[start..start + len]).expect("data block is JSON")
 }

@@ -250,15 +250,17 @@ fn html_page_runs_no_hostile_script_and_its_data_round_trips() {
     );
 
     // The inline SVG is the same well-formed document.
-    let open = "<div id=\"np-map\">\n";
-    let svg_start = page.find(open).expect("map div") + open.len();
+    let open = "<div class=\"np-map\"";
+    let at = page.find(open).expect("map div");
+    let svg_start = at + page[at..].find(">\n").expect("div end") + 2;
     let svg_end = svg_start + page[svg_start..].find("</svg>\n").expect("svg end") + 7;
     check_svg_document(&page[svg_start..svg_end], "HTML's SVG");
 
     // The data block holds no `<` at all (so neither `</script` nor `<!--`),
     // and parses back to exactly the strings we put in.
-    let open = "<script type=\"application/json\" id=\"nptreemap-data\">";
-    let start = page.find(open).expect("data block") + open.len();
+    let open = "<script type=\"application/json\" class=\"np-data\"";
+    let at = page.find(open).expect("data block");
+    let start = at + page[at..].find('>').expect("tag end") + 1;
     let end = start + page[start..].find("</script>").expect("block end");
     let block = &page[start..end];
     assert!(!block.contains('<'), "raw `<` in the data block");
