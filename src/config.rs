@@ -725,7 +725,7 @@ mod tests {
             ),
             (
                 "render: {palette: rainbow}\n",
-                "line 1, column 19: render: palette: unknown palette",
+                "line 1, column 9: render: palette: unknown palette",
             ),
         ] {
             let err = parse(text).expect_err(text).to_string();

@@ -72,7 +72,8 @@ const DATA_CLASS: &str = "np-data";
 /// tooltip, the zoom, a picture that fits its container's width (keeping its
 /// aspect, legend in view) and a dark variant.
 const STYLE: &str = r#".nptreemap { font: 14px Helvetica, Arial, sans-serif; color: #1a1a1a; max-width: 100%; }
-.nptreemap .np-map svg { display: block; width: 100%; height: auto; max-height: calc(100vh - 4em); }
+.nptreemap .np-map { margin: 0 auto; }
+.nptreemap .np-map svg { display: block; width: 100%; height: auto; }
 .nptreemap .np-map path { transition: opacity .1s; }
 .nptreemap .np-map path.np-dim { opacity: .25; }
 .nptreemap .np-map path.np-outside { opacity: .12; pointer-events: none; }
@@ -324,6 +325,17 @@ const SCRIPT: &str = r##"(function () {
 })();
 "##;
 
+/// Width over height of the SVG's `viewBox`.
+fn view_aspect(svg: &str) -> Option<f64> {
+    let start = svg.find("viewBox=\"")? + 9;
+    let end = start + svg[start..].find('"')?;
+    let v: Vec<f64> = svg[start..end]
+        .split_whitespace()
+        .map(|x| x.parse().ok())
+        .collect::<Option<_>>()?;
+    (v.len() == 4 && v[2] > 0.0 && v[3] > 0.0).then(|| v[2] / v[3])
+}
+
 /// A short key for the page's ids, from its content: two maps' pages get
 /// different ids, the same map always the same (FNV-1a, 32 bits).
 fn page_key(svg: &str, data: &str) -> String {
@@ -379,7 +391,12 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
     out.push_str(&format!(
         "<nav class=\"np-crumbs\" id=\"{key}-crumbs\" aria-label=\"Zoom\"></nav>\n</div>\n"
     ));
-    out.push_str(&format!("<div class=\"np-map\" id=\"{key}-map\">\n"));
+    // As wide as the container, and no wider than keeps the whole picture
+    // (legend included) within the window's height.
+    let aspect = view_aspect(svg).unwrap_or(1.0);
+    out.push_str(&format!(
+        "<div class=\"np-map\" id=\"{key}-map\" style=\"max-width: calc((100vh - 4.5em) * {aspect:.4})\">\n"
+    ));
     out.push_str(svg);
     if !svg.ends_with('\n') {
         out.push('\n');

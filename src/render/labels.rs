@@ -568,7 +568,7 @@ pub fn place_groups(
         let n = dataset.node(i);
         !n.is_virtual && !n.children.is_empty() && i < layout.cells.len()
     };
-    let mut place = |i: usize, max: f64, out: &mut Vec<Placed>| {
+    let place = |i: usize, max: f64, out: &mut Vec<Placed>| {
         let text = display_name(dataset, i, names);
         if text.is_empty() {
             return;

@@ -424,9 +424,12 @@ mod tests {
         assert!(!text.contains("\"q\""));
         let escaped = "&lt;script&gt;alert(1)&lt;/script&gt; &quot;q&quot;";
         assert!(text.contains(&format!("<title>{escaped} (B)</title>")));
+        // Too long for one line at 9 px: wrapped at its space.
+        let labels = &text[text.find("np-labels").unwrap_or(0)..];
         assert!(
-            text.contains(&format!("{escaped}</text>")),
-            "B's label is drawn"
+            labels.contains("&lt;script&gt;alert(1)&lt;/</tspan>")
+                && labels.contains(">script&gt; &quot;q&quot;</tspan>"),
+            "B's label is drawn: {labels}"
         );
         assert_eq!(escape("a&b<'>\u{1}\t"), "a&amp;b&lt;&apos;&gt;\t");
     }

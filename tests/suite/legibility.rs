@@ -379,13 +379,14 @@ fn measure(svg: &str, layout: &Value) -> Figures {
         .filter_map(|n| Some((n.attribute("data-id")?, hex(n.attribute("fill")?)?)))
         .collect();
     let root_id = root["id"].as_str().expect("root id");
-    let top = |mut id: &str| -> Option<String> {
+    let top = |start: &str| -> Option<String> {
+        let mut id = start.to_owned();
         loop {
-            let parent = by_id.get(id)?["parent"].as_str()?;
+            let parent = by_id.get(id.as_str())?["parent"].as_str()?;
             if parent == root_id {
-                return Some(id.to_owned());
+                return Some(id);
             }
-            id = parent;
+            id = parent.to_owned();
         }
     };
     let mut sums: BTreeMap<String, ([f64; 3], f64)> = BTreeMap::new();
