@@ -120,7 +120,9 @@ fn collect(
                 let Some((class, text)) = classes.get(t.id()) else {
                     continue;
                 };
-                let r = t.abs_bounding_box();
+                // In the text's user space (the map's units: no group moves
+                // the labels), not the viewBox-transformed absolute one.
+                let r = t.bounding_box();
                 let min_size = t
                     .chunks()
                     .iter()
@@ -368,7 +370,8 @@ fn measure(svg: &str, layout: &Value) -> Figures {
         .iter()
         .map(|(_, r)| std::f64::consts::PI * r * r)
         .sum::<f64>()
-        / (w * h);
+        / (w * h)
+        + 0.0;
 
     // Top-level groups: their mean leaf colour (area-weighted, in OKLab)
     // from the SVG's cell fills, and which of them share an edge.
