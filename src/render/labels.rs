@@ -554,12 +554,14 @@ pub fn quads_overlap(a: &[Point; 4], b: &[Point; 4]) -> bool {
 
 /// The group names drawn on the map: every top-level group with children of
 /// its own (virtual groups aside) whose name fits at [`GROUP_MIN`] or more,
-/// and the second-level groups whose names fit beside their parent's without
-/// overlapping it. `u` is the canvas scale (1 at 1,000 × 1,000).
+/// and the second-level groups whose names fit without overlapping another
+/// name or any leaf label (`leaves`). `u` is the canvas scale (1 at
+/// 1,000 × 1,000).
 pub fn place_groups(
     dataset: &Dataset,
     layout: &Layout,
     names: &BTreeMap<String, String>,
+    leaves: &[Placed],
     u: f64,
 ) -> Vec<Placed> {
     let root = dataset.root();
@@ -568,7 +570,7 @@ pub fn place_groups(
         let n = dataset.node(i);
         !n.is_virtual && !n.children.is_empty() && i < layout.cells.len()
     };
-    let place = |i: usize, max: f64, out: &mut Vec<Placed>| {
+    let place = |i: usize, max: f64, clear_of_leaves: bool, out: &mut Vec<Placed>| {
         let text = display_name(dataset, i, names);
         if text.is_empty() {
             return;
@@ -586,6 +588,13 @@ pub fn place_groups(
         if out.iter().any(|o| quads_overlap(&outline(o), &quad)) {
             return;
         }
+        if clear_of_leaves
+            && leaves
+                .iter()
+                .any(|l| quads_overlap(&l.rect.corners(), &quad))
+        {
+            return;
+        }
         out.push(placed);
     };
     let top: Vec<usize> = dataset
@@ -599,12 +608,12 @@ pub fn place_groups(
         return out;
     }
     for &g in &top {
-        place(g, GROUP_MAX * u, &mut out);
+        place(g, GROUP_MAX * u, false, &mut out);
     }
     for &g in &top {
         for &c in &dataset.node(g).children {
             if named(c) {
-                place(c, SUBGROUP_SHARE * GROUP_MAX * u, &mut out);
+                place(c, SUBGROUP_SHARE * GROUP_MAX * u, true, &mut out);
             }
         }
     }

@@ -166,7 +166,7 @@ pub fn compose(
     let colors = cell_colors(dataset, adjacent, style.cells.palette);
     let labels = leaf_labels(dataset, layout, &style.cells.labels);
     let groups = if style.cells.labels.groups {
-        place_groups(dataset, layout, &style.cells.labels.names, u)
+        place_groups(dataset, layout, &style.cells.labels.names, &labels, u)
     } else {
         Vec::new()
     };
@@ -290,7 +290,7 @@ pub fn compose(
 }
 
 /// Opacity of the group names: large and light, under the leaf labels.
-const GROUP_OPACITY: f64 = 0.4;
+const GROUP_OPACITY: f64 = 0.3;
 
 /// Appends the group names in their own group, drawn without a halo.
 fn push_group_labels(out: &mut String, groups: &[Placed], style: &SvgStyle) {

@@ -683,10 +683,6 @@ mod tests {
         assert_eq!(texts, 3, "title, names and labels go to the text layer");
         let fast = tiny_skia::Pixmap::decode_png(&png(svg, 2.0).expect("renders")).expect("png");
         let slow = one_pass(svg, 2.0);
-        if std::env::var_os("NPTREEMAP_DEBUG_PNG").is_some() {
-            fast.save_png("/tmp/fast.png").expect("save");
-            slow.save_png("/tmp/slow.png").expect("save");
-        }
         let share = differing(&fast, &slow, 8);
         let worst = fast
             .pixels()

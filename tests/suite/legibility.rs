@@ -31,9 +31,9 @@ type P = [f64; 2];
 const MIN_SIZE: f64 = 9.0;
 /// Marker area allowed, as a share of the map (issue 13's acceptance).
 const MAX_MARKER_SHARE: f64 = 0.02;
-/// Two adjacent groups whose mean leaf colours are closer than this in OKLab
-/// look alike: 0.02 is a just noticeable difference for small patches, and
-/// large areas side by side need a few of them.
+/// Two adjacent groups whose colours (see [`measure`]) are closer than this in
+/// OKLab look alike: 0.02 is a just noticeable difference for small patches,
+/// and large areas side by side need a few of them.
 const ALIKE: f64 = 0.05;
 
 /// What one picture measures.
@@ -293,14 +293,6 @@ fn oklab([r, g, b]: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-fn area(poly: &[P]) -> f64 {
-    let n = poly.len();
-    0.5 * (0..n)
-        .map(|i| poly[i][0] * poly[(i + 1) % n][1] - poly[(i + 1) % n][0] * poly[i][1])
-        .sum::<f64>()
-        .abs()
-}
-
 /// Measures one picture against its layout JSON.
 fn measure(svg: &str, layout: &Value) -> Figures {
     let nodes = layout["nodes"].as_array().expect("nodes");
@@ -373,8 +365,8 @@ fn measure(svg: &str, layout: &Value) -> Figures {
         / (w * h)
         + 0.0;
 
-    // Top-level groups: their mean leaf colour (area-weighted, in OKLab)
-    // from the SVG's cell fills, and which of them share an edge.
+    // Top-level groups: their colour from the SVG's cell fills, and which of
+    // them share an edge.
     let doc = roxmltree::Document::parse(svg).expect("XML");
     let fills: BTreeMap<&str, [f64; 3]> = doc
         .descendants()
@@ -392,20 +384,24 @@ fn measure(svg: &str, layout: &Value) -> Figures {
             id = parent.to_owned();
         }
     };
-    let mut sums: BTreeMap<String, ([f64; 3], f64)> = BTreeMap::new();
+    // Each group's colour: its leaf colour of median lightness (leaves vary
+    // their group's colour in lightness only, so two groups of one base
+    // colour meet in the middle whatever their sizes).
+    let mut shades: BTreeMap<String, Vec<[f64; 3]>> = BTreeMap::new();
     for (id, fill) in &fills {
         let Some(group) = top(id) else { continue };
         if group == *id {
             continue;
         }
-        let a = area(&points(&by_id[id]["polygon"]));
-        let lab = oklab(*fill);
-        let e = sums.entry(group).or_insert(([0.0; 3], 0.0));
-        for k in 0..3 {
-            e.0[k] += a * lab[k];
-        }
-        e.1 += a;
+        shades.entry(group).or_default().push(oklab(*fill));
     }
+    let sums: BTreeMap<String, [f64; 3]> = shades
+        .into_iter()
+        .map(|(g, mut v)| {
+            v.sort_by(|a, b| a[0].total_cmp(&b[0]));
+            (g, v[v.len() / 2])
+        })
+        .collect();
     let groups: Vec<(&str, Vec<P>)> = nodes
         .iter()
         .filter(|n| n["parent"].as_str() == Some(root_id))
@@ -425,10 +421,7 @@ fn measure(svg: &str, layout: &Value) -> Figures {
             }
             f.adjacent_groups += 1;
             let (ma, mb) = (&sums[*a], &sums[*b]);
-            let d = (0..3)
-                .map(|k| (ma.0[k] / ma.1 - mb.0[k] / mb.1).powi(2))
-                .sum::<f64>()
-                .sqrt();
+            let d = (0..3).map(|k| (ma[k] - mb[k]).powi(2)).sum::<f64>().sqrt();
             if d < ALIKE {
                 f.alike.push((a.to_string(), b.to_string(), d));
             }
