@@ -182,8 +182,19 @@ pub fn assign(
                 .fold(f64::INFINITY, f64::min)
         };
         let least = used.iter().copied().min().unwrap_or(0);
+        // While the palette has a colour for every group, never reuse one.
+        let fresh = |k: usize| used[k] == least;
         let pick = (0..palette.len())
-            .find(|&k| used[k] == least && gap(k) >= ALIKE)
+            .find(|&k| fresh(k) && gap(k) >= ALIKE)
+            .or_else(|| {
+                (palette.len() >= count)
+                    .then(|| {
+                        (0..palette.len())
+                            .filter(|&k| fresh(k))
+                            .max_by(|&a, &b| gap(a).total_cmp(&gap(b)).then(b.cmp(&a)))
+                    })
+                    .flatten()
+            })
             .or_else(|| (0..palette.len()).find(|&k| gap(k) >= ALIKE))
             .or_else(|| {
                 (0..palette.len()).max_by(|&a, &b| gap(a).total_cmp(&gap(b)).then(b.cmp(&a)))
@@ -196,7 +207,76 @@ pub fn assign(
             None => fallback,
         });
     }
-    colors.into_iter().map(|c| c.unwrap_or(fallback)).collect()
+    let mut colors: Vec<Rgb> = colors.into_iter().map(|c| c.unwrap_or(fallback)).collect();
+    improve(&mut colors, palette, &neighbors, fixed);
+    colors
+}
+
+/// Adjacent pairs that look alike, and the smallest distance between
+/// adjacent colours: lower is better, in that order.
+fn badness(colors: &[Rgb], neighbors: &[Vec<usize>]) -> (usize, f64) {
+    let mut alike = 0;
+    let mut least = f64::INFINITY;
+    for (a, ns) in neighbors.iter().enumerate() {
+        for &b in ns.iter().filter(|&&b| b > a) {
+            let d = distance(colors[a], colors[b]);
+            alike += usize::from(d < ALIKE);
+            least = least.min(d);
+        }
+    }
+    (alike, -least)
+}
+
+/// Local search after the greedy pass: for groups in an alike adjacent pair,
+/// try every swap with another group and every unused palette colour (any
+/// palette colour when the palette is shorter than the groups), keeping a
+/// change that lowers [`badness`]. Deterministic; stops when nothing helps.
+fn improve(colors: &mut [Rgb], palette: &[Rgb], neighbors: &[Vec<usize>], fixed: &[Option<Rgb>]) {
+    let unique = palette.len() >= colors.len();
+    let better = |a: (usize, f64), b: (usize, f64)| a.0 < b.0 || (a.0 == b.0 && a.1 < b.1 - 1e-12);
+    for _round in 0..64 {
+        let current = badness(colors, neighbors);
+        if current.0 == 0 {
+            return;
+        }
+        let mut best: Option<((usize, f64), Vec<(usize, Rgb)>)> = None;
+        let bad: Vec<usize> = (0..colors.len())
+            .filter(|&g| fixed[g].is_none())
+            .filter(|&g| neighbors[g].iter().any(|&n| distance(colors[g], colors[n]) < ALIKE))
+            .collect();
+        for &g in &bad {
+            let mut trials: Vec<Vec<(usize, Rgb)>> = Vec::new();
+            for h in (0..colors.len()).filter(|&h| h != g && fixed[h].is_none()) {
+                trials.push(vec![(g, colors[h]), (h, colors[g])]);
+            }
+            for &c in palette {
+                if !unique || !colors.contains(&c) {
+                    trials.push(vec![(g, c)]);
+                }
+            }
+            for change in trials {
+                let saved: Vec<(usize, Rgb)> = change.iter().map(|&(i, _)| (i, colors[i])).collect();
+                for &(i, c) in &change {
+                    colors[i] = c;
+                }
+                let score = badness(colors, neighbors);
+                for &(i, c) in &saved {
+                    colors[i] = c;
+                }
+                if better(score, best.as_ref().map_or(current, |b| b.0)) {
+                    best = Some((score, change));
+                }
+            }
+        }
+        match best {
+            Some((_, change)) => {
+                for (i, c) in change {
+                    colors[i] = c;
+                }
+            }
+            None => return,
+        }
+    }
 }
 
 /// sRGB (8 bits per channel) to OKLab `[L, a, b]`.
@@ -458,8 +538,26 @@ mod tests {
                 unique.sort_by_key(|c| c.to_hex());
                 unique.dedup();
                 assert_eq!(unique.len(), n, "every group its own colour");
+            }
+            if kind == PaletteKind::Tableau {
+                let mut unique = colors.clone();
+                unique.sort_by_key(|c| c.to_hex());
+                unique.dedup();
+                assert_eq!(unique.len(), n, "every group its own colour");
                 assert_eq!(colors[0], TABLEAU20[0], "the first group, the first colour");
             }
+        }
+        // Ten groups, Tableau 10: every colour once, even where the last
+        // free colour (grey) is close to a neighbour's (teal): a swap fixes it.
+        let mut ring: Vec<(usize, usize)> = (0..10).map(|i| (i, (i + 1) % 10)).collect();
+        ring.push((3, 9));
+        let colors = assign(&TABLEAU10, &(0..10).collect::<Vec<_>>(), &ring, &vec![None; 10]);
+        let mut unique = colors.clone();
+        unique.sort_by_key(|c| c.to_hex());
+        unique.dedup();
+        assert_eq!(unique.len(), 10);
+        for &(a, b) in &ring {
+            assert!(distance(colors[a], colors[b]) >= ALIKE, "{a} {b}");
         }
         // A group's own colour is kept.
         let own = Rgb::new(1, 2, 3);
