@@ -257,11 +257,14 @@ const SCRIPT: &str = r##"(function () {
     });
   }
   function zoomInto(el) {
+    // The first group below the view on the way to the cell that can be
+    // zoomed into (virtual levels and whole-map groups are passed over).
     var path = ancestors(el.getAttribute("data-id"));
-    var at = path.indexOf(view);
-    var next = at >= 0 ? path[at + 1] : null;
-    var n = next && nodes.get(next);
-    if (n && !n.leaf && n.zoom) { zoomTo(next); }
+    for (var k = path.indexOf(view) + 1; k > 0 && k < path.length; k++) {
+      var n = nodes.get(path[k]);
+      if (n.leaf) { return; }
+      if (n.zoom) { zoomTo(path[k]); return; }
+    }
   }
   var pointer = "mouse";
   map.addEventListener("pointerdown", function (e) { pointer = e.pointerType || "mouse"; });
@@ -486,7 +489,7 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
 
 /// Groups whose cell spans more than this share of the canvas in both
 /// directions are not worth zooming into.
-const ZOOM_MIN_GAIN: f64 = 0.8;
+const ZOOM_MIN_GAIN: f64 = 0.97;
 
 /// The view box that shows group `i` as large as the picture allows: its
 /// cell's bounding box with a margin, widened to the canvas's aspect.

@@ -52,10 +52,16 @@ impl Default for OverlayStyle {
     }
 }
 
-/// Base width of a tab on its edge at canvas scale 1, canvas units; its head
-/// is [`HEAD`] times as wide (a dovetail, so it reads as interlocking rather
-/// than as a bar).
-const TAB_WIDTH: f64 = 8.0;
+/// Base width of a tab on its edge, canvas units at canvas scale 1: at least
+/// [`TAB_WIDTH_MIN`], growing with the smaller cell's size
+/// ([`TAB_WIDTH_SHARE`] of the side of a square of its area) up to
+/// [`TAB_WIDTH_MAX`]. Its head is [`HEAD`] times as wide (a dovetail, so it
+/// reads as interlocking rather than as a bar).
+const TAB_WIDTH_MIN: f64 = 7.0;
+/// See [`TAB_WIDTH_MIN`].
+const TAB_WIDTH_MAX: f64 = 16.0;
+/// See [`TAB_WIDTH_MIN`].
+const TAB_WIDTH_SHARE: f64 = 0.07;
 /// Head width over base width.
 const HEAD: f64 = 1.5;
 /// Depth over base width, by similarity strength: the paper's three sizes
@@ -210,7 +216,7 @@ fn place_tab(
         n = -n;
     }
     let ratio = depth_ratio(link.similarity);
-    let full = TAB_WIDTH * u;
+    let full = (TAB_WIDTH_SHARE * small.area().sqrt()).clamp(TAB_WIDTH_MIN * u, TAB_WIDTH_MAX * u);
     // Largest scale the edge and both cells allow.
     let area_at_1 = 0.5 * (1.0 + HEAD) * full * ratio * full;
     let limit = [

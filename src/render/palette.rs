@@ -242,7 +242,11 @@ fn improve(colors: &mut [Rgb], palette: &[Rgb], neighbors: &[Vec<usize>], fixed:
         let mut best: Option<((usize, f64), Vec<(usize, Rgb)>)> = None;
         let bad: Vec<usize> = (0..colors.len())
             .filter(|&g| fixed[g].is_none())
-            .filter(|&g| neighbors[g].iter().any(|&n| distance(colors[g], colors[n]) < ALIKE))
+            .filter(|&g| {
+                neighbors[g]
+                    .iter()
+                    .any(|&n| distance(colors[g], colors[n]) < ALIKE)
+            })
             .collect();
         for &g in &bad {
             let mut trials: Vec<Vec<(usize, Rgb)>> = Vec::new();
@@ -255,7 +259,8 @@ fn improve(colors: &mut [Rgb], palette: &[Rgb], neighbors: &[Vec<usize>], fixed:
                 }
             }
             for change in trials {
-                let saved: Vec<(usize, Rgb)> = change.iter().map(|&(i, _)| (i, colors[i])).collect();
+                let saved: Vec<(usize, Rgb)> =
+                    change.iter().map(|&(i, _)| (i, colors[i])).collect();
                 for &(i, c) in &change {
                     colors[i] = c;
                 }
@@ -551,7 +556,12 @@ mod tests {
         // free colour (grey) is close to a neighbour's (teal): a swap fixes it.
         let mut ring: Vec<(usize, usize)> = (0..10).map(|i| (i, (i + 1) % 10)).collect();
         ring.push((3, 9));
-        let colors = assign(&TABLEAU10, &(0..10).collect::<Vec<_>>(), &ring, &vec![None; 10]);
+        let colors = assign(
+            &TABLEAU10,
+            &(0..10).collect::<Vec<_>>(),
+            &ring,
+            &vec![None; 10],
+        );
         let mut unique = colors.clone();
         unique.sort_by_key(|c| c.to_hex());
         unique.dedup();

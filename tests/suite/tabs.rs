@@ -14,11 +14,12 @@ use crate::support;
 
 type P = [f64; 2];
 
-/// Shortest shared edge that can carry a tab: the renderer's base width at
-/// scale 1 (8 units on a 1,000-unit canvas) over its largest edge share (a half).
+/// Shortest shared edge that can carry a tab: the renderer's smallest base
+/// width at scale 1 (7 units on a 1,000-unit canvas) over its largest edge
+/// share (a half), times its smallest scale (a half).
 fn min_edge(width: f64, height: f64) -> f64 {
     let u = ((width * height).sqrt() / 1000.0).max(0.75);
-    2.0 * 8.0 * u * 0.5
+    7.0 * u / 0.5 * 0.5
 }
 
 fn points(v: &Value) -> Vec<P> {
