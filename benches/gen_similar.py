@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Seeded random hierarchies with embeddings, for the neighbourhood benchmarks.
 
-Builds the tree with ../shared/peers/gen.py's shape rules (N leaves at depth D,
-balanced fan-out, lognormal weights), then gives every leaf a D-level random walk
-embedding: each node's vector is its parent's plus Gaussian noise, so siblings
-and cousins are more similar than strangers, as in real taxonomies.
+Builds the tree with gen.py's shape rules (N leaves at depth D, balanced fan-out,
+lognormal weights; tests/tools/gen.py, else ../shared/peers/gen.py, of which it is
+a copy), then gives every leaf a D-level random walk embedding: each node's
+vector is its parent's plus Gaussian noise, so siblings and cousins are more
+similar than strangers, as in real taxonomies.
 
 usage: gen_similar.py --n 5000 --depth 4 --dim 64 --seed 1 --out FILE.json
 """
@@ -16,7 +17,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-SHARED = Path(__file__).resolve().parents[1] / ".." / "shared"
+REPO = Path(__file__).resolve().parents[1]
+GEN = REPO / "tests" / "tools" / "gen.py"
+if not GEN.is_file():
+    GEN = REPO / ".." / "shared" / "peers" / "gen.py"
 
 
 def main():
@@ -30,7 +34,7 @@ def main():
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         shape = Path(tmp) / "shape.json"
-        subprocess.run([sys.executable, str(SHARED / "peers" / "gen.py"), "--n", str(args.n),
+        subprocess.run([sys.executable, str(GEN), "--n", str(args.n),
                         "--depth", str(args.depth), "--seed", str(args.seed), "--out", str(shape)],
                        check=True, stderr=subprocess.DEVNULL)
         tree = json.loads(shape.read_text())

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Reproduces the paper's Table 2 comparison and times the whole method.
 
-For every Table 2 dataset in ../shared/paper-data, runs
+For every Table 2 dataset in tests/data/paper (../shared/paper-data when that is
+absent), runs
 `nptreemap eval FILE --method M --seed S --json` for every method and seeds 1-5
 and prints the median realised leaf constraints per method next to the paper's
 figures; then times `nptreemap bench` (prepare + constraints + layout, parsing
@@ -20,7 +21,10 @@ import sys
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-SHARED = REPO / ".." / "shared"
+# The paper's data: the repository's copy, else the shared folder beside it.
+PAPER = REPO / "tests" / "data" / "paper"
+if not PAPER.is_dir():
+    PAPER = REPO / ".." / "shared" / "paper-data"
 METHODS = ["plain", "random-cvt", "proj-scale", "match-swap", "neighbor"]
 # file, label, leaf constraints, paper: random CVT / proj+scale / match+swap / optimised
 TABLE2 = [
@@ -49,11 +53,11 @@ def main():
     print(f"- Date (UTC): {dt.datetime.now(dt.timezone.utc):%Y-%m-%d %H:%M}")
     print(f"- Machine: {os.cpu_count()} CPUs; command: `python3 benches/table2.py`\n")
     print("Realised leaf constraints, median over seeds 1-5 (each layout's area error "
-          "≤ 0.01, checked by shared/tools/check-layout in the tests):\n")
+          "≤ 0.01, checked by tests/tools/check_layout.py in the tests):\n")
     print("| dataset | constraints | " + " | ".join(METHODS) + " | paper rand. CVT / proj.+scale / match+swap / optimised |")
     print("|---|---:|" + "---:|" * len(METHODS) + "---|")
     for file, label, n, paper in TABLE2:
-        path = SHARED / "paper-data" / file
+        path = PAPER / file
         cells = []
         for m in METHODS:
             counts = [run_json([nb, "eval", str(path), "--json", "--method", m, "--seed", str(s)])["realized"]
@@ -63,7 +67,7 @@ def main():
     bench_dir = REPO / "target" / "bench"
     bench_dir.mkdir(parents=True, exist_ok=True)
     gen = REPO / "benches" / "gen_similar.py"
-    cases = [("flare (paper data)", SHARED / "paper-data" / "flare.json", None)]
+    cases = [("flare (paper data)", PAPER / "flare.json", None)]
     for n, depth in ((429, 5), (5000, 3)):
         out = bench_dir / f"sim{n}_d{depth}.json"
         if not out.exists():

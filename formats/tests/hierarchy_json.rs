@@ -12,7 +12,7 @@
 //! ```
 //!
 //! The generator fixture `data/gen_n100_depth3_seed1.json` is the output of
-//! `python3 shared/peers/gen.py --n 100 --depth 3 --seed 1 --out ...`, which reported
+//! `python3 tests/tools/gen.py --n 100 --depth 3 --seed 1 --out ...`, which reported
 //! 100 leaves and 28 internal nodes, all leaves at depth 3; the leaf weights sum to
 //! 138.458175 (Python `sum`).
 
@@ -22,7 +22,7 @@ use nptreemap_formats::{
     parse_hierarchy_json, Dataset, FormatError, HierarchyJsonOptions, ModelError, SimilarityHint,
 };
 
-const PAPER_DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/paper-data");
+const PAPER_DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/paper");
 
 fn paper_file(name: &str) -> Vec<u8> {
     let path = PathBuf::from(PAPER_DATA).join(name);
@@ -285,7 +285,7 @@ fn every_paper_file_matches_independent_counts() {
 #[test]
 fn every_json_file_in_paper_data_is_covered_and_reads() {
     let mut names: Vec<String> = std::fs::read_dir(PAPER_DATA)
-        .expect("paper-data directory")
+        .expect("tests/data/paper directory")
         .map(|entry| {
             entry
                 .expect("entry")

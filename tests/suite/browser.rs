@@ -45,9 +45,9 @@ struct Page {
 }
 
 impl Page {
-    /// Lays out `shared/paper-data/<name>.json` (see [`Page::build_from`]).
+    /// Lays out `tests/data/paper/<name>.json` (see [`Page::build_from`]).
     fn build(dir: &Path, name: &str, extra: &[&str]) -> Page {
-        let input = support::shared().join(format!("paper-data/{name}.json"));
+        let input = support::paper_data().join(format!("{name}.json"));
         Page::build_from(dir, &input, name, extra, None)
     }
 
@@ -265,7 +265,7 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
     // (Asia, the first candidate above, spans the whole map).
     let zoomable = Page::build_from(
         &dir,
-        &support::shared().join("paper-data/country_pop_50M_AUS.json"),
+        &support::paper_data().join("country_pop_50M_AUS.json"),
         "countries-zoom",
         &[],
         Some(&leaf_in_zoomable_group(&countries)),

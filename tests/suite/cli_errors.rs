@@ -76,7 +76,7 @@ fn negative_weight_names_the_node() {
 
 #[test]
 fn unknown_output_kind_is_a_usage_error() {
-    let input = support::shared().join("paper-data/syntheticPoints_4.json");
+    let input = support::paper_data().join("syntheticPoints_4.json");
     fails_with(
         &[
             "layout",

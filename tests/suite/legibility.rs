@@ -498,7 +498,7 @@ fn pictures() -> Vec<(String, PathBuf)> {
         dir.join("examples/countries/out/countries.svg"),
     ));
     // Flare at the default 1,000 × 1,000.
-    let flare = support::shared().join("paper-data/flare.json");
+    let flare = support::paper_data().join("flare.json");
     let (svg, json) = (dir.join("flare.svg"), dir.join("flare.json"));
     support::layout(&flare, &[&svg, &json], &[]);
     out.push(("flare".to_owned(), svg));

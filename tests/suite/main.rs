@@ -15,6 +15,7 @@ mod labels;
 mod legibility;
 mod neighborhood;
 mod paper_data;
+mod picture_options;
 mod random_hierarchies;
 mod render_refs;
 mod similarity_paths;

@@ -1,6 +1,6 @@
 //! Issue 3 acceptance: on every Table 2 dataset the default method realises at
 //! least the paper's best leaf-level count (median over seeds 1 to 5), as
-//! recomputed by `shared/tools/check-layout` from the `--out` file, at an area
+//! recomputed by `tests/tools/check_layout.py` from the `--out` file, at an area
 //! error within d3's target; and every baseline realises fewer.
 
 use crate::support;
@@ -15,7 +15,7 @@ fn median(mut v: Vec<u64>) -> u64 {
 /// error is within d3's default target.
 fn evaluate(file: &str, method: &str, seed: u64, constraints: u64) -> serde_json::Value {
     let dir = support::temp_dir(&format!("eval_{file}_{method}_{seed}"));
-    let input = support::shared().join("paper-data").join(file);
+    let input = support::paper_data().join(file);
     let out = dir.join("layout.json");
     let run = support::bin()
         .args([
@@ -115,7 +115,7 @@ fn table2_cifar() {
 
 #[test]
 fn neighbor_layouts_are_deterministic() {
-    let input = support::shared().join("paper-data/country_pop_50M_AUS.json");
+    let input = support::paper_data().join("country_pop_50M_AUS.json");
     let dir = support::temp_dir("neighbor_determinism");
     let a = dir.join("a.json");
     let b = dir.join("b.json");
@@ -154,7 +154,7 @@ fn prototype_switch_reproduces_the_papers_figures() {
         ("country_pop_50M_AUS.json", 15u64),
         ("syntheticPoints_10nodes_2components.json", 9),
     ] {
-        let input = support::shared().join("paper-data").join(file);
+        let input = support::paper_data().join(file);
         let dir = support::temp_dir(&format!("prototype_{file}"));
         let counts: Vec<u64> = (1..=5)
             .map(|seed| {

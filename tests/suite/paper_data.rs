@@ -6,8 +6,8 @@ use crate::support;
 #[test]
 fn every_paper_file_passes_check_layout() {
     let dir = support::temp_dir("paper_data");
-    let mut files: Vec<_> = std::fs::read_dir(support::shared().join("paper-data"))
-        .expect("shared/paper-data exists")
+    let mut files: Vec<_> = std::fs::read_dir(support::paper_data())
+        .expect("tests/data/paper exists")
         .map(|e| e.expect("dir entry").path())
         .filter(|p| p.extension().is_some_and(|e| e == "json"))
         .collect();

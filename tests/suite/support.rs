@@ -1,12 +1,20 @@
-//! Shared helpers: paths to the binary and to `shared/`, running the independent
-//! checker, generating random hierarchies with the peers' generator.
+//! Shared helpers: paths to the binary and to the paper's data, running the
+//! independent checker, generating random hierarchies with the peers' generator.
+//! Everything they read is inside the repository (`tests/data/paper/`,
+//! `tests/tools/`); `NPTREEMAP_SHARED_CHECKER=1` adds a cross-check against
+//! `../shared/tools/check-layout` when that folder is beside the repository.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// The repository's sibling `shared/` folder (the paper data, the checker, the peers).
-pub(crate) fn shared() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared")
+/// The paper's datasets, `tests/data/paper/` (see its MANIFEST.md).
+pub(crate) fn paper_data() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/paper")
+}
+
+/// The repository's test tools, `tests/tools/` (the checker, the generator).
+fn tools() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/tools")
 }
 
 /// The `nptreemap` binary built for this test run.
@@ -55,21 +63,60 @@ pub(crate) fn layout(input: &Path, outs: &[&Path], extra: &[&str]) -> Output {
     out
 }
 
-/// Runs `shared/tools/check-layout` on a layout file and returns its report.
+/// Runs `tests/tools/check_layout.py` on a layout file and returns its report;
+/// with `NPTREEMAP_SHARED_CHECKER=1`, also `../shared/tools/check-layout`, which
+/// must agree on validity and on the realised counts.
 pub(crate) fn check_layout(json: &Path) -> serde_json::Value {
-    let out = Command::new("python3")
-        .arg(shared().join("tools/check-layout"))
-        .arg(json)
-        .output()
-        .expect("run check-layout (needs python3)");
-    let report: serde_json::Value =
-        serde_json::from_slice(&out.stdout).expect("check-layout prints JSON");
+    let (passed, report) = run_checker(&tools().join("check_layout.py"), json);
     assert!(
-        out.status.success() && report["ok"] == true,
-        "check-layout failed on {}: {report}",
+        passed && report["ok"] == true,
+        "check_layout.py failed on {}: {report}",
         json.display()
     );
+    if std::env::var_os("NPTREEMAP_SHARED_CHECKER").is_some_and(|v| v == "1") {
+        let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/tools/check-layout");
+        if shared.is_file() {
+            let (_, theirs) = run_checker(&shared, json);
+            for key in [
+                "ok",
+                "constraints_lowest",
+                "realized_lowest",
+                "constraints_by_depth",
+            ] {
+                assert_eq!(
+                    report[key],
+                    theirs[key],
+                    "{key}: check_layout.py and shared/tools/check-layout disagree on {}",
+                    json.display()
+                );
+            }
+        } else {
+            eprintln!(
+                "NPTREEMAP_SHARED_CHECKER=1 but {} is missing: cross-check skipped",
+                shared.display()
+            );
+        }
+    }
     report
+}
+
+/// Runs one checker script on a layout file: whether it exited 0, and the JSON
+/// it printed.
+fn run_checker(script: &Path, json: &Path) -> (bool, serde_json::Value) {
+    let out = Command::new("python3")
+        .arg(script)
+        .arg(json)
+        .output()
+        .expect("run the layout checker (needs python3)");
+    let report = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "{} printed no JSON ({e}) on {}: {}",
+            script.display(),
+            json.display(),
+            String::from_utf8_lossy(&out.stderr)
+        )
+    });
+    (out.status.success(), report)
 }
 
 /// Asserts the checker's per-diagram area error is within d3's default target.
@@ -80,11 +127,11 @@ pub(crate) fn assert_area_error(report: &serde_json::Value, limit: f64) {
     assert!(err <= limit, "area_error_diagram_mean {err} > {limit}");
 }
 
-/// Writes a random hierarchy with `shared/peers/gen.py` and returns its path.
+/// Writes a random hierarchy with `tests/tools/gen.py` and returns its path.
 pub(crate) fn generate(dir: &Path, leaves: usize, depth: usize, seed: u64) -> PathBuf {
     let path = dir.join(format!("h{leaves}_d{depth}_s{seed}.json"));
     let status = Command::new("python3")
-        .arg(shared().join("peers/gen.py"))
+        .arg(tools().join("gen.py"))
         .args(["--n", &leaves.to_string()])
         .args(["--depth", &depth.to_string()])
         .args(["--seed", &seed.to_string()])

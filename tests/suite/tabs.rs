@@ -132,7 +132,7 @@ fn area(poly: &[P]) -> f64 {
 
 fn check(name: &str) -> usize {
     let dir = support::temp_dir(&format!("tabs_{name}"));
-    let input = support::shared().join(format!("paper-data/{name}.json"));
+    let input = support::paper_data().join(format!("{name}.json"));
     let (svg_path, json_path) = (dir.join("map.svg"), dir.join("map.json"));
     support::layout(&input, &[&svg_path, &json_path], &[]);
     let layout: Value =

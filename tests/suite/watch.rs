@@ -2,7 +2,7 @@
 //! folder while the test edits its data the ways people do (a weight change,
 //! an added node, a removed node, a malformed edit and its fix, an atomic save
 //! by rename, a bad config and its fix, a deleted file) and asserts that the
-//! outputs follow, pass `shared/tools/check-layout`, are never seen partially
+//! outputs follow, pass `tests/tools/check_layout.py`, are never seen partially
 //! written, and that SIGTERM and SIGINT end the daemon with exit code 0.
 
 use std::io::{BufRead, BufReader};
