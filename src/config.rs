@@ -163,6 +163,7 @@ impl LabelsConfig {
             unit: self.unit.clone(),
             groups: self.groups,
             names: self.names.iter().cloned().collect(),
+            names_order: self.names.iter().map(|(k, _)| k.clone()).collect(),
         }
     }
 }

@@ -35,6 +35,8 @@ pub struct LabelStyle {
     /// Display names for ids or labels such as continent codes
     /// (`AS: Asia`); used on the map, in the legend and in the page's tooltips.
     pub names: BTreeMap<String, String>,
+    /// The keys of `names` in the config's order (the legend's `names` order).
+    pub names_order: Vec<String>,
 }
 
 impl Default for LabelStyle {
@@ -47,6 +49,7 @@ impl Default for LabelStyle {
             unit: String::new(),
             groups: true,
             names: BTreeMap::new(),
+            names_order: Vec::new(),
         }
     }
 }

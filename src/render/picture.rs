@@ -357,8 +357,11 @@ fn legend_items(
         LegendOrder::Names => {
             let rank = |i: usize| {
                 let n = dataset.node(i);
-                names
-                    .keys()
+                style
+                    .cells
+                    .labels
+                    .names_order
+                    .iter()
                     .position(|k| *k == n.id || *k == n.label)
                     .unwrap_or(usize::MAX)
             };

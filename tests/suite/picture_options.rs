@@ -116,7 +116,8 @@ fn legend_groups(doc: &roxmltree::Document) -> Vec<(String, String)> {
 
 #[test]
 fn palette_legend_order_and_display_names() {
-    let weights = continent_weights(&Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/countries"));
+    let weights =
+        continent_weights(&Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/countries"));
 
     // Defaults: Tableau colours, legend by weight, heaviest first.
     let (_, svg) = build("options_default", "  border_width: 0", None);
@@ -172,7 +173,9 @@ fn value_line_and_minimum_size() {
     // China's population from the CSV, formatted independently.
     let china = "1,411,778,724 people";
     assert!(
-        labels.iter().any(|(t, _)| t.contains("China") && t.contains(china)),
+        labels
+            .iter()
+            .any(|(t, _)| t.contains("China") && t.contains(china)),
         "no China label with {china:?}: {labels:?}"
     );
 }
@@ -184,7 +187,10 @@ fn a_title_with_a_line_break_still_gives_a_png() {
         "  border_width: 0",
         Some("\"line one\\nline two\""),
     );
-    assert!(svg.contains("line one") && svg.contains("line two"), "title");
+    assert!(
+        svg.contains("line one") && svg.contains("line two"),
+        "title"
+    );
     let png = std::fs::read(dir.join("out/countries.png")).expect("the PNG was written");
     let pixmap = resvg::tiny_skia::Pixmap::decode_png(&png).expect("valid PNG");
     assert!(pixmap.width() > 0 && pixmap.height() > 0);
