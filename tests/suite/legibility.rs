@@ -586,7 +586,13 @@ fn legibility_report() {
     let mut table = vec![HEADER.to_owned()];
     for svg in list.split(',').filter(|s| !s.is_empty()) {
         let (text, layout) = read(Path::new(svg));
-        table.push(row(svg, &measure(&text, &layout)));
+        let f = measure(&text, &layout);
+        table.push(row(svg, &f));
+        for (a, b, d) in &f.alike {
+            table.push(format!(
+                "<!-- {svg}: {a} and {b} alike, OKLab distance {d:.3} -->"
+            ));
+        }
     }
     let _ = writeln!(std::io::stdout(), "{}", table.join("\n"));
 }
