@@ -260,6 +260,10 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
     // one document, and the zoom into a group and back.
     fits_its_width(&mut browser, &countries.url);
     browser.open(&countries.url);
+    dark_mode_follows_the_reader(&mut browser);
+    browser.open(&countries.url);
+    a_tap_acts_as_hover(&mut browser, &countries);
+    browser.open(&countries.url);
     keyboard_focus_behaves_as_hover(&mut browser);
     // The zoom needs a leaf whose top-level group is worth zooming into
     // (Asia, the first candidate above, spans the whole map).
@@ -813,6 +817,74 @@ fn two_maps_stay_apart(browser: &mut Browser) {
             Err(format!("{d}"))
         }
     });
+}
+
+/// With `prefers-color-scheme: dark` the page turns dark: a dark page
+/// background and light label text; dark text again in light mode.
+fn dark_mode_follows_the_reader(browser: &mut Browser) {
+    const COLORS: &str = r##"(function () {
+      var labels = document.querySelector(".nptreemap .np-labels");
+      return { bg: getComputedStyle(document.body).backgroundColor,
+               text: labels ? getComputedStyle(labels).fill : null };
+    })()"##;
+    // Channel sum of an `rgb(r, g, b)` value.
+    fn brightness(v: &Value) -> u32 {
+        v.as_str()
+            .unwrap_or("")
+            .split(|c: char| !c.is_ascii_digit())
+            .filter_map(|n| n.parse::<u32>().ok())
+            .take(3)
+            .sum()
+    }
+    for (scheme, dark) in [("dark", true), ("light", false)] {
+        browser.call(
+            "Emulation.setEmulatedMedia",
+            json!({"features": [{"name": "prefers-color-scheme", "value": scheme}]}),
+        );
+        browser.wait_for(&format!("the {scheme} colours"), COLORS, |c| {
+            let (bg, text) = (brightness(&c["bg"]), brightness(&c["text"]));
+            if c["text"].is_null() {
+                return Err(format!("no labels: {c}"));
+            }
+            // The page's own background: dark in dark mode, none (the
+            // document's white) in light mode.
+            let dark_page = c["bg"].as_str().is_some_and(|b| b.starts_with("rgb("));
+            let ok = if dark {
+                dark_page && bg < 3 * 128 && text > 3 * 128
+            } else {
+                text < 3 * 128
+            };
+            if ok {
+                Ok(())
+            } else {
+                Err(format!("{scheme}: {c}"))
+            }
+        });
+    }
+}
+
+/// A tap (a real touch event) on a cell shows its hover state and does not
+/// zoom: on touch screens the first tap is the hover.
+fn a_tap_acts_as_hover(browser: &mut Browser, page: &Page) {
+    let (x, y) = hover_point(browser, page);
+    for kind in ["touchStart", "touchEnd"] {
+        let points = if kind == "touchEnd" {
+            json!([])
+        } else {
+            json!([{"x": x, "y": y}])
+        };
+        browser.call(
+            "Input.dispatchTouchEvent",
+            json!({"type": kind, "touchPoints": points}),
+        );
+    }
+    browser.wait_for(
+        &format!("the tap's hover state of {}", page.target),
+        HOVER_STATE,
+        |state| check_hovered(state, page),
+    );
+    let crumbs = browser.eval("document.querySelectorAll('.np-crumbs button').length");
+    assert_eq!(crumbs, 1, "the first tap does not zoom");
 }
 
 /// The numbers of an SVG `viewBox` attribute.
