@@ -212,6 +212,9 @@ pub fn assign(
     colors
 }
 
+/// [`badness`]'s score.
+type Badness = (usize, f64);
+
 /// Adjacent pairs that look alike, and the smallest distance between
 /// adjacent colours: lower is better, in that order.
 fn badness(colors: &[Rgb], neighbors: &[Vec<usize>]) -> (usize, f64) {
@@ -239,7 +242,7 @@ fn improve(colors: &mut [Rgb], palette: &[Rgb], neighbors: &[Vec<usize>], fixed:
         if current.0 == 0 {
             return;
         }
-        let mut best: Option<((usize, f64), Vec<(usize, Rgb)>)> = None;
+        let mut best: Option<(Badness, Vec<(usize, Rgb)>)> = None;
         let bad: Vec<usize> = (0..colors.len())
             .filter(|&g| fixed[g].is_none())
             .filter(|&g| {
@@ -556,12 +559,7 @@ mod tests {
         // free colour (grey) is close to a neighbour's (teal): a swap fixes it.
         let mut ring: Vec<(usize, usize)> = (0..10).map(|i| (i, (i + 1) % 10)).collect();
         ring.push((3, 9));
-        let colors = assign(
-            &TABLEAU10,
-            &(0..10).collect::<Vec<_>>(),
-            &ring,
-            &vec![None; 10],
-        );
+        let colors = assign(&TABLEAU10, &(0..10).collect::<Vec<_>>(), &ring, &[None; 10]);
         let mut unique = colors.clone();
         unique.sort_by_key(|c| c.to_hex());
         unique.dedup();

@@ -156,6 +156,9 @@ enum Layer {
     Text(Vec<TextPaint>),
 }
 
+// A parsed tree is large, but only a handful of these live at once (one per
+// layer), so boxing would buy nothing.
+#[allow(clippy::large_enum_variant)]
 enum Drawn<'a> {
     Tree(usvg::Tree),
     Text(&'a [TextPaint]),
