@@ -24,6 +24,11 @@ pub(crate) struct BuildArgs {
 
 pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
     let config = Config::from_path(&args.config).map_err(BuildError::from)?;
+    // Before anything is read or written: no output may land on an input,
+    // the config, another output or a special file.
+    let (reads, writes) = pipeline::files_of(&args.config, &config.datasets);
+    pipeline::check_outputs(&reads, &writes)?;
+    pipeline::remove_stale_temps(&writes);
     let progress = Progress::new(config.datasets.len());
     let mut built = Vec::new();
     for (i, d) in config.datasets.iter().enumerate() {
@@ -36,6 +41,9 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
     }
     progress.finish();
     for (d, b) in &built {
+        for line in &b.warnings {
+            super::warn(line);
+        }
         let written = pipeline::write_outputs(&b.outputs);
         if let Some(e) = written.failed.into_iter().next() {
             return Err(e.into());
@@ -63,8 +71,19 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
 
 pub(crate) fn check(args: &BuildArgs) -> anyhow::Result<()> {
     let config = Config::from_path(&args.config).map_err(BuildError::from)?;
+    let (reads, writes) = pipeline::files_of(&args.config, &config.datasets);
+    pipeline::check_outputs(&reads, &writes)?;
     for d in &config.datasets {
-        let dataset = pipeline::load(d)?;
+        let files = pipeline::read_inputs(d)?;
+        let dataset = pipeline::parse_inputs(d, &files)?;
+        for line in pipeline::warnings(&files, &dataset) {
+            super::warn(line);
+        }
+        if !args.cold {
+            if let Some(line) = pipeline::stored_layout(d).warning {
+                super::warn(line);
+            }
+        }
         super::say(format_args!(
             "ok {}: {} nodes, {} leaves, {} outputs",
             d.name,
