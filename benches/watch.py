@@ -145,7 +145,7 @@ def main():
     out_json = tmp / "out" / "bench.json"
 
     # Cold reference: the same layout step from scratch.
-    cold = json.loads(subprocess.run([args.bin, "bench", str(tree_path), "--cold", "--repeat", "3"],
+    cold = json.loads(subprocess.run([args.bin, "bench", str(tree_path), "--repeat", "3"],
                                      capture_output=True, text=True, check=True).stdout)
     daemon = Daemon(args.bin, config)
     daemon.wait_for(lambda l: l.startswith("bench: start"), 0)

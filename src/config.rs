@@ -11,7 +11,7 @@ use serde::{Deserialize, Deserializer};
 use crate::layout::{Canvas, Method, NeighborParams, Outline, Params, Request};
 use crate::neighborhood::SimilarityKind;
 use crate::render::overlay::OverlayStyle;
-use crate::render::{Border, Rgb, Style, SvgStyle};
+use crate::render::{Border, LabelStyle, LegendOrder, PaletteKind, Rgb, Style, SvgStyle};
 use nptreemap_formats::{FormatOptions, Limits};
 
 /// The built-in defaults, every key documented (`config/default.yaml`).
@@ -88,6 +88,12 @@ pub struct RenderConfig {
     pub title: Option<String>,
     /// Legend band under the map (top-level groups, tab and marker keys). Default: true.
     pub legend: bool,
+    /// Order of the legend's groups: `weight`, `data` or `names`. Default: weight.
+    #[serde(deserialize_with = "legend_order")]
+    pub legend_order: LegendOrder,
+    /// Palette of the top-level groups: `tableau` or `colorblind`. Default: tableau.
+    #[serde(deserialize_with = "palette")]
+    pub palette: PaletteKind,
     /// Canvas background colour, or `none` for transparent. Default: `#ffffff`.
     #[serde(deserialize_with = "background")]
     pub background: Option<Rgb>,
@@ -101,18 +107,131 @@ pub struct RenderConfig {
     pub stroke: Rgb,
     /// Outline width between top-level groups; each level down halves it. Default: 3.
     pub stroke_width: f64,
-    /// Leaf labels. Default: true.
-    pub labels: bool,
-    /// Labels needing a smaller font are left out. Default: 6.
-    pub min_font_size: f64,
-    /// Largest label font size. Default: 24.
-    pub max_font_size: f64,
+    /// Leaf labels and group names: `true`, `false`, or their settings.
+    #[serde(deserialize_with = "labels")]
+    pub labels: LabelsConfig,
     /// Interlocking tabs on the shared edges of similar neighbours. Default: true.
     pub tabs: bool,
     /// Dashed red links between similar cells that are not neighbours. Default: false.
     pub unrealized_links: bool,
     /// Count markers on cells with similar cells that are not neighbours. Default: true.
     pub unlinked_markers: bool,
+    /// Largest share of the map the count markers may cover together. Default: 0.015.
+    pub unlinked_markers_share: f64,
+}
+
+/// `render.labels`: leaf labels and group names. `labels: false` turns both off.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LabelsConfig {
+    /// Leaf labels. Default: true.
+    pub show: bool,
+    /// Smallest label size at scale 1; smaller labels wrap, are cut or left out. Default: 9.
+    pub min_size: f64,
+    /// Largest label size. Default: 24.
+    pub max_size: f64,
+    /// A second line with the value. Default: false.
+    pub value: bool,
+    /// Text after the value. Default: empty.
+    pub unit: String,
+    /// Group names on the map. Default: true.
+    pub groups: bool,
+    /// Display names for ids or labels (`AS: Asia`), in the legend's `names` order.
+    #[serde(deserialize_with = "ordered_names")]
+    pub names: Vec<(String, String)>,
+}
+
+impl Default for LabelsConfig {
+    fn default() -> Self {
+        let l = LabelStyle::default();
+        Self {
+            show: l.show,
+            min_size: l.min_size,
+            max_size: l.max_size,
+            value: l.value,
+            unit: l.unit,
+            groups: l.groups,
+            names: Vec::new(),
+        }
+    }
+}
+
+impl LabelsConfig {
+    fn style(&self) -> LabelStyle {
+        LabelStyle {
+            show: self.show,
+            min_size: self.min_size,
+            max_size: self.max_size,
+            value: self.value,
+            unit: self.unit.clone(),
+            groups: self.groups,
+            names: self.names.iter().cloned().collect(),
+            names_order: self.names.iter().map(|(k, _)| k.clone()).collect(),
+        }
+    }
+}
+
+/// `render.labels`: a boolean (all labels on or off) or the settings.
+fn labels<'de, D: Deserializer<'de>>(d: D) -> Result<LabelsConfig, D::Error> {
+    struct Visitor;
+    impl<'de> serde::de::Visitor<'de> for Visitor {
+        type Value = LabelsConfig;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("true, false or a map of label settings")
+        }
+        fn visit_bool<E: serde::de::Error>(self, on: bool) -> Result<LabelsConfig, E> {
+            Ok(LabelsConfig {
+                show: on,
+                groups: on,
+                ..LabelsConfig::default()
+            })
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<LabelsConfig, A::Error> {
+            LabelsConfig::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+        }
+    }
+    d.deserialize_any(Visitor)
+}
+
+/// `render.labels.names`: a map kept in file order (the legend's `names` order).
+fn ordered_names<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<(String, String)>, D::Error> {
+    struct Visitor;
+    impl<'de> serde::de::Visitor<'de> for Visitor {
+        type Value = Vec<(String, String)>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a map from ids or labels to display names")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(
+            self,
+            mut map: A,
+        ) -> Result<Self::Value, A::Error> {
+            let mut out: Vec<(String, String)> = Vec::new();
+            while let Some((k, v)) = map.next_entry::<String, String>()? {
+                out.retain(|(key, _)| *key != k);
+                out.push((k, v));
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_map(Visitor)
+}
+
+fn legend_order<'de, D: Deserializer<'de>>(d: D) -> Result<LegendOrder, D::Error> {
+    let text = String::deserialize(d)?;
+    LegendOrder::from_name(&text).ok_or_else(|| {
+        serde::de::Error::custom(format_args!(
+            "legend_order: unknown order {text:?}, expected weight, data or names"
+        ))
+    })
+}
+
+fn palette<'de, D: Deserializer<'de>>(d: D) -> Result<PaletteKind, D::Error> {
+    let text = String::deserialize(d)?;
+    PaletteKind::from_name(&text).ok_or_else(|| {
+        serde::de::Error::custom(format_args!(
+            "palette: unknown palette {text:?}, expected tableau or colorblind"
+        ))
+    })
 }
 
 impl Default for RenderConfig {
@@ -122,17 +241,18 @@ impl Default for RenderConfig {
         Self {
             title: None,
             legend: style.legend,
+            legend_order: style.legend_order,
+            palette: cells.palette,
             background: cells.background,
             border_color: DEFAULT_BORDER_COLOR,
             border_width: 0.0,
             stroke: cells.stroke,
             stroke_width: cells.stroke_width,
-            labels: cells.labels,
-            min_font_size: cells.min_font_size,
-            max_font_size: cells.max_font_size,
+            labels: LabelsConfig::default(),
             tabs: style.tabs,
             unrealized_links: style.overlay.show_unrealized,
             unlinked_markers: style.overlay.unlinked_markers,
+            unlinked_markers_share: style.overlay.marker_share,
         }
     }
 }
@@ -153,20 +273,27 @@ impl RenderConfig {
             }
         }
         for (key, v) in [
-            ("min_font_size", self.min_font_size),
-            ("max_font_size", self.max_font_size),
+            ("labels.min_size", self.labels.min_size),
+            ("labels.max_size", self.labels.max_size),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(bad(key, format!("{v} must be a positive number")));
             }
         }
-        if self.min_font_size > self.max_font_size {
+        if self.labels.min_size > self.labels.max_size {
             return Err(bad(
-                "min_font_size",
+                "labels.min_size",
                 format!(
-                    "{} is larger than max_font_size {}",
-                    self.min_font_size, self.max_font_size
+                    "{} is larger than labels.max_size {}",
+                    self.labels.min_size, self.labels.max_size
                 ),
+            ));
+        }
+        let share = self.unlinked_markers_share;
+        if !(share.is_finite() && (0.0..=1.0).contains(&share)) {
+            return Err(bad(
+                "unlinked_markers_share",
+                format!("{share} must be a share between 0 and 1"),
             ));
         }
         Ok(())
@@ -428,6 +555,7 @@ impl Config {
         Style {
             title: dataset.title.clone().or_else(|| r.title.clone()),
             legend: r.legend,
+            legend_order: r.legend_order,
             tabs: r.tabs,
             border: (r.border_width > 0.0).then_some(Border {
                 color: r.border_color,
@@ -437,14 +565,14 @@ impl Config {
                 background: r.background,
                 stroke: r.stroke,
                 stroke_width: r.stroke_width,
-                labels: r.labels,
-                min_font_size: r.min_font_size,
-                max_font_size: r.max_font_size,
+                labels: r.labels.style(),
+                palette: r.palette,
                 ..defaults.cells
             },
             overlay: OverlayStyle {
                 show_unrealized: r.unrealized_links,
                 unlinked_markers: r.unlinked_markers,
+                marker_share: r.unlinked_markers_share,
             },
         }
     }
@@ -579,6 +707,26 @@ mod tests {
         assert_eq!(a.cells.background, None);
         assert!(!a.tabs);
         assert_eq!(a.border.map(|b| b.width), Some(2.0));
+        let c = parse(
+            "render:\n  palette: colorblind\n  legend_order: names\n  labels:\n    min_size: 10\n    value: true\n    unit: \" KiB\"\n    names: {EU: Europe, AS: Asia}\n",
+        )
+        .expect("valid");
+        let d = DatasetConfig::hierarchy_file(Path::new("x.json"), None);
+        let style = c.style(&d);
+        assert_eq!(style.cells.palette, PaletteKind::Colorblind);
+        assert_eq!(style.legend_order, LegendOrder::Names);
+        assert_eq!(style.cells.labels.min_size, 10.0);
+        assert!(style.cells.labels.value);
+        assert_eq!(style.cells.labels.names["AS"], "Asia");
+        assert_eq!(
+            c.render.labels.names,
+            vec![
+                ("EU".to_string(), "Europe".to_string()),
+                ("AS".to_string(), "Asia".to_string())
+            ]
+        );
+        let off = parse("render: {labels: false}\n").expect("valid");
+        assert!(!off.render.labels.show && !off.render.labels.groups);
     }
 
     #[test]
@@ -593,7 +741,18 @@ mod tests {
                 "line 2, column 3: render: stroke: ",
             ),
             ("render: {border_width: -1}\n", "render.border_width"),
-            ("render: {min_font_size: 30}\n", "render.min_font_size"),
+            (
+                "render: {labels: {min_size: 30}}\n",
+                "render.labels.min_size",
+            ),
+            (
+                "render: {unlinked_markers_share: 2}\n",
+                "render.unlinked_markers_share",
+            ),
+            (
+                "render: {palette: rainbow}\n",
+                "line 1, column 9: render: palette: unknown palette",
+            ),
         ] {
             let err = parse(text).expect_err(text).to_string();
             assert!(err.starts_with(key), "{text}: {err}");

@@ -7,8 +7,9 @@
 
 use serde::Serialize;
 
-use super::picture::{picture, Style};
-use super::svg::{cell_colors, escape, path_data};
+use super::labels::display_name;
+use super::picture::{colors, picture, Style};
+use super::svg::{escape, path_data};
 use crate::layout::Computed;
 use nptreemap_formats::Dataset;
 
@@ -49,6 +50,11 @@ pub struct HtmlNode {
     pub depth: usize,
     /// Whether the node is a leaf (only leaves react to hovering).
     pub leaf: bool,
+    /// The parent's id; `None` for the root.
+    pub parent: Option<String>,
+    /// The view box (`x y width height`) that zooms into this group, with the
+    /// picture's aspect; `None` for leaves and for groups too large to zoom.
+    pub zoom: Option<[f64; 4]>,
     /// Ids of the cells at the same depth sharing an edge with this one
     /// (`neighbours` in the page's data, which its script reads).
     #[serde(rename = "neighbours")]
@@ -58,39 +64,73 @@ pub struct HtmlNode {
     pub partners: Vec<(String, bool)>,
 }
 
-/// Id of the JSON data block, which the script reads.
-const DATA_ID: &str = "nptreemap-data";
+/// Class of the JSON data block, which the script reads.
+const DATA_CLASS: &str = "np-data";
 
-/// Inline style: the hover classes, the tooltip and a responsive picture.
-const STYLE: &str = r#"body { margin: 1em; font: 14px Helvetica, Arial, sans-serif; color: #1a1a1a; }
-#np-map svg { max-width: 100%; height: auto; display: block; }
-#np-map path { transition: opacity .1s; }
-#np-map path.np-dim { opacity: .25; }
-#np-map path.np-partner { stroke: #000; stroke-width: 4px; }
-#np-map path.np-partner-unrealized { stroke-dasharray: 6 3; }
-body.np-hide-unrealized .np-unrealized { display: none; }
-#np-tooltip { position: fixed; pointer-events: none; background: #fff; border: 1px solid #888;
-  padding: .3em .5em; max-width: 40em; box-shadow: 0 1px 4px rgba(0,0,0,.3); }
-#np-tooltip[hidden] { display: none; }
-#np-frames { margin: .5em 0; }
-#np-frames input { width: 24em; vertical-align: middle; }
+/// Inline style, scoped to the map's container so that pages can be inlined
+/// into any document (two maps on one page included): the hover classes, the
+/// tooltip, the zoom, a picture that fits its container's width (keeping its
+/// aspect, legend in view) and a dark variant.
+const STYLE: &str = r#".nptreemap { font: 14px Helvetica, Arial, sans-serif; color: #1a1a1a; max-width: 100%; }
+.nptreemap .np-map { margin: 0 auto; }
+.nptreemap .np-map svg { display: block; width: 100%; height: auto; }
+.nptreemap .np-map path { transition: opacity .1s; }
+.nptreemap .np-map path.np-dim { opacity: .25; }
+.nptreemap .np-map path.np-outside { opacity: .12; pointer-events: none; }
+.nptreemap .np-map path.np-partner { stroke: #000; stroke-width: 4px; }
+.nptreemap .np-map path.np-partner-unrealized { stroke-dasharray: 6 3; }
+.nptreemap .np-map path:focus { outline: none; stroke: #000; stroke-width: 3px; }
+.nptreemap.np-hide-unrealized .np-unrealized { display: none; }
+.nptreemap .np-tooltip { position: fixed; z-index: 10; pointer-events: none; background: #fff; color: #1a1a1a;
+  border: 1px solid #888; padding: .3em .5em; max-width: 40em; box-shadow: 0 1px 4px rgba(0,0,0,.3); }
+.nptreemap .np-tooltip[hidden] { display: none; }
+.nptreemap .np-controls { display: flex; flex-wrap: wrap; gap: .3em 1.2em; align-items: center; margin: .3em 0; }
+.nptreemap .np-frames input { width: 16em; max-width: 60vw; vertical-align: middle; }
+.nptreemap .np-crumbs button { font: inherit; border: 0; background: none; color: #1f5fa8; cursor: pointer; padding: 0; }
+.nptreemap .np-crumbs button[aria-current] { color: inherit; cursor: default; font-weight: bold; }
+@media (prefers-color-scheme: dark) {
+  .nptreemap { color: #e8e8e8; color-scheme: dark; }
+  .nptreemap .np-background { fill: #161616; }
+  .nptreemap .np-cells, .nptreemap .np-tabs { stroke: #161616; }
+  .nptreemap .np-labels { fill: #f2f2f2; stroke: #161616; }
+  .nptreemap .np-group-labels { fill: #ffffff; }
+  .nptreemap .np-legend-labels, .nptreemap .np-title { fill: #e8e8e8; }
+  .nptreemap .np-map path.np-partner { stroke: #fff; }
+  .nptreemap .np-tooltip { background: #262626; color: #e8e8e8; border-color: #555; }
+  .nptreemap .np-crumbs button { color: #8ab8ff; }
+}
 "#;
 
-/// Inline script: hover highlighting, tooltip, and the unrealised-links toggle.
-/// User text reaches the page only through `textContent`.
+/// Inline script: hover (and focus, and tap) highlighting, the tooltip, the
+/// unrealised-links toggle, the optimisation slider and the zoom into groups
+/// with a breadcrumb back. It finds everything inside its own container, so
+/// several maps can share a document. User text reaches the page only
+/// through `textContent`.
 const SCRIPT: &str = r##"(function () {
   "use strict";
-  var data = JSON.parse(document.getElementById("nptreemap-data").textContent);
-  var nodes = {};
-  data.nodes.forEach(function (n) { nodes[n.id] = n; });
-  var map = document.getElementById("np-map");
-  var tip = document.getElementById("np-tooltip");
-  var cells = {};
+  var root = document.currentScript.parentNode;
+  function part(name) { return root.querySelector(".np-" + name); }
+  var data = JSON.parse(part("data").textContent);
+  // Maps and sets, never plain objects: ids such as "constructor",
+  // "toString" or "__proto__" are keys like any other (issue 11, item 14).
+  var nodes = new Map();
+  data.nodes.forEach(function (n) { nodes.set(n.id, n); });
+  var map = part("map");
+  var svg = map.querySelector("svg");
+  var tip = part("tooltip");
+  var crumbs = part("crumbs");
+  var cells = new Map();
   var leaves = [];
   Array.prototype.forEach.call(map.querySelectorAll("path[data-id]"), function (el) {
     var id = el.getAttribute("data-id");
-    cells[id] = el;
-    if (nodes[id] && nodes[id].leaf) { leaves.push(el); }
+    var n = nodes.get(id);
+    cells.set(id, el);
+    if (n && n.leaf) {
+      leaves.push(el);
+      el.setAttribute("tabindex", "0");
+      el.setAttribute("role", "img");
+      el.setAttribute("aria-label", n.path.join(" \u203a ") + ", weight " + n.weight.toLocaleString());
+    }
   });
   var current = null;
 
@@ -104,15 +144,16 @@ const SCRIPT: &str = r##"(function () {
   }
 
   function show(el) {
-    var n = nodes[el.getAttribute("data-id")];
+    var n = nodes.get(el.getAttribute("data-id"));
     current = el;
-    var near = {};
-    n.neighbours.forEach(function (id) { near[id] = true; });
+    // The hovered cell and its neighbours stay; every other leaf greys out.
+    var near = new Set(n.neighbours);
+    near.add(n.id);
     leaves.forEach(function (c) {
-      if (!near[c.getAttribute("data-id")]) { c.classList.add("np-dim"); }
+      if (!near.has(c.getAttribute("data-id"))) { c.classList.add("np-dim"); }
     });
     n.partners.forEach(function (p) {
-      var c = cells[p[0]];
+      var c = cells.get(p[0]);
       if (c) {
         c.classList.add("np-partner");
         if (!p[1]) { c.classList.add("np-partner-unrealized"); }
@@ -122,37 +163,146 @@ const SCRIPT: &str = r##"(function () {
     tip.hidden = false;
   }
 
-  map.addEventListener("mouseover", function (e) {
-    var el = e.target.closest ? e.target.closest("path[data-id]") : null;
-    if (el === current) { return; }
-    clear();
-    var n = el && nodes[el.getAttribute("data-id")];
-    if (n && n.leaf) { show(el); }
-  });
-  map.addEventListener("mouseleave", clear);
-  map.addEventListener("mousemove", function (e) {
-    // Beside the pointer, flipped to its other side near the window's edge
-    // so the tooltip never runs out of view.
-    var x = e.clientX + 14, y = e.clientY + 14;
-    if (x + tip.offsetWidth > window.innerWidth) { x = Math.max(0, e.clientX - 14 - tip.offsetWidth); }
-    if (y + tip.offsetHeight > window.innerHeight) { y = Math.max(0, e.clientY - 14 - tip.offsetHeight); }
+  function place(cx, cy) {
+    // Beside the point, flipped to its other side near the window's edge so
+    // the tooltip never runs out of view.
+    var x = cx + 14, y = cy + 14;
+    if (x + tip.offsetWidth > window.innerWidth) { x = Math.max(0, cx - 14 - tip.offsetWidth); }
+    if (y + tip.offsetHeight > window.innerHeight) { y = Math.max(0, cy - 14 - tip.offsetHeight); }
     tip.style.left = x + "px";
     tip.style.top = y + "px";
+  }
+
+  function leafAt(target) {
+    var el = target && target.closest ? target.closest("path[data-id]") : null;
+    var n = el && nodes.get(el.getAttribute("data-id"));
+    return n && n.leaf ? el : null;
+  }
+
+  map.addEventListener("mouseover", function (e) {
+    var el = leafAt(e.target);
+    if (el === current) { return; }
+    clear();
+    if (el) { show(el); }
   });
+  map.addEventListener("mouseleave", clear);
+  map.addEventListener("mousemove", function (e) { place(e.clientX, e.clientY); });
+  // Keyboard: Tab moves through the cells, the focused one behaves as hovered.
+  map.addEventListener("focusin", function (e) {
+    var el = leafAt(e.target);
+    if (!el) { return; }
+    clear();
+    show(el);
+    var r = el.getBoundingClientRect();
+    place(r.left + r.width / 2, r.top + r.height / 2);
+  });
+  map.addEventListener("focusout", function (e) {
+    if (!map.contains(e.relatedTarget)) { clear(); }
+  });
+
+  // Zoom: a click (Enter on a focused cell) opens the group under the
+  // current view that holds the cell; the breadcrumb (Escape) goes back.
+  var full = svg.getAttribute("viewBox").split(" ").map(Number);
+  var top = data.nodes.length ? data.nodes[0].id : null;
+  var view = top;
+  function ancestors(id) {
+    var out = [];
+    for (var n = nodes.get(id); n; n = n.parent === null ? null : nodes.get(n.parent)) { out.unshift(n.id); }
+    return out;
+  }
+  function setView(box) { svg.setAttribute("viewBox", box.map(function (v) { return v.toFixed(2); }).join(" ")); }
+  function animate(from, to) {
+    var start = null;
+    function step(t) {
+      if (start === null) { start = t; }
+      var k = Math.min(1, (t - start) / 250);
+      var e = k < 0.5 ? 2 * k * k : 1 - Math.pow(-2 * k + 2, 2) / 2;
+      setView(from.map(function (v, i) { return v + (to[i] - v) * e; }));
+      if (k < 1) { requestAnimationFrame(step); } else { setView(to); }
+    }
+    requestAnimationFrame(step);
+  }
+  function zoomTo(id) {
+    var n = nodes.get(id);
+    if (!n) { return; }
+    var target = n.zoom || full;
+    var from = svg.getAttribute("viewBox").split(" ").map(Number);
+    view = id;
+    clear();
+    var inside = new Set();
+    data.nodes.forEach(function (m) {
+      if (id === top || ancestors(m.id).indexOf(id) >= 0) { inside.add(m.id); }
+    });
+    cells.forEach(function (el, cid) {
+      var out = !inside.has(cid);
+      el.classList.toggle("np-outside", out);
+      if (nodes.get(cid) && nodes.get(cid).leaf) { el.setAttribute("tabindex", out ? "-1" : "0"); }
+    });
+    root.classList.toggle("np-zoomed", id !== top);
+    root.setAttribute("data-zoom", id);
+    drawCrumbs();
+    animate(from, target);
+  }
+  function drawCrumbs() {
+    while (crumbs.firstChild) { crumbs.removeChild(crumbs.firstChild); }
+    ancestors(view).forEach(function (id, k, all) {
+      if (k > 0) { crumbs.appendChild(document.createTextNode(" \u203a ")); }
+      var b = document.createElement("button");
+      b.type = "button";
+      b.textContent = nodes.get(id).label;
+      b.setAttribute("data-id", id);
+      if (k === all.length - 1) { b.setAttribute("aria-current", "location"); }
+      b.addEventListener("click", function () { zoomTo(id); });
+      crumbs.appendChild(b);
+    });
+  }
+  function zoomInto(el) {
+    // The first group below the view on the way to the cell that can be
+    // zoomed into (virtual levels and whole-map groups are passed over).
+    var path = ancestors(el.getAttribute("data-id"));
+    for (var k = path.indexOf(view) + 1; k > 0 && k < path.length; k++) {
+      var n = nodes.get(path[k]);
+      if (n.leaf) { return; }
+      if (n.zoom) { zoomTo(path[k]); return; }
+    }
+  }
+  var pointer = "mouse";
+  map.addEventListener("pointerdown", function (e) { pointer = e.pointerType || "mouse"; });
+  map.addEventListener("click", function (e) {
+    var el = e.target.closest ? e.target.closest("path[data-id]") : null;
+    if (!el) { return; }
+    // Touch: the first tap acts as hover, a second tap on the same cell zooms.
+    if (pointer === "touch" && leafAt(el) && el !== current) {
+      clear();
+      show(el);
+      var r = el.getBoundingClientRect();
+      place(r.left + r.width / 2, r.top + r.height / 2);
+      return;
+    }
+    zoomInto(el);
+  });
+  map.addEventListener("keydown", function (e) {
+    var el = leafAt(e.target);
+    if ((e.key === "Enter" || e.key === " ") && el) { e.preventDefault(); zoomInto(el); }
+    if (e.key === "Escape" && view !== top) {
+      var path = ancestors(view);
+      zoomTo(path[path.length - 2]);
+    }
+  });
+  drawCrumbs();
 
   // The optimisation slider: frame k drawn over the map, the last position
   // the finished picture.
-  var slider = document.getElementById("np-frame");
+  var slider = part("frame");
   if (slider && data.frames) {
-    var svgRoot = map.querySelector("svg");
-    var NS = svgRoot.namespaceURI;
+    var NS = svg.namespaceURI;
     var layer = document.createElementNS(NS, "g");
-    layer.setAttribute("id", "np-frame-layer");
+    layer.setAttribute("class", "np-frame-layer");
     layer.setAttribute("pointer-events", "none");
     layer.setAttribute("stroke", "#ffffff");
     layer.setAttribute("stroke-width", "1");
-    svgRoot.appendChild(layer);
-    var caption = document.getElementById("np-frame-label");
+    svg.appendChild(layer);
+    var caption = part("frame-label");
     var showFrame = function () {
       var k = parseInt(slider.value, 10);
       while (layer.firstChild) { layer.removeChild(layer.firstChild); }
@@ -171,12 +321,34 @@ const SCRIPT: &str = r##"(function () {
     showFrame();
   }
 
-  var box = document.getElementById("np-unrealized");
-  function toggle() { document.body.classList.toggle("np-hide-unrealized", !box.checked); }
+  var box = part("unrealized-toggle");
+  function toggle() { root.classList.toggle("np-hide-unrealized", !box.checked); }
   box.addEventListener("change", toggle);
   toggle();
 })();
 "##;
+
+/// Width over height of the SVG's `viewBox`.
+fn view_aspect(svg: &str) -> Option<f64> {
+    let start = svg.find("viewBox=\"")? + 9;
+    let end = start + svg[start..].find('"')?;
+    let v: Vec<f64> = svg[start..end]
+        .split_whitespace()
+        .map(|x| x.parse().ok())
+        .collect::<Option<_>>()?;
+    (v.len() == 4 && v[2] > 0.0 && v[3] > 0.0).then(|| v[2] / v[3])
+}
+
+/// A short key for the page's ids, from its content: two maps' pages get
+/// different ids, the same map always the same (FNV-1a, 32 bits).
+fn page_key(svg: &str, data: &str) -> String {
+    let mut h: u32 = 0x811c_9dc5;
+    for b in svg.bytes().chain(data.bytes()) {
+        h ^= u32::from(b);
+        h = h.wrapping_mul(0x0100_0193);
+    }
+    format!("np-{h:08x}")
+}
 
 /// Writes one self-contained HTML5 page showing `svg` (inserted verbatim, so it
 /// must be our own SVG text, whose cell `<path>`s carry `data-id`) with `data`.
@@ -184,47 +356,64 @@ const SCRIPT: &str = r##"(function () {
 /// The page has no network references: style, script and data are inline. The
 /// data is JSON in `<script type="application/json" id="nptreemap-data">`, with
 /// every `<` written as `\u003c` so no label can close the block. Hovering a
-/// leaf dims every leaf cell outside its neighbour set (itself included, as in
-/// the prototype), outlines its constraint partners (dashed where unrealised)
+/// leaf dims every leaf cell outside its neighbour set (not itself, unlike the
+/// prototype, which greys the hovered cell too), outlines its constraint partners (dashed where unrealised)
 /// and shows its root-to-leaf path and weight in a tooltip; a checkbox "Show
 /// unrealized links" (off by default) shows or hides SVG elements of class
 /// `np-unrealized`. Identical input gives identical bytes.
 pub fn html(svg: &str, data: &HtmlData) -> String {
+    let json = data_json(data);
+    let key = page_key(svg, &json);
     let mut out = String::with_capacity(svg.len() + STYLE.len() + SCRIPT.len() + 1024);
     out.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
     out.push_str(
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>",
     );
     out.push_str(&escape(&data.title));
-    out.push_str("</title>\n<style>\n");
+    out.push_str("</title>\n<style>\nbody { margin: 1em; }\n@media (prefers-color-scheme: dark) { body { background: #161616; } }\n</style>\n</head>\n<body>\n");
+    // Everything of the map lives in one container with ids under one key:
+    // it can be copied into another document as it is.
+    out.push_str(&format!(
+        "<div class=\"nptreemap\" id=\"{key}\">\n<style>\n"
+    ));
     out.push_str(STYLE);
-    out.push_str("</style>\n</head>\n<body>\n");
-    out.push_str(
-        "<label><input type=\"checkbox\" id=\"np-unrealized\"> \
-         Show unrealized links</label>\n",
-    );
+    out.push_str("</style>\n<div class=\"np-controls\">\n");
+    out.push_str(&format!(
+        "<label><input type=\"checkbox\" class=\"np-unrealized-toggle\" id=\"{key}-unrealized\"> \
+         Show unrealized links</label>\n"
+    ));
     if !data.frames.is_empty() {
         // The last position is the finished picture; the others are frames.
         out.push_str(&format!(
-            "<div id=\"np-frames\"><label>Optimisation <input type=\"range\" id=\"np-frame\" \
+            "<div class=\"np-frames\"><label>Optimisation <input type=\"range\" class=\"np-frame\" id=\"{key}-frame\" \
              min=\"0\" max=\"{n}\" value=\"{n}\" step=\"1\"></label> \
-             <span id=\"np-frame-label\">final layout</span></div>\n",
+             <span class=\"np-frame-label\" id=\"{key}-frame-label\">final layout</span></div>\n",
             n = data.frames.len()
         ));
     }
-    out.push_str("<div id=\"np-map\">\n");
+    out.push_str(&format!(
+        "<nav class=\"np-crumbs\" id=\"{key}-crumbs\" aria-label=\"Zoom\"></nav>\n</div>\n"
+    ));
+    // As wide as the container, and no wider than keeps the whole picture
+    // (legend included) within the window's height.
+    let aspect = view_aspect(svg).unwrap_or(1.0);
+    out.push_str(&format!(
+        "<div class=\"np-map\" id=\"{key}-map\" style=\"max-width: calc((100vh - 4.5em) * {aspect:.4})\">\n"
+    ));
     out.push_str(svg);
     if !svg.ends_with('\n') {
         out.push('\n');
     }
-    out.push_str("</div>\n<div id=\"np-tooltip\" hidden></div>\n");
     out.push_str(&format!(
-        "<script type=\"application/json\" id=\"{DATA_ID}\">\n"
+        "</div>\n<div class=\"np-tooltip\" id=\"{key}-tooltip\" role=\"tooltip\" hidden></div>\n"
     ));
-    out.push_str(&data_json(data));
+    out.push_str(&format!(
+        "<script type=\"application/json\" class=\"{DATA_CLASS}\" id=\"{key}-data\">\n"
+    ));
+    out.push_str(&json);
     out.push_str("\n</script>\n<script>\n");
     out.push_str(SCRIPT);
-    out.push_str("</script>\n</body>\n</html>\n");
+    out.push_str("</script>\n</div>\n</body>\n</html>\n");
     out
 }
 
@@ -250,11 +439,13 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
         .enumerate()
         .map(|(i, node)| HtmlNode {
             id: node.id.clone(),
-            label: node.label.clone(),
-            path: path_labels(dataset, i),
+            label: display_name(dataset, i, &style.cells.labels.names),
+            path: path_labels(dataset, i, &style.cells.labels.names),
             weight: node.value,
             depth: node.depth,
             leaf: node.children.is_empty(),
+            parent: node.parent.map(|p| dataset.node(p).id.clone()),
+            zoom: zoom_box(computed, i),
             neighbors: adjacency[node.depth]
                 .neighbors(i)
                 .iter()
@@ -267,7 +458,7 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
         .title
         .clone()
         .unwrap_or_else(|| dataset.node(dataset.root()).label.clone());
-    let colors = cell_colors(dataset);
+    let colors = colors(computed, style);
     let frames = computed
         .report
         .frames
@@ -296,12 +487,45 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
     )
 }
 
-/// The labels from the root to node `i`, both included: the tooltip's text.
-fn path_labels(dataset: &Dataset, i: usize) -> Vec<String> {
+/// Groups whose cell spans more than this share of the canvas in both
+/// directions are not worth zooming into.
+const ZOOM_MIN_GAIN: f64 = 0.97;
+
+/// The view box that shows group `i` as large as the picture allows: its
+/// cell's bounding box with a margin, widened to the canvas's aspect.
+fn zoom_box(computed: &Computed, i: usize) -> Option<[f64; 4]> {
+    let node = computed.dataset.node(i);
+    if node.children.is_empty() || node.parent.is_none() || node.is_virtual {
+        return None;
+    }
+    let layout = &computed.layout;
+    let (lo, hi) = layout.cells.get(i)?.polygon.bbox();
+    let (cw, ch) = (layout.canvas.width, layout.canvas.height);
+    let margin = 0.03 * (hi.x - lo.x).max(hi.y - lo.y);
+    let (mut w, mut h) = (hi.x - lo.x + 2.0 * margin, hi.y - lo.y + 2.0 * margin);
+    if w / h < cw / ch {
+        w = h * cw / ch;
+    } else {
+        h = w * ch / cw;
+    }
+    if w > ZOOM_MIN_GAIN * cw && h > ZOOM_MIN_GAIN * ch {
+        return None;
+    }
+    let (cx, cy) = (0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y));
+    let r = |v: f64| (v * 100.0).round() / 100.0;
+    Some([r(cx - 0.5 * w), r(cy - 0.5 * h), r(w), r(h)])
+}
+
+/// The names from the root to node `i`, both included: the tooltip's text.
+fn path_labels(
+    dataset: &Dataset,
+    i: usize,
+    names: &std::collections::BTreeMap<String, String>,
+) -> Vec<String> {
     dataset
         .path(i)
         .iter()
-        .map(|k| dataset.node(*k).label.clone())
+        .map(|k| display_name(dataset, *k, names))
         .collect()
 }
 
@@ -328,7 +552,7 @@ mod tests {
             .iter()
             .enumerate()
             .map(|(i, node)| {
-                let path = path_labels(dataset, i);
+                let path = path_labels(dataset, i, &Default::default());
                 let (neighbors, partners) = match node.id.as_str() {
                     "A1" => (vec!["A2".into(), "B".into()], vec![("B".into(), true)]),
                     "A3" => (vec!["A2".into()], vec![("A1".into(), false)]),
@@ -341,6 +565,8 @@ mod tests {
                     weight: node.value,
                     depth: node.depth,
                     leaf: dataset.is_leaf(i),
+                    parent: node.parent.map(|p| dataset.node(p).id.clone()),
+                    zoom: None,
                     neighbors,
                     partners,
                 }
@@ -358,7 +584,10 @@ mod tests {
         let (ds, layout) = sample();
         let svg_text = svg(&ds, &layout, &SvgStyle::default());
         let plain = html(&svg_text, &sample_data(&ds, "t"));
-        assert!(!plain.contains("id=\"np-frame\""), "no frames, no slider");
+        assert!(
+            !plain.contains("class=\"np-frame\""),
+            "no frames, no slider"
+        );
         let mut data = sample_data(&ds, "t");
         data.frames = vec![
             HtmlFrame {
@@ -373,6 +602,7 @@ mod tests {
         let page = html(&svg_text, &data);
         // Two frames and the finished map: positions 0..=2, starting at the end.
         assert!(page.contains("min=\"0\" max=\"2\" value=\"2\""));
+        assert!(page.contains("class=\"np-frame\""));
         assert!(!page.contains(HOSTILE));
         let block: serde_json::Value =
             serde_json::from_str(data_block(&page)).expect("data block parses");
@@ -393,8 +623,9 @@ mod tests {
 
     /// The text of the JSON data block.
     fn data_block(page: &str) -> &str {
-        let open = format!("<script type=\"application/json\" id=\"{DATA_ID}\">");
-        let start = page.find(&open).expect("data block") + open.len();
+        let open = format!("<script type=\"application/json\" class=\"{DATA_CLASS}\"");
+        let at = page.find(&open).expect("data block");
+        let start = at + page[at..].find('>').expect("tag end") + 1;
         let len = page[start..].find("</script>").expect("block end");
         &page[start..start + len]
     }
@@ -471,8 +702,8 @@ mod tests {
         assert!(page.starts_with("<!DOCTYPE html>\n"));
         assert!(page.ends_with("</html>\n"));
         for part in [
-            "<div id=\"np-tooltip\" hidden></div>",
-            "<input type=\"checkbox\" id=\"np-unrealized\">",
+            "class=\"np-tooltip\"",
+            "<input type=\"checkbox\" class=\"np-unrealized-toggle\"",
             "Show unrealized links",
             ".np-dim",
             ".np-partner",
@@ -481,6 +712,13 @@ mod tests {
             assert!(page.contains(part), "{part}");
         }
         assert!(!SCRIPT.contains("innerHTML"));
-        assert!(SCRIPT.contains(DATA_ID));
+        assert!(SCRIPT.contains("part(\"data\")"));
+        // Every id carries the page's key, and two maps get two keys.
+        let key = page_key("a", "b");
+        for id in page.split(" id=\"").skip(1) {
+            let id = &id[..id.find('"').expect("quote")];
+            assert!(id.starts_with("np-") && id.len() >= 11, "{id}");
+        }
+        assert_ne!(key, page_key("a", "c"));
     }
 }

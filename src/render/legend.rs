@@ -1,11 +1,13 @@
-//! The legend band under the map: one entry per top-level group (colour swatch
-//! and name) and a key for each overlay glyph the picture shows (interlocking
-//! tab, unlinked marker). Owns the legend's entries and their row layout; may
-//! not decide what is listed (the [`picture`](super::picture) does) or touch the
-//! map.
+//! The legend band under the map: a key for each overlay glyph the picture
+//! shows (interlocking tab, unlinked marker) and one entry per top-level group
+//! (colour swatch and name), wrapped to the width and cut after a few rows
+//! with a count of the groups left out (the names are on the map too). Owns
+//! the legend's entries and their row layout; may not decide what is listed
+//! (the [`picture`](super::picture) does) or touch the map.
 
 use super::palette::Rgb;
 use super::svg::{escape, num, SvgStyle};
+use super::text::width_em;
 
 /// One legend entry.
 #[derive(Clone, Debug, PartialEq)]
@@ -21,6 +23,8 @@ pub enum LegendItem {
     Tab,
     /// The marker counting a cell's constraint partners that are not neighbours.
     Unlinked,
+    /// How many entries did not fit.
+    More(usize),
 }
 
 /// Legend font size per unit of canvas scale: 14 px on a 1,000 × 1,000 canvas,
@@ -30,9 +34,8 @@ const FONT: f64 = 14.0;
 const ROW_EM: f64 = 1.7;
 /// Space after an entry before the next one, in font sizes.
 const GAP_EM: f64 = 1.4;
-/// Estimated text advance per character, in font sizes (wide on purpose, as
-/// for labels in svg.rs, so entries never overlap).
-const CHAR_EM: f64 = 0.6;
+/// Most rows of entries: a band of at most about an eighth of a square map.
+const MAX_ROWS: usize = 5;
 /// Longest group name kept whole; longer ones end in an ellipsis so one long
 /// name cannot push every other entry out of the row.
 const MAX_CHARS: usize = 40;
@@ -50,6 +53,7 @@ impl LegendItem {
             }
             LegendItem::Tab => "similar and adjacent (tab on the shared edge)".to_string(),
             LegendItem::Unlinked => "similar cells that are not adjacent (count)".to_string(),
+            LegendItem::More(n) => format!("and {n} more group{}", if *n == 1 { "" } else { "s" }),
         }
     }
 }
@@ -57,7 +61,8 @@ impl LegendItem {
 /// The legend's SVG elements, placed below a canvas of `width` × `height`, and
 /// the band's height (0 and no text when there are no items). `u` is the
 /// canvas scale (1 on a 1,000-unit canvas). Entries flow left to right and
-/// wrap into rows.
+/// wrap into rows; past [`MAX_ROWS`] rows the entries left are counted in a
+/// last one.
 pub fn legend(
     items: &[LegendItem],
     width: f64,
@@ -78,61 +83,144 @@ pub fn legend(
         num(font),
         style.text_color
     );
-    let (mut x, mut y) = (pad, height + pad);
-    for item in items {
-        let text = item.text();
-        let w = swatch + 0.4 * font + CHAR_EM * font * text.chars().count() as f64;
-        if x > pad && x + w > width - pad {
-            x = pad;
-            y += row;
+    let entry_width = |item: &LegendItem| {
+        let glyph = if matches!(item, LegendItem::More(_)) {
+            0.0
+        } else {
+            swatch + 0.4 * font
+        };
+        glyph + font * width_em(&item.text())
+    };
+    // Flow every entry into rows: (row, x) per entry.
+    let flow = |items: &[LegendItem]| -> Vec<(usize, f64)> {
+        let (mut x, mut r) = (pad, 0usize);
+        items
+            .iter()
+            .map(|item| {
+                let w = entry_width(item);
+                if x > pad && x + w > width - pad {
+                    x = pad;
+                    r += 1;
+                }
+                let at = (r, x);
+                x += w + GAP_EM * font;
+                at
+            })
+            .collect()
+    };
+    let mut shown: Vec<LegendItem> = items.to_vec();
+    let mut places = flow(&shown);
+    if places.last().is_some_and(|(r, _)| *r >= MAX_ROWS) {
+        // Keep what fits in MAX_ROWS rows with the count after it.
+        let mut keep = places.iter().filter(|(r, _)| *r < MAX_ROWS).count();
+        loop {
+            let mut trial: Vec<LegendItem> = items[..keep].to_vec();
+            trial.push(LegendItem::More(items.len() - keep));
+            let p = flow(&trial);
+            if p.last().is_some_and(|(r, _)| *r < MAX_ROWS) || keep == 0 {
+                shown = trial;
+                places = p;
+                break;
+            }
+            keep -= 1;
         }
-        // Glyphs sit in a swatch-sized box whose centre is on the text's middle.
-        let (gx, gy) = (x, y + 0.5 * (row - swatch));
-        out.push_str("<g class=\"np-legend-item\">");
-        match item {
-            LegendItem::Swatch { color, .. } => out.push_str(&format!(
-                "<rect x=\"{}\" y=\"{}\" width=\"{s}\" height=\"{s}\" fill=\"{color}\"/>",
+    }
+    let top = height + pad;
+    // Glyphs and texts in two groups (entries never overlap, so the order is
+    // free): the PNG draws a group of plain text from its glyph cache.
+    let mut texts = format!(
+        "<g class=\"np-legend-labels\" font-family=\"{}\" font-size=\"{}\" fill=\"{}\">\n",
+        escape(&style.font_family),
+        num(font),
+        style.text_color
+    );
+    for (item, (r, x)) in shown.iter().zip(&places) {
+        push_entry(
+            &mut out,
+            &mut texts,
+            item,
+            *x,
+            top + *r as f64 * row,
+            row,
+            swatch,
+            font,
+        );
+    }
+    let rows = places.last().map_or(1, |(r, _)| r + 1);
+    out.push_str("</g>\n");
+    texts.push_str("</g>\n");
+    out.push_str(&texts);
+    (out, rows as f64 * row + 2.0 * pad)
+}
+
+/// One entry at `(x, y)`: its glyph in a swatch-sized box centred on the
+/// text's middle, then its text.
+#[allow(clippy::too_many_arguments)]
+fn push_entry(
+    out: &mut String,
+    texts: &mut String,
+    item: &LegendItem,
+    x: f64,
+    y: f64,
+    row: f64,
+    swatch: f64,
+    font: f64,
+) {
+    let (gx, gy) = (x, y + 0.5 * (row - swatch));
+    out.push_str("<g class=\"np-legend-item\">");
+    match item {
+        LegendItem::Swatch { color, .. } => out.push_str(&format!(
+            "<rect x=\"{}\" y=\"{}\" width=\"{s}\" height=\"{s}\" fill=\"{color}\"/>",
+            num(gx),
+            num(gy),
+            s = num(swatch)
+        )),
+        LegendItem::Tab => {
+            // Two cells side by side, the left one's dovetail in the right
+            // one, as on the map.
+            let h = 0.5 * swatch;
+            let (b, hd, d) = (0.16 * swatch, 0.24 * swatch, 0.26 * swatch);
+            let mid = gy + h;
+            out.push_str(&format!(
+                "<g class=\"np-legend-tab\"><rect x=\"{}\" y=\"{}\" width=\"{h2}\" height=\"{s}\" fill=\"#9c9c9c\"/><rect x=\"{}\" y=\"{}\" width=\"{h2}\" height=\"{s}\" fill=\"#cfcfcf\"/><polygon points=\"{},{} {},{} {},{} {},{}\" fill=\"#9c9c9c\" stroke=\"#ffffff\" stroke-width=\"{}\" stroke-linejoin=\"round\"/></g>",
                 num(gx),
                 num(gy),
+                num(gx + h),
+                num(gy),
+                num(gx + h - 0.02 * swatch),
+                num(mid - b),
+                num(gx + h + d),
+                num(mid - hd),
+                num(gx + h + d),
+                num(mid + hd),
+                num(gx + h - 0.02 * swatch),
+                num(mid + b),
+                num(0.06 * swatch),
+                h2 = num(h),
                 s = num(swatch)
-            )),
-            LegendItem::Tab => {
-                let h = 0.5 * swatch;
-                out.push_str(&format!(
-                    "<g class=\"np-legend-tab\"><rect x=\"{}\" y=\"{}\" width=\"{h2}\" height=\"{s}\" fill=\"#9c9c9c\"/><rect x=\"{}\" y=\"{}\" width=\"{h2}\" height=\"{s}\" fill=\"#cfcfcf\"/><polyline points=\"{},{} {},{} {},{} {},{} {},{} {},{}\" fill=\"none\" stroke=\"#ffffff\" stroke-width=\"{}\"/></g>",
-                    num(gx),
-                    num(gy),
-                    num(gx + h),
-                    num(gy),
-                    num(gx + h), num(gy),
-                    num(gx + h), num(gy + 0.3 * swatch),
-                    num(gx + 0.25 * swatch), num(gy + 0.3 * swatch),
-                    num(gx + 0.75 * swatch), num(gy + 0.7 * swatch),
-                    num(gx + h), num(gy + 0.7 * swatch),
-                    num(gx + h), num(gy + swatch),
-                    num(0.08 * swatch),
-                    h2 = num(h),
-                    s = num(swatch)
-                ));
-            }
-            LegendItem::Unlinked => out.push_str(&format!(
-                "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#ffffff\" stroke=\"#d62728\" stroke-width=\"{}\"/>",
-                num(gx + 0.5 * swatch),
-                num(gy + 0.5 * swatch),
-                num(0.45 * swatch),
-                num(0.12 * swatch)
-            )),
+            ));
         }
-        out.push_str(&format!(
-            "<text x=\"{}\" y=\"{}\">{}</text></g>\n",
-            num(x + swatch + 0.4 * font),
-            num(y + 0.5 * row + 0.35 * font),
-            escape(&text)
-        ));
-        x += w + GAP_EM * font;
+        LegendItem::Unlinked => out.push_str(&format!(
+            "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#ffffff\" stroke=\"#d62728\" stroke-width=\"{}\"/>",
+            num(gx + 0.5 * swatch),
+            num(gy + 0.5 * swatch),
+            num(0.45 * swatch),
+            num(0.12 * swatch)
+        )),
+        LegendItem::More(_) => {}
     }
     out.push_str("</g>\n");
-    (out, y + row + pad - height)
+    let tx = if matches!(item, LegendItem::More(_)) {
+        x
+    } else {
+        x + swatch + 0.4 * font
+    };
+    texts.push_str(&format!(
+        "<text x=\"{}\" y=\"{}\">{}</text>\n",
+        num(tx),
+        num(y + 0.5 * row + 0.35 * font),
+        escape(&item.text())
+    ));
 }
 
 #[cfg(test)]
@@ -195,5 +283,18 @@ mod tests {
         assert!(text.contains(&format!("{}…", "x".repeat(MAX_CHARS - 1))));
         assert!(!text.contains(&"x".repeat(MAX_CHARS)));
         assert!(text.contains("&lt;i&gt;&amp;"));
+    }
+
+    #[test]
+    fn many_groups_stop_after_the_last_row_with_a_count() {
+        let items: Vec<LegendItem> = (0..200).map(|i| swatch(&format!("group {i}"))).collect();
+        let (text, h) = legend(&items, 1000.0, 1000.0, 1.0, &SvgStyle::default());
+        assert!(h < 0.16 * 1000.0, "band {h}");
+        let shown = text.matches("<rect").count();
+        assert!(shown > 20 && shown < 200, "{shown}");
+        assert!(
+            text.contains(&format!("and {} more groups", 200 - shown)),
+            "{text}"
+        );
     }
 }

@@ -7,6 +7,8 @@
 
 /// Interactive HTML page: the SVG with inline hover script, style and node data.
 pub mod html;
+/// Leaf labels fitted into their cells and group names across their groups.
+pub mod labels;
 /// The legend band: top-level groups and the overlay's glyphs.
 pub mod legend;
 /// Interlocking tabs and unrealised-link markers drawn over the treemap.
@@ -19,12 +21,15 @@ pub mod picture;
 pub mod png;
 /// The SVG picture: filled cells, level-weighted outlines, fitted labels.
 pub mod svg;
+/// The built-in font: metrics, shaping and glyph outlines, cached.
+pub(crate) mod text;
 
 #[cfg(test)]
 pub(crate) mod test_support;
 
 pub use html::{html, html_page, HtmlData, HtmlFrame, HtmlNode};
-pub use palette::Rgb;
-pub use picture::{picture, Border, Style};
+pub use labels::LabelStyle;
+pub use palette::{PaletteKind, Rgb};
+pub use picture::{picture, Border, LegendOrder, Style};
 pub use png::{png, PngError};
 pub use svg::{svg, SvgStyle};

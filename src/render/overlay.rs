@@ -1,16 +1,19 @@
 //! What is drawn on top of the treemap for its similarity constraints: the
-//! interlocking tab on every edge shared by two constrained neighbours
+//! interlocking tab on shared edges of constrained neighbours
 //! (method-reference §8.3) and, for constraints that are not neighbours,
-//! dashed red links between the cells plus an "unlinked" count on the cell
-//! (§8.4). Pure: a finished layout and its constraints in, SVG text out. The
-//! tabs go under the picture's labels, the rest over them
-//! ([`compose`](crate::render::picture::compose) places the two layers).
+//! dashed red links between the cells plus a count marker on the cell
+//! (§8.4). Placed against the labels (issue 13, item 1): a tab never covers a
+//! label and never takes more than a small share of either cell; a marker
+//! moves within its cell to free space or is left out, and all markers
+//! together stay within a share of the map. Pure: a finished layout, its
+//! constraints and the placed labels in, shapes and SVG text out.
 
-use super::svg::{cell_colors, escape, num};
+use super::labels::{Placed, Rect};
+use super::svg::{escape, num};
 use crate::geom::shared_edge::{shared_segments, PERPENDICULAR_TOL};
-use crate::geom::Point;
+use crate::geom::{ConvexPolygon, Point};
 use crate::layout::Layout;
-use nptreemap_formats::Dataset;
+use nptreemap_formats::{Dataset, Rgb};
 
 /// One constraint to draw.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,8 +34,12 @@ pub struct OverlayStyle {
     /// Draw the dashed links of unrealised constraints visibly (they are
     /// always present, hidden, for the HTML page's checkbox). Default: false.
     pub show_unrealized: bool,
-    /// Draw the count of missing links on cells that have some. Default: true.
+    /// Draw the count of missing links on cells that have some, where it
+    /// fits. Default: true.
     pub unlinked_markers: bool,
+    /// Largest share of the map all count markers together may cover; the
+    /// cells with the most missing links come first. Default: 0.015.
+    pub marker_share: f64,
 }
 
 impl Default for OverlayStyle {
@@ -40,142 +47,425 @@ impl Default for OverlayStyle {
         Self {
             show_unrealized: false,
             unlinked_markers: true,
+            marker_share: 0.015,
         }
     }
 }
 
-/// Tab width along the edge and base depth across it, in the prototype's
-/// pixels (8 and 6 px, §8.3), scaled like every prototype constant by the
-/// canvas against its 32-gon of radius 192.
-const TAB_WIDTH_PX: f64 = 8.0;
-const TAB_DEPTH_PX: f64 = 6.0;
-
-/// Size multiplier of a tab by raw similarity (the prototype's four levels, §3.8).
-fn strength_multiplier(similarity: f64) -> f64 {
+/// Base width of a tab on its edge, canvas units at canvas scale 1: at least
+/// [`TAB_WIDTH_MIN`], growing with the smaller cell's size
+/// ([`TAB_WIDTH_SHARE`] of the side of a square of its area) up to
+/// [`TAB_WIDTH_MAX`]. Its head is [`HEAD`] times as wide (a dovetail, so it
+/// reads as interlocking rather than as a bar).
+const TAB_WIDTH_MIN: f64 = 7.0;
+/// See [`TAB_WIDTH_MIN`].
+const TAB_WIDTH_MAX: f64 = 16.0;
+/// See [`TAB_WIDTH_MIN`].
+const TAB_WIDTH_SHARE: f64 = 0.07;
+/// Head width over base width.
+const HEAD: f64 = 1.5;
+/// Depth over base width, by similarity strength: the paper's three sizes
+/// (§3.8's levels, the lowest two merged, as real constraints rarely fall
+/// below 0.5).
+fn depth_ratio(similarity: f64) -> f64 {
     if similarity >= 0.95 {
-        2.0
+        1.3
     } else if similarity >= 0.75 {
-        1.5
-    } else if similarity >= 0.5 {
-        1.25
+        0.95
     } else {
-        1.0
+        0.65
     }
 }
+/// A tab takes at most this share of either cell's area.
+const TAB_AREA_SHARE: f64 = 0.04;
+/// A tab's base covers at most this share of the shared edge.
+const TAB_EDGE_SHARE: f64 = 0.5;
+/// A tab shrunk below this share of its full size is not drawn.
+const TAB_MIN_SCALE: f64 = 0.5;
+/// Where along the shared edge a tab may sit, tried in order.
+const TAB_POSITIONS: [f64; 5] = [0.5, 0.35, 0.65, 0.22, 0.78];
 
-/// The canvas scale of the prototype's pixel constants.
-fn scale(layout: &Layout) -> f64 {
-    let proto = 0.5 * 32.0 * (std::f64::consts::TAU / 32.0).sin() * 192.0 * 192.0;
-    (layout.canvas.width * layout.canvas.height / proto).sqrt()
+/// A tab placed on a shared edge.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tab {
+    /// The constraint's first node.
+    pub a: usize,
+    /// Its second node.
+    pub b: usize,
+    /// The cell whose colour protrudes (the smaller one).
+    pub from: usize,
+    /// The shape filled with `from`'s colour: the knob plus a sliver on
+    /// `from`'s side that covers the edge's own line.
+    pub fill: Vec<Point>,
+    /// The knob's outline: base end, head corners, base end.
+    pub outline: [Point; 4],
+    /// Outline width.
+    pub width: f64,
 }
 
-/// Where a tab goes: the longest shared segment of the two cells, when it is at
-/// least one tab wide. Returns its end points.
+/// Where a tab may go: the longest shared segment of the two cells.
 pub fn tab_edge(layout: &Layout, link: &Link) -> Option<[Point; 2]> {
     let tol = PERPENDICULAR_TOL * layout.diagonal();
-    let width = TAB_WIDTH_PX * scale(layout);
     shared_segments(
         &layout.cells[link.a].polygon,
         &layout.cells[link.b].polygon,
         tol,
     )
     .into_iter()
-    .filter(|s| s[0].distance(s[1]) >= width)
     .max_by(|s, t| s[0].distance(s[1]).total_cmp(&t[0].distance(t[1])))
 }
 
-/// The overlay's SVG elements in their two layers.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Overlay {
-    /// The tabs, drawn over the cells but under the labels: they sit on cell
-    /// edges, which a fitted label may reach, and at the paper's size (12 px
-    /// scaled with the canvas) would otherwise hide whole words of small labels.
-    pub tabs: String,
-    /// The dashed links and the unlinked counts, drawn over everything: they
-    /// point at cells and are small.
-    pub marks: String,
+/// Signed distance from `p` to the inside of a convex polygon's boundary:
+/// positive inside, the smallest over its edges.
+fn inset(polygon: &ConvexPolygon, p: Point) -> f64 {
+    let pts = polygon.points();
+    (0..pts.len())
+        .map(|k| {
+            let (a, b) = (pts[k], pts[(k + 1) % pts.len()]);
+            let e = b - a;
+            let len = e.length();
+            if len > 0.0 {
+                crate::geom::cross(e, p - a) / len
+            } else {
+                f64::INFINITY
+            }
+        })
+        .fold(f64::INFINITY, f64::min)
 }
 
-/// The overlay's SVG elements in their two layers (see [`Overlay`]).
-pub fn overlay(
-    dataset: &Dataset,
+/// Whether a polygon and a box overlap.
+fn hits_rect(poly: &[Point], r: &Rect) -> bool {
+    let quad = r.corners();
+    convex_overlap(poly, &quad)
+}
+
+/// Whether two convex polygons overlap with positive area (separating axes).
+fn convex_overlap(a: &[Point], b: &[Point]) -> bool {
+    for poly in [a, b] {
+        for k in 0..poly.len() {
+            let e = poly[(k + 1) % poly.len()] - poly[k];
+            let n = Point::new(-e.y, e.x);
+            let span = |q: &[Point]| {
+                q.iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                        let v = n.dot(*p);
+                        (lo.min(v), hi.max(v))
+                    })
+            };
+            let ((a0, a1), (b0, b1)) = (span(a), span(b));
+            if a1 <= b0 + 1e-9 || b1 <= a0 + 1e-9 {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// The tabs of the realised `links`, each on its shared edge, sized to the
+/// edge and the smaller cell, clear of every label box and of each other;
+/// a link with no such place gets none. `u` is the canvas scale; `width(a, b)`
+/// the outline width of the edge between two cells.
+pub fn place_tabs(
     layout: &Layout,
     links: &[Link],
-    style: &OverlayStyle,
-) -> Overlay {
-    let s = scale(layout);
-    let colors = cell_colors(dataset);
-    let fill = |i: usize| colors[i].map_or("#cccccc".to_string(), |c| c.to_string());
-    let mut out = String::new();
-    out.push_str("<g class=\"np-tabs\" stroke-linejoin=\"round\">\n");
+    labels: &[Placed],
+    u: f64,
+    width: &dyn Fn(usize, usize) -> f64,
+) -> Vec<Tab> {
+    let mut by_cell: std::collections::HashMap<usize, Vec<Rect>> = Default::default();
+    for l in labels {
+        by_cell
+            .entry(l.node)
+            .or_default()
+            .push(l.rect.grown(0.5 * u));
+    }
+    let mut tabs: Vec<Tab> = Vec::new();
     for link in links.iter().filter(|l| l.realized) {
-        let Some([p0, p1]) = tab_edge(layout, link) else {
-            continue;
-        };
-        let (big, small) = if layout.cells[link.a].power_weight >= layout.cells[link.b].power_weight
-        {
-            (link.a, link.b)
-        } else {
-            (link.b, link.a)
-        };
-        let m = (p0 + p1) * 0.5;
-        let p = (p1 - p0).normalize_or_zero();
-        let half = 0.5 * TAB_WIDTH_PX * s;
-        let mut n =
-            Point::new(-p.y, p.x) * (TAB_DEPTH_PX * s * strength_multiplier(link.similarity));
-        // n points into the larger cell ("max" cell, §8.3).
-        let into_big = layout.cells[big].polygon.centroid() - m;
-        if n.dot(into_big) < 0.0 {
-            n = -n;
+        if let Some(tab) = place_tab(layout, link, &by_cell, &tabs, u, width(link.a, link.b)) {
+            tabs.push(tab);
         }
-        let pts = |v: &[Point]| {
-            v.iter()
-                .map(|q| format!("{},{}", num(q.x), num(q.y)))
-                .collect::<Vec<_>>()
-                .join(" ")
+    }
+    tabs
+}
+
+fn place_tab(
+    layout: &Layout,
+    link: &Link,
+    labels: &std::collections::HashMap<usize, Vec<Rect>>,
+    placed: &[Tab],
+    u: f64,
+    line: f64,
+) -> Option<Tab> {
+    let [p0, p1] = tab_edge(layout, link)?;
+    let (pa, pb) = (&layout.cells[link.a].polygon, &layout.cells[link.b].polygon);
+    let (from, into) = if pa.area() <= pb.area() {
+        (link.a, link.b)
+    } else {
+        (link.b, link.a)
+    };
+    let (small, large) = (&layout.cells[from].polygon, &layout.cells[into].polygon);
+    let edge = p1 - p0;
+    let len = edge.length();
+    if len <= 0.0 {
+        return None;
+    }
+    let p = edge * (1.0 / len);
+    let mut n = Point::new(-p.y, p.x);
+    // n points into the receiving cell.
+    if n.dot(large.centroid() - (p0 + p1) * 0.5) < 0.0 {
+        n = -n;
+    }
+    let ratio = depth_ratio(link.similarity);
+    let full = (TAB_WIDTH_SHARE * small.area().sqrt()).clamp(TAB_WIDTH_MIN * u, TAB_WIDTH_MAX * u);
+    // Largest scale the edge and both cells allow.
+    let area_at_1 = 0.5 * (1.0 + HEAD) * full * ratio * full;
+    let limit = [
+        TAB_EDGE_SHARE * len / full,
+        (TAB_AREA_SHARE * small.area() / area_at_1).sqrt(),
+        (TAB_AREA_SHARE * large.area() / area_at_1).sqrt(),
+        1.0,
+    ]
+    .into_iter()
+    .fold(f64::INFINITY, f64::min);
+    let cover = 0.5 * line + 0.3 * u.min(1.0);
+    for scale in [limit, 0.8 * limit, 0.64 * limit] {
+        if scale < TAB_MIN_SCALE {
+            break;
+        }
+        let w = full * scale;
+        let (hb, hh, d) = (0.5 * w, 0.5 * HEAD * w, ratio * w);
+        for t in TAB_POSITIONS {
+            let along = t * len;
+            if along < hh + line || len - along < hh + line {
+                continue;
+            }
+            let m = p0 + p * along;
+            let outline = [
+                m - p * hb,
+                m - p * hh + n * d,
+                m + p * hh + n * d,
+                m + p * hb,
+            ];
+            // The head stays inside the receiving cell, clear of its other edges.
+            if outline[1..3]
+                .iter()
+                .any(|q| inset(large, *q) < line + 0.5 * u.min(1.0))
+            {
+                continue;
+            }
+            let fill = vec![
+                m - p * hb - n * cover,
+                outline[0],
+                outline[1],
+                outline[2],
+                outline[3],
+                m + p * hb - n * cover,
+            ];
+            let hull = [fill[0], outline[1], outline[2], fill[5]];
+            let clear_of_labels = [from, into].iter().all(|c| {
+                labels
+                    .get(c)
+                    .is_none_or(|rs| rs.iter().all(|r| !hits_rect(&hull, r)))
+            });
+            let clear_of_tabs = placed.iter().all(|o| {
+                let other = [o.fill[0], o.outline[1], o.outline[2], o.fill[5]];
+                !convex_overlap(&hull, &other)
+            });
+            if clear_of_labels && clear_of_tabs {
+                return Some(Tab {
+                    a: link.a,
+                    b: link.b,
+                    from,
+                    fill,
+                    outline,
+                    width: line,
+                });
+            }
+        }
+    }
+    let _ = small;
+    None
+}
+
+/// A count marker placed in its cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Marker {
+    /// The cell.
+    pub node: usize,
+    /// Its centre.
+    pub at: Point,
+    /// Its radius.
+    pub r: f64,
+    /// Missing links.
+    pub count: usize,
+}
+
+/// Marker radius at canvas scale 1, canvas units: its count stays readable
+/// (8.75 px digits) while 60 markers take about 1 % of a 1,000 px map.
+const MARKER_R: f64 = 7.0;
+/// A marker covers at most this share of its cell.
+const MARKER_CELL_SHARE: f64 = 0.06;
+
+/// The count markers: one per cell with missing links, where a circle fits
+/// inside the cell clear of its label and tabs, nearest the label's
+/// upper-right corner (or the cell's centre); the cells with the most missing
+/// links (then the largest) first, until the markers would cover more than
+/// `share` of the map.
+pub fn place_markers(
+    layout: &Layout,
+    links: &[Link],
+    labels: &[Placed],
+    tabs: &[Tab],
+    u: f64,
+    share: f64,
+) -> Vec<Marker> {
+    let cells = layout.cells.len();
+    let mut missing = vec![0usize; cells];
+    for link in links.iter().filter(|l| !l.realized) {
+        missing[link.a] += 1;
+        missing[link.b] += 1;
+    }
+    let r = MARKER_R * u;
+    let marker_area = std::f64::consts::PI * r * r;
+    let budget = share * layout.canvas.width * layout.canvas.height;
+    let mut order: Vec<usize> = (0..cells).filter(|&i| missing[i] > 0).collect();
+    order.sort_by(|&a, &b| {
+        missing[b]
+            .cmp(&missing[a])
+            .then(
+                layout.cells[b]
+                    .polygon
+                    .area()
+                    .total_cmp(&layout.cells[a].polygon.area()),
+            )
+            .then(a.cmp(&b))
+    });
+    let mut label_of: Vec<Option<&Rect>> = vec![None; cells];
+    for l in labels {
+        if l.node < cells {
+            label_of[l.node] = Some(&l.rect);
+        }
+    }
+    let mut tabs_in: Vec<Vec<[Point; 4]>> = vec![Vec::new(); cells];
+    for t in tabs {
+        let hull = [t.fill[0], t.outline[1], t.outline[2], t.fill[5]];
+        tabs_in[t.a].push(hull);
+        tabs_in[t.b].push(hull);
+    }
+    let mut out = Vec::new();
+    let mut used = 0.0;
+    for i in order {
+        if used + marker_area > budget {
+            break;
+        }
+        let polygon = &layout.cells[i].polygon;
+        if marker_area > MARKER_CELL_SHARE * polygon.area() {
+            continue;
+        }
+        let margin = r + 1.5 * u;
+        let label = label_of[i].map(|l| l.grown(1.5 * u));
+        let wanted = match &label {
+            Some(l) => Point::new(l.x1 + r, l.y0),
+            None => polygon.centroid(),
         };
+        let (lo, hi) = polygon.bbox();
+        const STEPS: usize = 12;
+        let mut best: Option<(f64, Point)> = None;
+        for iy in 0..=STEPS {
+            for ix in 0..=STEPS {
+                let c = Point::new(
+                    lo.x + (hi.x - lo.x) * ix as f64 / STEPS as f64,
+                    lo.y + (hi.y - lo.y) * iy as f64 / STEPS as f64,
+                );
+                if inset(polygon, c) < margin {
+                    continue;
+                }
+                let hits_label = label.as_ref().is_some_and(|l| {
+                    let dx = c.x - c.x.clamp(l.x0, l.x1);
+                    let dy = c.y - c.y.clamp(l.y0, l.y1);
+                    dx * dx + dy * dy < r * r
+                });
+                let square = [
+                    c + Point::new(-r, -r),
+                    c + Point::new(r, -r),
+                    c + Point::new(r, r),
+                    c + Point::new(-r, r),
+                ];
+                let hits_tab = tabs_in[i].iter().any(|t| convex_overlap(t, &square));
+                if hits_label || hits_tab {
+                    continue;
+                }
+                let d = c.distance(wanted);
+                if best.is_none_or(|(bd, _)| d < bd) {
+                    best = Some((d, c));
+                }
+            }
+        }
+        if let Some((_, at)) = best {
+            used += marker_area;
+            out.push(Marker {
+                node: i,
+                at,
+                r,
+                count: missing[i],
+            });
+        }
+    }
+    out.sort_by_key(|m| m.node);
+    out
+}
+
+/// The tab layer's SVG: each tab as its cell-coloured shape and its outline.
+pub fn tabs_svg(dataset: &Dataset, tabs: &[Tab], colors: &[Option<Rgb>], stroke: Rgb) -> String {
+    let pts = |v: &[Point]| {
+        v.iter()
+            .map(|q| format!("{},{}", num(q.x), num(q.y)))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let mut out = format!(
+        "<g class=\"np-tabs\" stroke-linejoin=\"round\" stroke-linecap=\"round\" stroke=\"{stroke}\">\n"
+    );
+    for t in tabs {
+        let fill = colors
+            .get(t.from)
+            .copied()
+            .flatten()
+            .map_or("#cccccc".to_string(), |c| c.to_string());
         out.push_str(&format!(
-            "<g class=\"np-tab\" data-a=\"{}\" data-b=\"{}\">",
-            escape(&dataset.node(link.a).id),
-            escape(&dataset.node(link.b).id)
-        ));
-        // The larger cell's tongue pokes into the smaller one and vice versa.
-        out.push_str(&format!(
-            "<polygon points=\"{}\" fill=\"{}\"/>",
-            pts(&[m + n * 0.5, m + p * half, m + p * half - n, m - n]),
-            fill(big)
-        ));
-        out.push_str(&format!(
-            "<polygon points=\"{}\" fill=\"{}\"/>",
-            pts(&[m - n * 0.5, m - p * half, m - p * half + n, m + n]),
-            fill(small)
-        ));
-        out.push_str(&format!(
-            "<polyline points=\"{}\" fill=\"none\" stroke=\"#ffffff\" stroke-width=\"{}\"/></g>\n",
-            pts(&[
-                m - p * half,
-                m - p * half + n,
-                m + n,
-                m - n,
-                m + p * half - n,
-                m + p * half
-            ]),
-            num(s.max(1.0))
+            "<g class=\"np-tab\" data-a=\"{}\" data-b=\"{}\"><polygon points=\"{}\" fill=\"{fill}\" stroke=\"none\"/><polyline points=\"{}\" fill=\"none\" stroke-width=\"{}\"/></g>\n",
+            escape(&dataset.node(t.a).id),
+            escape(&dataset.node(t.b).id),
+            pts(&t.fill),
+            pts(&t.outline),
+            num(t.width)
         ));
     }
     out.push_str("</g>\n");
-    let tabs = std::mem::take(&mut out);
+    out
+}
+
+/// The dashed links of unrealised constraints (hidden unless `style` shows
+/// them) and the count markers: circles, then their counts, in two groups
+/// (circles never overlap, so the order within is free, and text in a group
+/// of its own renders fast).
+pub fn marks_svg(
+    layout: &Layout,
+    links: &[Link],
+    markers: &[Marker],
+    style: &OverlayStyle,
+    u: f64,
+) -> String {
     let display = if style.show_unrealized {
         ""
     } else {
         " display=\"none\""
     };
-    out.push_str(&format!(
+    let mut out = format!(
         "<g class=\"np-unrealized\" stroke=\"#d62728\" stroke-width=\"{}\" stroke-dasharray=\"{}\"{display}>\n",
-        num(2.0 * s.max(0.5)),
-        num(4.0 * s.max(0.5))
-    ));
-    let mut missing = vec![0usize; dataset.len()];
+        num(1.5 * u.max(0.5)),
+        num(4.0 * u.max(0.5))
+    );
     for link in links.iter().filter(|l| !l.realized) {
         let (a, b) = (
             layout.cells[link.a].polygon.centroid(),
@@ -188,43 +478,40 @@ pub fn overlay(
             num(b.x),
             num(b.y)
         ));
-        missing[link.a] += 1;
-        missing[link.b] += 1;
     }
     out.push_str("</g>\n");
-    if style.unlinked_markers {
-        // Radius 4.5 prototype px: a marker as big as the glyph's box in the
-        // prototype (scale 0.5 of a ~18 px icon), readable at 1,000 px.
-        let r = 4.5 * s;
-        out.push_str(&format!(
-            "<g class=\"np-unlinked\" font-family=\"DejaVu Sans, sans-serif\" font-size=\"{}\" text-anchor=\"middle\">\n",
-            num(r * 1.2)
-        ));
-        for (i, &count) in missing.iter().enumerate().filter(|(_, c)| **c > 0) {
-            // Below the centred label rather than on it (the prototype's
-            // (-10, +10) offset sits on the label at our label sizes); back to
-            // the centroid when the cell is too small to hold it there.
-            let polygon = &layout.cells[i].polygon;
-            let below = polygon.centroid() + Point::new(0.0, 2.8 * r);
-            let c = if polygon.contains(below + Point::new(0.0, r)) {
-                below
-            } else {
-                polygon.centroid()
-            };
-            out.push_str(&format!(
-                "<g><title>{} unrealized link(s)</title><circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#ffffff\" stroke=\"#d62728\" stroke-width=\"{}\"/><text x=\"{}\" y=\"{}\" fill=\"#d62728\">{count}</text></g>\n",
-                count,
-                num(c.x),
-                num(c.y),
-                num(r),
-                num(0.25 * r),
-                num(c.x),
-                num(c.y + 0.4 * r)
-            ));
-        }
-        out.push_str("</g>\n");
+    if markers.is_empty() {
+        return out;
     }
-    Overlay { tabs, marks: out }
+    let r = markers[0].r;
+    out.push_str(&format!(
+        "<g class=\"np-unlinked\" fill=\"#ffffff\" stroke=\"#d62728\" stroke-width=\"{}\">\n",
+        num(0.2 * r)
+    ));
+    for m in markers {
+        out.push_str(&format!(
+            "<circle cx=\"{}\" cy=\"{}\" r=\"{}\"><title>{} unrealized link(s)</title></circle>\n",
+            num(m.at.x),
+            num(m.at.y),
+            num(m.r),
+            m.count
+        ));
+    }
+    out.push_str("</g>\n");
+    out.push_str(&format!(
+        "<g class=\"np-unlinked-count\" font-family=\"DejaVu Sans, sans-serif\" font-size=\"{}\" text-anchor=\"middle\" fill=\"#d62728\" pointer-events=\"none\">\n",
+        num(1.25 * r)
+    ));
+    for m in markers {
+        out.push_str(&format!(
+            "<text x=\"{}\" y=\"{}\">{}</text>\n",
+            num(m.at.x),
+            num(m.at.y + 0.45 * r),
+            m.count
+        ));
+    }
+    out.push_str("</g>\n");
+    out
 }
 
 #[cfg(test)]
@@ -232,84 +519,128 @@ mod tests {
     use super::*;
     use crate::geom::ConvexPolygon;
     use crate::layout::{Canvas, LayoutCell};
-    use nptreemap_formats::{DatasetBuilder, NodeSpec};
+    use crate::render::labels::Line;
 
-    /// root split into three columns a | b | c of a 900 × 300 canvas, and a
-    /// fourth node d as a thin strip under c whose edge with b is too short.
-    fn sample() -> (Dataset, Layout) {
-        let mut builder = DatasetBuilder::new();
-        builder.add(NodeSpec::new("root"));
-        for id in ["a", "b", "c", "d"] {
-            builder.add(NodeSpec::new(id).parent("root").weight(1.0));
-        }
-        let ds = builder.build().expect("valid");
-        let rect = |x: f64, y: f64, w: f64, h: f64, weight: f64| {
+    /// Three columns a | b | c of a 900 × 300 canvas, and d, a thin strip
+    /// under c whose edge with b is 1 unit long.
+    fn sample() -> Layout {
+        let rect = |x: f64, y: f64, w: f64, h: f64| {
             let polygon = ConvexPolygon::rectangle(x, y, w, h).expect("rectangle");
             LayoutCell {
                 site: polygon.centroid(),
-                power_weight: weight,
+                power_weight: 0.0,
                 polygon,
             }
         };
-        let layout = Layout {
+        Layout {
             canvas: Canvas {
                 width: 900.0,
                 height: 300.0,
             },
             cells: vec![
-                rect(0.0, 0.0, 900.0, 300.0, 0.0),
-                rect(0.0, 0.0, 300.0, 300.0, 5.0),
-                rect(300.0, 0.0, 300.0, 300.0, 1.0),
-                rect(600.0, 0.0, 300.0, 299.0, 2.0),
-                rect(600.0, 299.0, 300.0, 1.0, 0.0),
+                rect(0.0, 0.0, 900.0, 300.0),
+                rect(0.0, 0.0, 300.0, 300.0),
+                rect(300.0, 0.0, 300.0, 300.0),
+                rect(600.0, 0.0, 300.0, 299.0),
+                rect(600.0, 299.0, 300.0, 1.0),
             ],
-        };
-        (ds, layout)
+        }
+    }
+
+    fn link(a: usize, b: usize, similarity: f64, realized: bool) -> Link {
+        Link {
+            a,
+            b,
+            similarity,
+            realized,
+        }
     }
 
     #[test]
-    fn one_tab_per_realized_link_with_room_centered_on_its_edge() {
-        let (ds, layout) = sample();
-        let (a, b, c, d) = (1, 2, 3, 4);
-        let links = vec![
-            Link {
-                a,
-                b,
-                similarity: 0.9,
-                realized: true,
-            },
-            Link {
-                a: b,
-                b: c,
-                similarity: 0.3,
-                realized: true,
-            },
-            // b and d share a 1-unit edge: too short for a tab.
-            Link {
-                a: b,
-                b: d,
-                similarity: 0.99,
-                realized: true,
-            },
-            Link {
-                a,
-                b: c,
-                similarity: 0.6,
-                realized: false,
-            },
+    fn tabs_sit_on_their_edge_inside_the_larger_cell_and_never_on_a_label() {
+        let layout = sample();
+        let links = [
+            link(1, 2, 0.99, true),
+            link(2, 3, 0.3, true),
+            link(2, 4, 0.99, true),
         ];
-        let Overlay { tabs, marks } = overlay(&ds, &layout, &links, &OverlayStyle::default());
-        assert_eq!(tabs.matches("class=\"np-tab\"").count(), 2);
-        assert!(!marks.contains("np-tab"));
-        // Each tab's edge is the shared side of its two cells: x = 300 and x = 600.
-        for (link, x) in [(&links[0], 300.0), (&links[1], 600.0)] {
-            let [p0, p1] = tab_edge(&layout, link).expect("room for a tab");
-            assert!((p0.x - x).abs() < 1e-9 && (p1.x - x).abs() < 1e-9);
+        let tabs = place_tabs(&layout, &links, &[], 1.0, &|_, _| 1.0);
+        // b–d shares one unit: no room.
+        assert_eq!(tabs.len(), 2, "{tabs:?}");
+        for (t, x) in tabs.iter().zip([300.0, 600.0]) {
+            assert!((t.outline[0].x - x).abs() < 1e-9 && (t.outline[3].x - x).abs() < 1e-9);
+            let into = if t.from == t.a { t.b } else { t.a };
+            for q in &t.outline[1..3] {
+                assert!(layout.cells[into].polygon.contains(*q), "head inside");
+            }
         }
-        assert!(tab_edge(&layout, &links[2]).is_none());
-        // The unrealised link is a hidden dashed line, and a and c carry a marker each.
-        assert_eq!(marks.matches("<line ").count(), 1);
-        assert!(marks.contains("class=\"np-unrealized\"") && marks.contains("display=\"none\""));
-        assert_eq!(marks.matches("unrealized link(s)").count(), 2);
+        // The stronger similarity draws the deeper tab.
+        let depth = |t: &Tab| (t.outline[1].x - t.outline[0].x).abs();
+        assert!(depth(&tabs[0]) > depth(&tabs[1]));
+        // A label across the middle of the edge moves the tab along it.
+        let label = Placed {
+            node: 2,
+            lines: vec![Line {
+                text: "b".into(),
+                x: 450.0,
+                baseline: 155.0,
+                size: 10.0,
+            }],
+            rect: Rect {
+                x0: 295.0,
+                y0: 140.0,
+                x1: 605.0,
+                y1: 160.0,
+            },
+            angle: 0.0,
+        };
+        let moved = place_tabs(
+            &layout,
+            &links[..1],
+            std::slice::from_ref(&label),
+            1.0,
+            &|_, _| 1.0,
+        );
+        assert_eq!(moved.len(), 1);
+        assert!(!hits_rect(&moved[0].fill, &label.rect));
+        assert!((moved[0].outline[0].y - 150.0).abs() > 10.0);
+    }
+
+    #[test]
+    fn markers_fit_their_cell_avoid_the_label_and_respect_the_budget() {
+        let layout = sample();
+        let links = [link(1, 3, 0.9, false), link(1, 2, 0.9, false)];
+        let label = Placed {
+            node: 1,
+            lines: Vec::new(),
+            rect: Rect {
+                x0: 100.0,
+                y0: 140.0,
+                x1: 200.0,
+                y1: 160.0,
+            },
+            angle: 0.0,
+        };
+        let markers = place_markers(
+            &layout,
+            &links,
+            std::slice::from_ref(&label),
+            &[],
+            1.0,
+            0.02,
+        );
+        assert_eq!(markers.len(), 3, "a, b and c; d is too thin");
+        for m in &markers {
+            assert!(inset(&layout.cells[m.node].polygon, m.at) >= m.r);
+        }
+        let a = markers.iter().find(|m| m.node == 1).expect("a has one");
+        assert_eq!(a.count, 2);
+        let dx = a.at.x - a.at.x.clamp(100.0, 200.0);
+        let dy = a.at.y - a.at.y.clamp(140.0, 160.0);
+        assert!(dx.hypot(dy) >= a.r, "clear of the label");
+        // A budget of one marker keeps the cell with the most missing links.
+        let one = std::f64::consts::PI * 49.0 / (900.0 * 300.0) * 1.5;
+        let markers = place_markers(&layout, &links, &[], &[], 1.0, one);
+        assert_eq!(markers.iter().map(|m| m.node).collect::<Vec<_>>(), vec![1]);
     }
 }

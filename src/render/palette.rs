@@ -1,7 +1,13 @@
-//! Colours for the pictures: the Tableau 10 / Tableau 20 categorical palettes
-//! and lightness variations in HSL, over the model's [`Rgb`] (parsed once, by
-//! the formats crate). Owns colour arithmetic only; may not know about nodes,
-//! layouts or SVG.
+//! Colours for the pictures: the Tableau 10 / Tableau 20 categorical palettes,
+//! a colour-blind-safe palette (Okabe–Ito), a generated perceptual palette for
+//! any number of groups, the assignment of palette colours to groups so that
+//! adjacent groups never look alike, and lightness variations in HSL, over the
+//! model's [`Rgb`] (parsed once, by the formats crate). Owns colour arithmetic
+//! only; may not know about nodes, layouts or SVG (callers pass group indices
+//! and which pairs touch).
+//!
+//! OKLab (Björn Ottosson, 2020) is written out here, a dozen lines of published
+//! matrices, rather than pulling a colour-science crate for one conversion.
 
 pub use nptreemap_formats::Rgb;
 
@@ -45,6 +51,306 @@ pub const TABLEAU20: [Rgb; 20] = [
     Rgb::new(0x9d, 0x76, 0x60),
     Rgb::new(0xd7, 0xb5, 0xa6), // brown
 ];
+
+/// The Okabe–Ito palette (Okabe & Ito 2008, "Color Universal Design"), safe
+/// for the common colour-vision deficiencies, without its black (labels are
+/// dark) and in its usual order.
+pub const OKABE_ITO: [Rgb; 7] = [
+    Rgb::new(0xe6, 0x9f, 0x00), // orange
+    Rgb::new(0x56, 0xb4, 0xe9), // sky blue
+    Rgb::new(0x00, 0x9e, 0x73), // bluish green
+    Rgb::new(0xf0, 0xe4, 0x42), // yellow
+    Rgb::new(0x00, 0x72, 0xb2), // blue
+    Rgb::new(0xd5, 0x5e, 0x00), // vermillion
+    Rgb::new(0xcc, 0x79, 0xa7), // reddish purple
+];
+
+/// Which categorical palette the top-level groups take.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PaletteKind {
+    /// Tableau 10 up to ten groups, Tableau 20 up to twenty, then a generated
+    /// perceptual palette: every group its own colour.
+    #[default]
+    Tableau,
+    /// Okabe–Ito's seven colours, reused across groups that do not touch.
+    Colorblind,
+}
+
+impl PaletteKind {
+    /// The name used in configs.
+    pub fn name(self) -> &'static str {
+        match self {
+            PaletteKind::Tableau => "tableau",
+            PaletteKind::Colorblind => "colorblind",
+        }
+    }
+
+    /// Parses a config name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [PaletteKind::Tableau, PaletteKind::Colorblind]
+            .into_iter()
+            .find(|k| k.name() == name)
+    }
+}
+
+/// The colours `groups` top-level groups choose from: for [`PaletteKind::Tableau`]
+/// at least `groups` distinct colours; for [`PaletteKind::Colorblind`] always
+/// Okabe–Ito.
+pub fn group_palette(kind: PaletteKind, groups: usize) -> Vec<Rgb> {
+    match kind {
+        PaletteKind::Colorblind => OKABE_ITO.to_vec(),
+        PaletteKind::Tableau if groups <= TABLEAU10.len() => TABLEAU10.to_vec(),
+        PaletteKind::Tableau if groups <= TABLEAU20.len() => TABLEAU20.to_vec(),
+        PaletteKind::Tableau => generated(groups),
+    }
+}
+
+/// Lightness levels of the generated palette, cycled with the hue: mid-tones
+/// on which dark labels with a white halo read, and whose lighter child
+/// shades stay off white.
+const GENERATED_L: [f64; 3] = [0.72, 0.60, 0.82];
+/// Chroma of the generated palette: about Tableau's, muted enough for large areas.
+const GENERATED_C: f64 = 0.11;
+/// Hue step of the generated palette, degrees: the golden angle, so any run
+/// of consecutive colours spreads round the hue circle.
+const GOLDEN_ANGLE: f64 = 137.507_764;
+
+/// `n` distinct colours spread over OKLCH: hues by the golden angle, three
+/// lightness levels, constant chroma (reduced where sRGB cannot show it).
+/// Deterministic; every colour differs from every other.
+pub fn generated(n: usize) -> Vec<Rgb> {
+    let mut out: Vec<Rgb> = Vec::with_capacity(n);
+    let mut k = 0usize;
+    while out.len() < n {
+        let h = (k as f64 * GOLDEN_ANGLE).rem_euclid(360.0);
+        let l = GENERATED_L[k % GENERATED_L.len()];
+        let c = from_oklch(l, GENERATED_C, h);
+        // Rounding to 8 bits can make two close entries equal at large n.
+        if !out.contains(&c) {
+            out.push(c);
+        }
+        k += 1;
+    }
+    out
+}
+
+/// OKLab distance under which two colours count as alike for neighbouring
+/// groups: about the step between Tableau's orange and yellow (0.13), the
+/// palette's closest pair of different hues.
+pub const ALIKE: f64 = 0.1;
+
+/// Colours for groups `0..count` from `palette`, so that groups that touch
+/// (`adjacent` pairs) get colours at least [`ALIKE`] apart whenever the
+/// palette allows, and every group its own colour while the palette has
+/// enough. `order` lists the groups by priority (heaviest first): earlier
+/// groups get earlier palette colours. `fixed[g]` is a group's own colour,
+/// kept as given. Deterministic greedy: each group takes the first colour in
+/// palette order that is unused (or least used) and far enough from its
+/// coloured neighbours, else the one farthest from them.
+pub fn assign(
+    palette: &[Rgb],
+    order: &[usize],
+    adjacent: &[(usize, usize)],
+    fixed: &[Option<Rgb>],
+) -> Vec<Rgb> {
+    let count = fixed.len();
+    let fallback = palette.first().copied().unwrap_or(TABLEAU10[0]);
+    let mut neighbors: Vec<Vec<usize>> = vec![Vec::new(); count];
+    for &(a, b) in adjacent {
+        if a < count && b < count && a != b {
+            neighbors[a].push(b);
+            neighbors[b].push(a);
+        }
+    }
+    let lab: Vec<[f64; 3]> = palette.iter().map(|c| oklab(*c)).collect();
+    let mut colors: Vec<Option<Rgb>> = fixed.to_vec();
+    let mut used = vec![0usize; palette.len()];
+    for (k, c) in palette.iter().enumerate() {
+        used[k] = fixed.iter().filter(|f| **f == Some(*c)).count();
+    }
+    for &g in order.iter().filter(|&&g| g < count) {
+        if colors[g].is_some() {
+            continue;
+        }
+        let near: Vec<[f64; 3]> = neighbors[g]
+            .iter()
+            .filter_map(|&n| colors[n].map(oklab))
+            .collect();
+        let gap = |k: usize| {
+            near.iter()
+                .map(|n| distance_lab(lab[k], *n))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let least = used.iter().copied().min().unwrap_or(0);
+        // While the palette has a colour for every group, never reuse one.
+        let fresh = |k: usize| used[k] == least;
+        let pick = (0..palette.len())
+            .find(|&k| fresh(k) && gap(k) >= ALIKE)
+            .or_else(|| {
+                (palette.len() >= count)
+                    .then(|| {
+                        (0..palette.len())
+                            .filter(|&k| fresh(k))
+                            .max_by(|&a, &b| gap(a).total_cmp(&gap(b)).then(b.cmp(&a)))
+                    })
+                    .flatten()
+            })
+            .or_else(|| (0..palette.len()).find(|&k| gap(k) >= ALIKE))
+            .or_else(|| {
+                (0..palette.len()).max_by(|&a, &b| gap(a).total_cmp(&gap(b)).then(b.cmp(&a)))
+            });
+        colors[g] = Some(match pick {
+            Some(k) => {
+                used[k] += 1;
+                palette[k]
+            }
+            None => fallback,
+        });
+    }
+    let mut colors: Vec<Rgb> = colors.into_iter().map(|c| c.unwrap_or(fallback)).collect();
+    improve(&mut colors, palette, &neighbors, fixed);
+    colors
+}
+
+/// [`badness`]'s score.
+type Badness = (usize, f64);
+
+/// Adjacent pairs that look alike, and the smallest distance between
+/// adjacent colours: lower is better, in that order.
+fn badness(colors: &[Rgb], neighbors: &[Vec<usize>]) -> (usize, f64) {
+    let mut alike = 0;
+    let mut least = f64::INFINITY;
+    for (a, ns) in neighbors.iter().enumerate() {
+        for &b in ns.iter().filter(|&&b| b > a) {
+            let d = distance(colors[a], colors[b]);
+            alike += usize::from(d < ALIKE);
+            least = least.min(d);
+        }
+    }
+    (alike, -least)
+}
+
+/// Local search after the greedy pass: for groups in an alike adjacent pair,
+/// try every swap with another group and every unused palette colour (any
+/// palette colour when the palette is shorter than the groups), keeping a
+/// change that lowers [`badness`]. Deterministic; stops when nothing helps.
+fn improve(colors: &mut [Rgb], palette: &[Rgb], neighbors: &[Vec<usize>], fixed: &[Option<Rgb>]) {
+    let unique = palette.len() >= colors.len();
+    let better = |a: (usize, f64), b: (usize, f64)| a.0 < b.0 || (a.0 == b.0 && a.1 < b.1 - 1e-12);
+    for _round in 0..64 {
+        let current = badness(colors, neighbors);
+        if current.0 == 0 {
+            return;
+        }
+        let mut best: Option<(Badness, Vec<(usize, Rgb)>)> = None;
+        let bad: Vec<usize> = (0..colors.len())
+            .filter(|&g| fixed[g].is_none())
+            .filter(|&g| {
+                neighbors[g]
+                    .iter()
+                    .any(|&n| distance(colors[g], colors[n]) < ALIKE)
+            })
+            .collect();
+        for &g in &bad {
+            let mut trials: Vec<Vec<(usize, Rgb)>> = Vec::new();
+            for h in (0..colors.len()).filter(|&h| h != g && fixed[h].is_none()) {
+                trials.push(vec![(g, colors[h]), (h, colors[g])]);
+            }
+            for &c in palette {
+                if !unique || !colors.contains(&c) {
+                    trials.push(vec![(g, c)]);
+                }
+            }
+            for change in trials {
+                let saved: Vec<(usize, Rgb)> =
+                    change.iter().map(|&(i, _)| (i, colors[i])).collect();
+                for &(i, c) in &change {
+                    colors[i] = c;
+                }
+                let score = badness(colors, neighbors);
+                for &(i, c) in &saved {
+                    colors[i] = c;
+                }
+                if better(score, best.as_ref().map_or(current, |b| b.0)) {
+                    best = Some((score, change));
+                }
+            }
+        }
+        match best {
+            Some((_, change)) => {
+                for (i, c) in change {
+                    colors[i] = c;
+                }
+            }
+            None => return,
+        }
+    }
+}
+
+/// sRGB (8 bits per channel) to OKLab `[L, a, b]`.
+pub fn oklab(c: Rgb) -> [f64; 3] {
+    let lin = |c: u8| {
+        let c = f64::from(c) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let (r, g, b) = (lin(c.r), lin(c.g), lin(c.b));
+    let l = (0.412_221_470_8 * r + 0.536_332_536_3 * g + 0.051_445_992_9 * b).cbrt();
+    let m = (0.211_903_498_2 * r + 0.680_699_545_1 * g + 0.107_396_956_6 * b).cbrt();
+    let s = (0.088_302_461_9 * r + 0.281_718_837_6 * g + 0.629_978_700_5 * b).cbrt();
+    [
+        0.210_454_255_3 * l + 0.793_617_785_0 * m - 0.004_072_046_8 * s,
+        1.977_998_495_1 * l - 2.428_592_205_0 * m + 0.450_593_709_9 * s,
+        0.025_904_037_1 * l + 0.782_771_766_2 * m - 0.808_675_766_0 * s,
+    ]
+}
+
+/// OKLab back to linear sRGB, unclamped.
+fn oklab_to_linear([l, a, b]: [f64; 3]) -> [f64; 3] {
+    let l_ = (l + 0.396_337_777_4 * a + 0.215_803_757_3 * b).powi(3);
+    let m_ = (l - 0.105_561_345_8 * a - 0.063_854_172_8 * b).powi(3);
+    let s_ = (l - 0.089_484_177_5 * a - 1.291_485_548_0 * b).powi(3);
+    [
+        4.076_741_662_1 * l_ - 3.307_711_591_3 * m_ + 0.230_969_929_2 * s_,
+        -1.268_438_004_6 * l_ + 2.609_757_401_1 * m_ - 0.341_319_396_5 * s_,
+        -0.004_196_086_3 * l_ - 0.703_418_614_7 * m_ + 1.707_614_701_0 * s_,
+    ]
+}
+
+/// The colour of OKLCH lightness `l`, chroma `c` and hue `h` (degrees), with
+/// the chroma reduced until sRGB can show it.
+pub fn from_oklch(l: f64, c: f64, h: f64) -> Rgb {
+    let (sin, cos) = h.to_radians().sin_cos();
+    let mut chroma = c;
+    loop {
+        let rgb = oklab_to_linear([l, chroma * cos, chroma * sin]);
+        if rgb.iter().all(|v| (-1e-9..=1.0 + 1e-9).contains(v)) || chroma <= 0.0 {
+            let enc = |v: f64| {
+                let v = v.clamp(0.0, 1.0);
+                let s = if v <= 0.003_130_8 {
+                    12.92 * v
+                } else {
+                    1.055 * v.powf(1.0 / 2.4) - 0.055
+                };
+                (s * 255.0).round().clamp(0.0, 255.0) as u8
+            };
+            return Rgb::new(enc(rgb[0]), enc(rgb[1]), enc(rgb[2]));
+        }
+        chroma = (chroma - 0.005).max(0.0);
+    }
+}
+
+/// Euclidean distance in OKLab: about 0.02 is a just noticeable difference.
+pub fn distance(a: Rgb, b: Rgb) -> f64 {
+    distance_lab(oklab(a), oklab(b))
+}
+
+fn distance_lab(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
 
 /// Lightness offset (see [`lighten`]) of the darkest sibling in [`child_shade`].
 const SHADE_DARKEST: f64 = -0.18;
@@ -151,16 +457,6 @@ pub fn child_shade(parent: Rgb, index: usize, count: usize) -> Rgb {
     lighten(parent, SHADE_DARKEST + t * (SHADE_LIGHTEST - SHADE_DARKEST))
 }
 
-/// The categorical palette for `groups` top-level groups: Tableau 10 up to ten
-/// groups, Tableau 20 above (colours repeat past twenty).
-pub fn categorical(groups: usize) -> &'static [Rgb] {
-    if groups <= TABLEAU10.len() {
-        &TABLEAU10
-    } else {
-        &TABLEAU20
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -185,8 +481,96 @@ mod tests {
             "#4e79a7 #f28e2b #e15759 #76b7b2 #59a14f #edc948 #b07aa1 #ff9da7 #9c755f #bab0ac"
         );
         assert_eq!(TABLEAU20.len(), 20);
-        assert_eq!(categorical(10).len(), 10);
-        assert_eq!(categorical(11).len(), 20);
+        assert_eq!(group_palette(PaletteKind::Tableau, 10).len(), 10);
+        assert_eq!(group_palette(PaletteKind::Tableau, 11).len(), 20);
+        assert_eq!(group_palette(PaletteKind::Tableau, 154).len(), 154);
+        assert_eq!(
+            group_palette(PaletteKind::Colorblind, 30),
+            OKABE_ITO.to_vec()
+        );
+    }
+
+    #[test]
+    fn oklab_matches_published_values() {
+        // Ottosson's reference: white is L = 1, a = b = 0; sRGB red is
+        // (0.628, 0.225, 0.126).
+        let w = oklab(WHITE);
+        assert!((w[0] - 1.0).abs() < 1e-3 && w[1].abs() < 1e-3 && w[2].abs() < 1e-3);
+        let r = oklab(Rgb::new(255, 0, 0));
+        assert!(
+            (r[0] - 0.628).abs() < 1e-3
+                && (r[1] - 0.2249).abs() < 1e-3
+                && (r[2] - 0.1258).abs() < 1e-3
+        );
+        // Round trip through OKLCH.
+        for c in TABLEAU20 {
+            let [l, a, b] = oklab(c);
+            let back = from_oklch(l, a.hypot(b), b.atan2(a).to_degrees());
+            assert!(distance(back, c) < 0.01, "{c} {back}");
+        }
+    }
+
+    #[test]
+    fn generated_colors_are_distinct_and_mid_tone() {
+        let colors = generated(300);
+        let mut unique = colors.clone();
+        unique.sort_by_key(|c| c.to_hex());
+        unique.dedup();
+        assert_eq!(unique.len(), 300);
+        for c in &colors {
+            let l = oklab(*c)[0];
+            assert!((0.55..0.85).contains(&l), "{c}: L {l}");
+        }
+        assert_eq!(
+            generated(5),
+            generated(300)[..5].to_vec(),
+            "a prefix is stable"
+        );
+    }
+
+    #[test]
+    fn adjacent_groups_get_distant_colors() {
+        // A wheel: hub 0 touches 1..=12, each rim group touches the next.
+        let n = 13;
+        let mut adjacent: Vec<(usize, usize)> = (1..n).map(|i| (0, i)).collect();
+        adjacent.extend((1..n).map(|i| (i, if i + 1 < n { i + 1 } else { 1 })));
+        let order: Vec<usize> = (0..n).collect();
+        for kind in [PaletteKind::Tableau, PaletteKind::Colorblind] {
+            let palette = group_palette(kind, n);
+            let colors = assign(&palette, &order, &adjacent, &vec![None; n]);
+            for &(a, b) in &adjacent {
+                assert!(distance(colors[a], colors[b]) >= ALIKE, "{kind:?}: {a} {b}");
+            }
+            if kind == PaletteKind::Tableau {
+                let mut unique = colors.clone();
+                unique.sort_by_key(|c| c.to_hex());
+                unique.dedup();
+                assert_eq!(unique.len(), n, "every group its own colour");
+            }
+            if kind == PaletteKind::Tableau {
+                let mut unique = colors.clone();
+                unique.sort_by_key(|c| c.to_hex());
+                unique.dedup();
+                assert_eq!(unique.len(), n, "every group its own colour");
+                assert_eq!(colors[0], TABLEAU20[0], "the first group, the first colour");
+            }
+        }
+        // Ten groups, Tableau 10: every colour once, even where the last
+        // free colour (grey) is close to a neighbour's (teal): a swap fixes it.
+        let mut ring: Vec<(usize, usize)> = (0..10).map(|i| (i, (i + 1) % 10)).collect();
+        ring.push((3, 9));
+        let colors = assign(&TABLEAU10, &(0..10).collect::<Vec<_>>(), &ring, &[None; 10]);
+        let mut unique = colors.clone();
+        unique.sort_by_key(|c| c.to_hex());
+        unique.dedup();
+        assert_eq!(unique.len(), 10);
+        for &(a, b) in &ring {
+            assert!(distance(colors[a], colors[b]) >= ALIKE, "{a} {b}");
+        }
+        // A group's own colour is kept.
+        let own = Rgb::new(1, 2, 3);
+        let colors = assign(&TABLEAU10, &[0, 1], &[(0, 1)], &[Some(own), None]);
+        assert_eq!(colors[0], own);
     }
 
     #[test]

@@ -9,10 +9,14 @@
 
 use nptreemap_formats::Dataset;
 
+use super::labels::{display_name, place_groups, Placed};
 use super::legend::{legend, LegendItem};
-use super::overlay::{overlay, tab_edge, Link, OverlayStyle};
+use super::overlay::{marks_svg, place_markers, place_tabs, tabs_svg, Link, OverlayStyle};
 use super::palette::Rgb;
-use super::svg::{cell_colors, escape, num, push_cells, push_labels, SvgStyle};
+use super::svg::{
+    cell_colors, escape, leaf_labels, num, push_cells, push_labels, push_text, stroke_width,
+    SvgStyle,
+};
 use crate::layout::{Computed, Layout};
 
 /// How the picture looks, beyond the geometry of its layout.
@@ -31,8 +35,40 @@ pub struct Style {
     /// explaining the tab and unlinked glyphs when the picture has them.
     /// Default: `true` (drawn only when there is something to explain).
     pub legend: bool,
+    /// The order of the legend's groups. Default: by weight.
+    pub legend_order: LegendOrder,
     /// A line around the root outline; `None` draws none. Default: `None`.
     pub border: Option<Border>,
+}
+
+/// The order of the legend's groups.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LegendOrder {
+    /// Heaviest first.
+    #[default]
+    Weight,
+    /// As in the data.
+    Data,
+    /// As in `render.labels.names`, the groups it does not name after them by weight.
+    Names,
+}
+
+impl LegendOrder {
+    /// The name used in configs.
+    pub fn name(self) -> &'static str {
+        match self {
+            LegendOrder::Weight => "weight",
+            LegendOrder::Data => "data",
+            LegendOrder::Names => "names",
+        }
+    }
+
+    /// Parses a config name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [LegendOrder::Weight, LegendOrder::Data, LegendOrder::Names]
+            .into_iter()
+            .find(|o| o.name() == name)
+    }
 }
 
 /// The line drawn around the root outline.
@@ -52,13 +88,14 @@ impl Default for Style {
             tabs: true,
             title: None,
             legend: true,
+            legend_order: LegendOrder::default(),
             border: None,
         }
     }
 }
 
 /// Title font size per unit of canvas scale (see [`unit`]): 28 px on a
-/// 1,000 × 1,000 canvas, a heading next to 6–24 px labels.
+/// 1,000 × 1,000 canvas, a heading next to 9–24 px labels.
 const TITLE_EM: f64 = 28.0;
 /// Space around the title and the legend, canvas units per unit of scale.
 const PAD: f64 = 16.0;
@@ -66,21 +103,19 @@ const PAD: f64 = 16.0;
 /// Canvas scale: 1 on a 1,000 × 1,000 canvas, so text and padding grow with
 /// the map instead of vanishing on large canvases; never below 0.75, so the
 /// legend of a small picture stays readable (10.5 px text at 400 × 400).
-fn unit(layout: &Layout) -> f64 {
+pub(crate) fn unit(layout: &Layout) -> f64 {
     ((layout.canvas.width * layout.canvas.height).sqrt() / 1000.0).max(MIN_UNIT)
 }
 
 /// Smallest canvas scale for the frame's text (see [`unit`]).
 const MIN_UNIT: f64 = 0.75;
 
-/// The SVG picture of a finished computation: the treemap with, when there are
-/// constraints, the interlocking tabs and unrealised-link markers of its
-/// deepest level (where the paper draws them, method-reference §8.2–8.4),
-/// framed as `style` says. Identical input gives identical bytes.
-pub fn picture(computed: &Computed, style: &Style) -> String {
-    let (dataset, layout) = (&computed.dataset, &computed.layout);
+/// The constraint links the picture draws: those of the deepest level (where
+/// the paper draws them, method-reference §8.2–8.4).
+fn deepest_links(computed: &Computed) -> Vec<Link> {
+    let dataset = &computed.dataset;
     let deepest = dataset.max_depth();
-    let links: Vec<Link> = computed
+    computed
         .constraints
         .iter()
         .zip(&computed.realized)
@@ -91,30 +126,97 @@ pub fn picture(computed: &Computed, style: &Style) -> String {
             similarity: c.similarity,
             realized: *r,
         })
-        .collect();
-    compose(dataset, layout, &links, style)
+        .collect()
+}
+
+/// The fill colour of every node of the picture (see [`cell_colors`]).
+pub(crate) fn colors(computed: &Computed, style: &Style) -> Vec<Option<Rgb>> {
+    let pairs = computed.adjacency().get(1).map_or(&[][..], |a| a.pairs());
+    cell_colors(&computed.dataset, pairs, style.cells.palette)
+}
+
+/// The SVG picture of a finished computation: the treemap with, when there are
+/// constraints, the interlocking tabs and unrealised-link markers of its
+/// deepest level, framed as `style` says. Identical input gives identical bytes.
+pub fn picture(computed: &Computed, style: &Style) -> String {
+    let pairs = computed.adjacency().get(1).map_or(&[][..], |a| a.pairs());
+    compose(
+        &computed.dataset,
+        &computed.layout,
+        &deepest_links(computed),
+        pairs,
+        style,
+    )
 }
 
 /// Draws the picture of `layout` (cells indexed like `dataset`) with the
-/// constraint `links` of its deepest level: the tabs under the labels, the
-/// rest over them. Identical input gives identical bytes.
-pub fn compose(dataset: &Dataset, layout: &Layout, links: &[Link], style: &Style) -> String {
+/// constraint `links` of its deepest level; `adjacent` are the top-level
+/// groups that share an edge (node index pairs), for their colours. Labels are
+/// placed first, tabs clear of them, markers clear of both. Identical input
+/// gives identical bytes.
+pub fn compose(
+    dataset: &Dataset,
+    layout: &Layout,
+    links: &[Link],
+    adjacent: &[(usize, usize)],
+    style: &Style,
+) -> String {
     let (cw, ch) = (layout.canvas.width, layout.canvas.height);
     let u = unit(layout);
-    let shown: Vec<Link> = links
-        .iter()
-        .filter(|l| style.tabs || !l.realized)
-        .cloned()
-        .collect();
+    let colors = cell_colors(dataset, adjacent, style.cells.palette);
+    let labels = leaf_labels(dataset, layout, &style.cells.labels);
+    let groups = if style.cells.labels.groups {
+        place_groups(dataset, layout, &style.cells.labels.names, &labels, u)
+    } else {
+        Vec::new()
+    };
+    let edge_width = |a: usize, b: usize| {
+        // The outline between two cells is the one of their lowest common
+        // ancestor's children.
+        let (mut x, mut y) = (a, b);
+        while dataset.node(x).depth > dataset.node(y).depth {
+            x = dataset.node(x).parent.unwrap_or(x);
+        }
+        while dataset.node(y).depth > dataset.node(x).depth {
+            y = dataset.node(y).parent.unwrap_or(y);
+        }
+        while x != y {
+            match (dataset.node(x).parent, dataset.node(y).parent) {
+                (Some(px), Some(py)) => {
+                    x = px;
+                    y = py;
+                }
+                _ => break,
+            }
+        }
+        stroke_width(style.cells.stroke_width, dataset.node(x).depth + 1)
+    };
+    let tabs = if style.tabs {
+        place_tabs(layout, links, &labels, u, &edge_width)
+    } else {
+        Vec::new()
+    };
+    let markers = if style.overlay.unlinked_markers {
+        place_markers(layout, links, &labels, &tabs, u, style.overlay.marker_share)
+    } else {
+        Vec::new()
+    };
 
     let title = style
         .title
         .as_deref()
-        .filter(|t| !t.trim().is_empty())
+        .map(super::labels::clean)
+        .filter(|t| !t.is_empty())
         .map(|t| (t, TITLE_EM * u));
-    let top = title.map_or(0.0, |(_, size)| size + 2.0 * PAD * u);
+    let top = title.as_ref().map_or(0.0, |(_, size)| size + 2.0 * PAD * u);
     let items = if style.legend {
-        legend_items(dataset, layout, &shown, style)
+        legend_items(
+            dataset,
+            &colors,
+            !tabs.is_empty(),
+            !markers.is_empty(),
+            style,
+        )
     } else {
         Vec::new()
     };
@@ -123,7 +225,7 @@ pub fn compose(dataset: &Dataset, layout: &Layout, links: &[Link], style: &Style
 
     let width = style.cells.width.unwrap_or(cw);
     let height = style.cells.height.unwrap_or(width * total / cw);
-    let mut out = String::with_capacity(1024 + 200 * dataset.len());
+    let mut out = String::with_capacity(1024 + 300 * dataset.len());
     out.push_str(&format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" viewBox=\"0 {} {} {}\">\n",
         num(width),
@@ -134,33 +236,33 @@ pub fn compose(dataset: &Dataset, layout: &Layout, links: &[Link], style: &Style
     ));
     if let Some(bg) = style.cells.background {
         out.push_str(&format!(
-            "<rect y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{bg}\"/>\n",
+            "<rect class=\"np-background\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{bg}\"/>\n",
             num(-top),
             num(cw),
             num(total)
         ));
     }
-    if let Some((text, size)) = title {
+    if let Some((text, size)) = &title {
         out.push_str(&format!(
             "<text class=\"np-title\" x=\"{}\" y=\"{}\" font-family=\"{}\" font-size=\"{}\" font-weight=\"bold\" fill=\"{}\">{}</text>\n",
             num(PAD * u),
             num(-PAD * u - 0.25 * size),
             escape(&style.cells.font_family),
-            num(size),
+            num(*size),
             style.cells.text_color,
             escape(text)
         ));
     }
-    push_cells(&mut out, dataset, layout, &style.cells);
-    // Tabs under the labels (they sit on edges a fitted label may reach),
-    // links and counts over them.
-    let layers = (!shown.is_empty()).then(|| overlay(dataset, layout, &shown, &style.overlay));
-    if let Some(layers) = &layers {
-        out.push_str(&layers.tabs);
+    push_cells(&mut out, dataset, layout, &style.cells, &colors);
+    // Tabs on the edges, group names across the groups, then the leaf labels
+    // over both, the markers last (they never overlap a label).
+    if !tabs.is_empty() {
+        out.push_str(&tabs_svg(dataset, &tabs, &colors, style.cells.stroke));
     }
-    push_labels(&mut out, dataset, layout, &style.cells);
-    if let Some(layers) = &layers {
-        out.push_str(&layers.marks);
+    push_group_labels(&mut out, &groups, &style.cells);
+    push_labels(&mut out, &labels, &style.cells);
+    if !links.is_empty() {
+        out.push_str(&marks_svg(layout, links, &markers, &style.overlay, u));
     }
     if let Some(border) = style
         .border
@@ -187,44 +289,101 @@ pub fn compose(dataset: &Dataset, layout: &Layout, links: &[Link], style: &Style
     out
 }
 
-/// What the legend lists: the top-level groups (when they have children of
-/// their own; otherwise every cell is labelled already), then a key for each
-/// glyph the overlay actually draws.
+/// Opacity of the group names: large and light, under the leaf labels.
+const GROUP_OPACITY: f64 = 0.3;
+
+/// Appends the group names in their own group, drawn without a halo.
+fn push_group_labels(out: &mut String, groups: &[Placed], style: &SvgStyle) {
+    if groups.is_empty() {
+        return;
+    }
+    out.push_str(&format!(
+        "<g class=\"np-group-labels\" font-family=\"{}\" text-anchor=\"middle\" fill=\"{}\" fill-opacity=\"{}\" pointer-events=\"none\">\n",
+        escape(&style.font_family),
+        style.text_color,
+        num(GROUP_OPACITY)
+    ));
+    for g in groups {
+        push_text(out, g, false);
+    }
+    out.push_str("</g>\n");
+}
+
+/// What the legend lists: a key for each glyph the picture draws, then the
+/// top-level groups (when they have children of their own; otherwise every
+/// cell is labelled already) in the style's order. Two groups with the same
+/// name are told apart by their ids.
 fn legend_items(
     dataset: &Dataset,
-    layout: &Layout,
-    links: &[Link],
+    colors: &[Option<Rgb>],
+    tabs: bool,
+    markers: bool,
     style: &Style,
 ) -> Vec<LegendItem> {
     let mut items = Vec::new();
+    if tabs {
+        items.push(LegendItem::Tab);
+    }
+    if markers {
+        items.push(LegendItem::Unlinked);
+    }
     let root = dataset.node(dataset.root());
     let groups_have_children = root
         .children
         .iter()
         .any(|&c| !dataset.node(c).children.is_empty());
-    if root.children.len() >= 2 && groups_have_children {
-        let colors = cell_colors(dataset);
-        for &c in &root.children {
-            let label = &dataset.node(c).label;
-            // Virtual nodes (issue 3's depth padding) repeat their child's label
-            // and colour; the legend names only groups people gave.
-            if dataset.node(c).is_virtual {
-                continue;
-            }
-            items.push(LegendItem::Swatch {
-                color: colors[c].unwrap_or(super::palette::TABLEAU10[0]),
-                label: label.clone(),
-            });
+    if root.children.len() < 2 || !groups_have_children {
+        return items;
+    }
+    let names = &style.cells.labels.names;
+    // Virtual nodes (issue 3's depth padding) repeat their child's label
+    // and colour; the legend names only groups people gave.
+    let mut groups: Vec<usize> = root
+        .children
+        .iter()
+        .copied()
+        .filter(|&c| !dataset.node(c).is_virtual)
+        .collect();
+    let by_weight = |a: &usize, b: &usize| {
+        dataset
+            .node(*b)
+            .value
+            .total_cmp(&dataset.node(*a).value)
+            .then(a.cmp(b))
+    };
+    match style.legend_order {
+        LegendOrder::Data => {}
+        LegendOrder::Weight => groups.sort_by(by_weight),
+        LegendOrder::Names => {
+            let rank = |i: usize| {
+                let n = dataset.node(i);
+                style
+                    .cells
+                    .labels
+                    .names_order
+                    .iter()
+                    .position(|k| *k == n.id || *k == n.label)
+                    .unwrap_or(usize::MAX)
+            };
+            groups.sort_by(|a, b| rank(*a).cmp(&rank(*b)).then(by_weight(a, b)));
         }
     }
-    if links
+    let labels: Vec<String> = groups
         .iter()
-        .any(|l| l.realized && tab_edge(layout, l).is_some())
-    {
-        items.push(LegendItem::Tab);
-    }
-    if style.overlay.unlinked_markers && links.iter().any(|l| !l.realized) {
-        items.push(LegendItem::Unlinked);
+        .map(|&g| display_name(dataset, g, names))
+        .collect();
+    for (k, &g) in groups.iter().enumerate() {
+        let twice = labels.iter().filter(|l| **l == labels[k]).count() > 1;
+        let id = &dataset.node(g).id;
+        let label = if twice && *id != labels[k] {
+            format!("{} ({})", labels[k], super::labels::clean(id))
+        } else {
+            labels[k].clone()
+        };
+        items.push(LegendItem::Swatch {
+            color: colors[g].unwrap_or(super::palette::TABLEAU10[0]),
+            label,
+        });
     }
     items
 }
@@ -250,6 +409,7 @@ mod tests {
             &ds,
             &layout,
             &[],
+            &[],
             &Style {
                 legend: false,
                 ..Style::default()
@@ -259,6 +419,7 @@ mod tests {
         let framed = compose(
             &ds,
             &layout,
+            &[],
             &[],
             &Style {
                 title: Some("World <b>".to_string()),
@@ -295,13 +456,13 @@ mod tests {
             },
             ..Style::default()
         };
-        let s = compose(&ds, &layout, &[], &style);
+        let s = compose(&ds, &layout, &[], &[], &style);
         assert!(s.contains("class=\"np-border\""));
         assert!(s.contains("stroke=\"#333333\" stroke-width=\"2.00\""));
-        assert!(!s.contains("<rect y="), "no background rectangle");
-        let s = compose(&ds, &layout, &[], &Style::default());
+        assert!(!s.contains("np-background"), "no background rectangle");
+        let s = compose(&ds, &layout, &[], &[], &Style::default());
         assert!(!s.contains("np-border"));
-        assert!(s.contains("<rect y=\"0.00\" width=\"400.00\""));
+        assert!(s.contains("<rect class=\"np-background\" y=\"0.00\" width=\"400.00\""));
     }
 
     #[test]
@@ -314,13 +475,20 @@ mod tests {
             similarity: 0.9,
             realized: true,
         };
-        let with = compose(&ds, &layout, std::slice::from_ref(&link), &Style::default());
+        let with = compose(
+            &ds,
+            &layout,
+            std::slice::from_ref(&link),
+            &[],
+            &Style::default(),
+        );
         assert_eq!(with.matches("class=\"np-tab\"").count(), 1);
         assert!(with.contains("class=\"np-legend-tab\""));
         let without = compose(
             &ds,
             &layout,
             &[link],
+            &[],
             &Style {
                 tabs: false,
                 ..Style::default()
@@ -337,8 +505,8 @@ mod tests {
             title: Some("T & <t>".to_string()),
             ..Style::default()
         };
-        let a = compose(&ds, &layout, &[], &style);
-        assert_eq!(a, compose(&ds, &layout, &[], &style));
+        let a = compose(&ds, &layout, &[], &[], &style);
+        assert_eq!(a, compose(&ds, &layout, &[], &[], &style));
         resvg::usvg::Tree::from_str(&a, &resvg::usvg::Options::default()).expect("valid SVG");
     }
 }

@@ -1,30 +1,19 @@
 //! The SVG picture of a finished layout: filled leaf cells coloured by top-level
-//! group, white outlines thicker for higher levels, and labels fitted into leaf
-//! cells. Owns the picture's structure, colours per node and label placement; may
-//! not compute or alter geometry, fail, or do I/O. Output is deterministic: fixed
-//! two-decimal coordinates, nodes in dataset order.
+//! group (colours assigned from which groups touch), white outlines thicker for
+//! higher levels, and the SVG text of placed labels ([`super::labels`] decides
+//! where). Owns the picture's structure and colours per node; may not compute or
+//! alter geometry, fail, or do I/O. Output is deterministic: fixed two-decimal
+//! coordinates, nodes in dataset order.
 
 use nptreemap_formats::Dataset;
 
-use super::palette::{self, Rgb, WHITE};
-use crate::geom::{cross, ConvexPolygon, Point};
+use super::labels::{display_name, format_value, place_leaf, LabelStyle, Placed};
+use super::palette::{self, PaletteKind, Rgb, WHITE};
+use crate::geom::ConvexPolygon;
 use crate::layout::Layout;
 
-/// Text width per character, in font sizes: a generic sans-serif estimate (the
-/// mean advance of Latin text in Helvetica/Arial/DejaVu Sans is 0.5–0.6 em).
-/// Erring wide keeps labels inside their cells.
-const CHAR_WIDTH_EM: f64 = 0.6;
-/// Height of the box a label must fit in, in font sizes (ascenders to descenders
-/// plus a little air).
-const LINE_HEIGHT_EM: f64 = 1.2;
-/// Free space left and right of a label, in font sizes.
-const SIDE_PAD_EM: f64 = 0.3;
-/// Baseline offset below the box centre, in font sizes: half the cap height of
-/// common sans-serif fonts, so capitals and lower case look centred. Explicit
-/// rather than `dominant-baseline`, which renderers support unevenly.
-const BASELINE_SHIFT_EM: f64 = 0.35;
 /// Halo stroke width around label glyphs, in font sizes (half of it shows).
-const HALO_EM: f64 = 0.2;
+pub(crate) const HALO_EM: f64 = 0.2;
 /// Each hierarchy level down draws its outlines this much thinner.
 const STROKE_DECAY: f64 = 0.5;
 /// Thinnest outline, canvas units: thinner lines vanish in anti-aliasing.
@@ -47,13 +36,10 @@ pub struct SvgStyle {
     /// Outline width, canvas units, between top-level groups; every level down
     /// halves it, never below 0.5 (or this value, if smaller). Default: `3.0`.
     pub stroke_width: f64,
-    /// Whether leaves get text labels. Default: `true`.
-    pub labels: bool,
-    /// Labels that would need a smaller font size (canvas units) are left out.
-    /// Default: `6.0`.
-    pub min_font_size: f64,
-    /// Largest label font size, canvas units. Default: `24.0`.
-    pub max_font_size: f64,
+    /// Leaf labels and group names: whether, how small, with values, names.
+    pub labels: LabelStyle,
+    /// The top-level groups' palette. Default: Tableau.
+    pub palette: PaletteKind,
     /// CSS font-family list for labels (kept free of quotes). Default:
     /// `Helvetica, Arial, DejaVu Sans, sans-serif`, a generic stack; PNG output
     /// pins its own font.
@@ -71,9 +57,8 @@ impl Default for SvgStyle {
             background: Some(WHITE),
             stroke: WHITE,
             stroke_width: 3.0,
-            labels: true,
-            min_font_size: 6.0,
-            max_font_size: 24.0,
+            labels: LabelStyle::default(),
+            palette: PaletteKind::default(),
             font_family: "Helvetica, Arial, DejaVu Sans, sans-serif".to_owned(),
             text_color: Rgb::new(0x1a, 0x1a, 0x1a),
         }
@@ -111,17 +96,26 @@ pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
         ));
     }
 
-    push_cells(&mut out, dataset, layout, style);
-    push_labels(&mut out, dataset, layout, style);
+    let root = dataset.node(dataset.root());
+    let adjacency = layout.level_adjacency(&root.children);
+    let colors = cell_colors(dataset, adjacency.pairs(), style.palette);
+    push_cells(&mut out, dataset, layout, style, &colors);
+    let labels = leaf_labels(dataset, layout, &style.labels);
+    push_labels(&mut out, &labels, style);
     out.push_str("</svg>\n");
     out
 }
 
 /// Appends every drawn cell, deepest level first, each level in its own group
 /// with its outline width (see [`svg`]).
-pub(crate) fn push_cells(out: &mut String, dataset: &Dataset, layout: &Layout, style: &SvgStyle) {
+pub(crate) fn push_cells(
+    out: &mut String,
+    dataset: &Dataset,
+    layout: &Layout,
+    style: &SvgStyle,
+    colors: &[Option<Rgb>],
+) {
     let count = dataset.len().min(layout.cells.len());
-    let colors = cell_colors(dataset);
     // Node indices per depth, each list in dataset order.
     let mut by_depth: Vec<Vec<usize>> = vec![Vec::new(); dataset.max_depth() + 1];
     for i in (0..count).filter(|&i| is_drawn(dataset, i)) {
@@ -133,7 +127,7 @@ pub(crate) fn push_cells(out: &mut String, dataset: &Dataset, layout: &Layout, s
     }
 
     out.push_str(&format!(
-        "<g stroke=\"{}\" stroke-linejoin=\"round\">\n",
+        "<g class=\"np-cells\" stroke=\"{}\" stroke-linejoin=\"round\">\n",
         style.stroke
     ));
     for (depth, nodes) in by_depth.iter().enumerate().rev() {
@@ -175,34 +169,58 @@ fn is_drawn(dataset: &Dataset, i: usize) -> bool {
 }
 
 /// Outline width at `depth`: `top` for depth 0 and 1, then decaying per level.
-fn stroke_width(top: f64, depth: usize) -> f64 {
+pub(crate) fn stroke_width(top: f64, depth: usize) -> f64 {
     let steps = depth.saturating_sub(1).min(64) as i32;
     (top * STROKE_DECAY.powi(steps)).max(top.min(MIN_STROKE_WIDTH))
 }
 
 /// Fill colour of every node, indexed like the dataset. A node's own valid
-/// `color` always wins; otherwise top-level groups take the categorical palette
-/// by sibling index and deeper nodes a lightness variation of their parent's
-/// colour ([`palette::child_shade`]). The root has none unless it is a leaf.
-pub(crate) fn cell_colors(dataset: &Dataset) -> Vec<Option<Rgb>> {
+/// `color` always wins; otherwise the top-level groups take `palette`'s
+/// colours, assigned heaviest first so that groups sharing an edge
+/// (`adjacent`, pairs of node indices) never look alike
+/// ([`palette::assign`]), and deeper nodes a lightness variation of their
+/// parent's colour ([`palette::child_shade`]). The root has none unless it is
+/// a leaf.
+pub(crate) fn cell_colors(
+    dataset: &Dataset,
+    adjacent: &[(usize, usize)],
+    palette: PaletteKind,
+) -> Vec<Option<Rgb>> {
     let own = |i: usize| dataset.node(i).color;
     let mut colors: Vec<Option<Rgb>> = vec![None; dataset.len()];
     let root = dataset.root();
     if root < dataset.len() && dataset.is_leaf(root) {
         colors[root] = Some(own(root).unwrap_or(palette::TABLEAU10[0]));
     }
+    let groups = &dataset.node(root).children;
+    let position = |i: usize| groups.iter().position(|&g| g == i);
+    let mut order: Vec<usize> = (0..groups.len()).collect();
+    order.sort_by(|&a, &b| {
+        let (va, vb) = (dataset.node(groups[a]).value, dataset.node(groups[b]).value);
+        vb.total_cmp(&va).then(a.cmp(&b))
+    });
+    let pairs: Vec<(usize, usize)> = adjacent
+        .iter()
+        .filter_map(|&(a, b)| Some((position(a)?, position(b)?)))
+        .collect();
+    let fixed: Vec<Option<Rgb>> = groups.iter().map(|&g| own(g)).collect();
+    let top = palette::assign(
+        &palette::group_palette(palette, groups.len()),
+        &order,
+        &pairs,
+        &fixed,
+    );
     // Breadth-first order puts every parent before its children, so one pass
     // sees each parent's colour settled before it is varied.
     for (p, parent) in dataset.nodes().iter().enumerate() {
         let n = parent.children.len();
-        let groups = palette::categorical(n);
         let base = colors[p].unwrap_or(palette::TABLEAU10[0]);
         for (k, &c) in parent.children.iter().enumerate() {
             if c >= colors.len() {
                 continue;
             }
-            let derived = if parent.parent.is_none() {
-                groups[k % groups.len()]
+            let derived = if p == root {
+                top[k]
             } else {
                 palette::child_shade(base, k, n)
             };
@@ -223,90 +241,106 @@ pub(crate) fn path_data(out: &mut String, polygon: &ConvexPolygon) {
     out.push('Z');
 }
 
-/// Appends the label group: one `<text>` per leaf whose label fits (nothing
-/// when labels are off).
-pub(crate) fn push_labels(out: &mut String, dataset: &Dataset, layout: &Layout, style: &SvgStyle) {
-    if !style.labels {
-        return;
+/// The leaf labels that fit, in dataset order (none when labels are off).
+pub(crate) fn leaf_labels(dataset: &Dataset, layout: &Layout, style: &LabelStyle) -> Vec<Placed> {
+    if !style.show {
+        return Vec::new();
     }
     let count = dataset.len().min(layout.cells.len());
-    let mut group_open = false;
-    for i in (0..count).filter(|&i| dataset.is_leaf(i) && is_drawn(dataset, i)) {
-        let label = &dataset.node(i).label;
-        let chars = label.chars().filter(|c| !c.is_control()).count();
-        if chars == 0 || label.trim().is_empty() {
-            continue;
-        }
-        let polygon = &layout.cells[i].polygon;
-        let center = polygon.centroid();
-        let size = fit_font_size(polygon, center, chars).min(style.max_font_size);
-        if size < style.min_font_size {
-            continue;
-        }
-        if !group_open {
-            // pointer-events="none" lets hovering reach the cells' <title>s.
-            out.push_str(LABELS_GROUP);
-            out.push_str(&format!(
-                " font-family=\"{}\" text-anchor=\"middle\" fill=\"{}\" stroke=\"{}\" \
-                 stroke-linejoin=\"round\" paint-order=\"stroke\" pointer-events=\"none\">\n",
-                escape(&style.font_family),
-                style.text_color,
-                style.stroke,
-            ));
-            group_open = true;
-        }
-        out.push_str(&format!(
-            "<text x=\"{}\" y=\"{}\" font-size=\"{}\" stroke-width=\"{}\">{}</text>\n",
-            num(center.x),
-            num(center.y + BASELINE_SHIFT_EM * size),
-            num(size),
-            num(HALO_EM * size),
-            escape(label),
-        ));
-    }
-    if group_open {
-        out.push_str("</g>\n");
-    }
+    (0..count)
+        .filter(|&i| dataset.is_leaf(i) && is_drawn(dataset, i))
+        .filter_map(|i| {
+            let text = display_name(dataset, i, &style.names);
+            let value = style
+                .value
+                .then(|| format_value(dataset.node(i).value, &style.unit));
+            place_leaf(
+                i,
+                &text,
+                value.as_deref(),
+                &layout.cells[i].polygon,
+                style.min_size,
+                style.max_size,
+            )
+        })
+        .collect()
 }
 
-/// The largest font size at which a label of `chars` characters, estimated as a
-/// box of `(CHAR_WIDTH_EM·chars + 2·SIDE_PAD_EM) × LINE_HEIGHT_EM` font sizes
-/// centred at `center`, lies inside `polygon`.
-///
-/// The box scales about `center` with the font size, and the polygon is convex
-/// and contains `center`, so the box fits exactly when its four corners do; each
-/// corner moves along a ray from `center`, and where that ray leaves the polygon
-/// is a closed-form minimum over the edges. This is the value a bisection on
-/// `contains` would converge to, computed in one pass.
-fn fit_font_size(polygon: &ConvexPolygon, center: Point, chars: usize) -> f64 {
-    let half = Point::new(
-        0.5 * (CHAR_WIDTH_EM * chars as f64 + 2.0 * SIDE_PAD_EM),
-        0.5 * LINE_HEIGHT_EM,
-    );
-    let corners = [
-        Point::new(half.x, half.y),
-        Point::new(-half.x, half.y),
-        Point::new(half.x, -half.y),
-        Point::new(-half.x, -half.y),
-    ];
-    let pts = polygon.points();
-    let mut best = f64::INFINITY;
-    for (k, &a) in pts.iter().enumerate() {
-        let e = pts[(k + 1) % pts.len()] - a;
-        // Positive orientation: the inside is where cross(e, p - a) >= 0.
-        let slack = cross(e, center - a);
-        for u in corners {
-            let towards = cross(e, u);
-            if towards < 0.0 {
-                best = best.min(slack / -towards);
-            }
+/// Appends the label group: one `<text>` per placed label (a `<tspan>` per
+/// line when it has several), with a halo in the stroke colour.
+pub(crate) fn push_labels(out: &mut String, labels: &[Placed], style: &SvgStyle) {
+    if labels.is_empty() {
+        return;
+    }
+    // pointer-events="none" lets hovering reach the cells' <title>s.
+    out.push_str(LABELS_GROUP);
+    out.push_str(&format!(
+        " font-family=\"{}\" text-anchor=\"middle\" fill=\"{}\" stroke=\"{}\" \
+         stroke-linejoin=\"round\" paint-order=\"stroke\" pointer-events=\"none\">\n",
+        escape(&style.font_family),
+        style.text_color,
+        style.stroke,
+    ));
+    for p in labels {
+        push_text(out, p, true);
+    }
+    out.push_str("</g>\n");
+}
+
+/// One placed label as a `<text>`: a single line inline, several as
+/// `<tspan>`s with their own position and size; `halo` adds the halo's
+/// stroke width; a turned label rotates about its box's centre.
+pub(crate) fn push_text(out: &mut String, p: &Placed, halo: bool) {
+    let Some(first) = p.lines.first() else {
+        return;
+    };
+    let halo_width = |size: f64| {
+        if halo {
+            format!(" stroke-width=\"{}\"", num(HALO_EM * size))
+        } else {
+            String::new()
         }
-    }
-    if best.is_finite() {
-        best.max(0.0)
+    };
+    let turn = if p.angle != 0.0 {
+        format!(
+            " transform=\"rotate({} {} {})\"",
+            num(p.angle),
+            num(0.5 * (p.rect.x0 + p.rect.x1)),
+            num(0.5 * (p.rect.y0 + p.rect.y1))
+        )
     } else {
-        0.0
+        String::new()
+    };
+    if p.lines.len() == 1 {
+        out.push_str(&format!(
+            "<text x=\"{}\" y=\"{}\" font-size=\"{}\"{}{turn}>{}</text>\n",
+            num(first.x),
+            num(first.baseline),
+            num(first.size),
+            halo_width(first.size),
+            escape(&first.text),
+        ));
+        return;
     }
+    out.push_str(&format!(
+        "<text font-size=\"{}\"{}{turn}>",
+        num(first.size),
+        halo_width(first.size)
+    ));
+    for line in &p.lines {
+        let own = if (line.size - first.size).abs() > 1e-9 {
+            format!(" font-size=\"{}\"{}", num(line.size), halo_width(line.size))
+        } else {
+            String::new()
+        };
+        out.push_str(&format!(
+            "<tspan x=\"{}\" y=\"{}\"{own}>{}</tspan>",
+            num(line.x),
+            num(line.baseline),
+            escape(&line.text)
+        ));
+    }
+    out.push_str("</text>\n");
 }
 
 /// A number with exactly two decimals; never `-0.00`, never non-finite.
@@ -390,9 +424,12 @@ mod tests {
         assert!(!text.contains("\"q\""));
         let escaped = "&lt;script&gt;alert(1)&lt;/script&gt; &quot;q&quot;";
         assert!(text.contains(&format!("<title>{escaped} (B)</title>")));
+        // Too long for one line at 9 px: wrapped at its space.
+        let labels = &text[text.find("np-labels").unwrap_or(0)..];
         assert!(
-            text.contains(&format!("{escaped}</text>")),
-            "B's label is drawn"
+            labels.contains("&lt;script&gt;alert(1)&lt;/</tspan>")
+                && labels.contains(">script&gt; &quot;q&quot;</tspan>"),
+            "B's label is drawn: {labels}"
         );
         assert_eq!(escape("a&b<'>\u{1}\t"), "a&amp;b&lt;&apos;&gt;\t");
     }
@@ -416,41 +453,19 @@ mod tests {
         assert!(!text.contains(">A3</text>"), "A3 is 2 units tall");
         assert!(text.contains("<title>A3</title>"), "but its cell is drawn");
         let off = SvgStyle {
-            labels: false,
+            labels: LabelStyle {
+                show: false,
+                ..LabelStyle::default()
+            },
             ..SvgStyle::default()
         };
         assert_eq!(count(&svg(&dataset, &layout, &off), "<text"), 0);
     }
 
     #[test]
-    fn font_size_fits_the_cell() {
-        // 240 × 100 rectangle, 2 characters: the height limits (100 / 1.2).
-        let rect = ConvexPolygon::rectangle(0.0, 0.0, 240.0, 100.0).unwrap();
-        let c = rect.centroid();
-        assert!((fit_font_size(&rect, c, 2) - 100.0 / LINE_HEIGHT_EM).abs() < 1e-9);
-        // 40 characters: the width limits.
-        let w = CHAR_WIDTH_EM * 40.0 + 2.0 * SIDE_PAD_EM;
-        assert!((fit_font_size(&rect, c, 40) - 240.0 / w).abs() < 1e-9);
-        // Agrees with containment on a non-rectangular cell.
-        let hex = ConvexPolygon::regular(Point::new(50.0, 50.0), 40.0, 6).unwrap();
-        let c = hex.centroid();
-        let s = fit_font_size(&hex, c, 5);
-        let half = Point::new(
-            0.5 * (CHAR_WIDTH_EM * 5.0 + 2.0 * SIDE_PAD_EM),
-            0.5 * LINE_HEIGHT_EM,
-        );
-        let inside = |s: f64| {
-            [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)]
-                .iter()
-                .all(|&(x, y)| hex.contains(c + Point::new(x * half.x, y * half.y) * s))
-        };
-        assert!(inside(s * 0.999) && !inside(s * 1.01));
-    }
-
-    #[test]
     fn colors_follow_the_hierarchy() {
         let (dataset, layout) = sample();
-        let colors = cell_colors(&dataset);
+        let colors = cell_colors(&dataset, &[], PaletteKind::Tableau);
         let idx = |id: &str| dataset.nodes().iter().position(|n| n.id == id).unwrap();
         assert_eq!(colors[idx("root")], None);
         assert_eq!(colors[idx("A")], Some(palette::TABLEAU10[0]));

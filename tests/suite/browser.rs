@@ -45,14 +45,25 @@ struct Page {
 }
 
 impl Page {
-    /// Lays out `tests/data/paper/<name>.json` into `<name>.html` and
-    /// `<name>.json` under `dir`, and picks the first leaf (in file order) that
-    /// has neighbours and partners, preferring one with an unrealised partner.
+    /// Lays out `tests/data/paper/<name>.json` (see [`Page::build_from`]).
     fn build(dir: &Path, name: &str, extra: &[&str]) -> Page {
         let input = support::paper_data().join(format!("{name}.json"));
+        Page::build_from(dir, &input, name, extra, None)
+    }
+
+    /// Lays out `input` into `<name>.html` and `<name>.json` under `dir`, and
+    /// hovers `target`, or else the first leaf (in file order) that has
+    /// neighbours and partners, preferring one with an unrealised partner.
+    fn build_from(
+        dir: &Path,
+        input: &Path,
+        name: &str,
+        extra: &[&str],
+        target: Option<&str>,
+    ) -> Page {
         let html = dir.join(format!("{name}.html"));
         let json = dir.join(format!("{name}.json"));
-        support::layout(&input, &[&html, &json], extra);
+        support::layout(input, &[&html, &json], extra);
         let data = page_data(&std::fs::read_to_string(&html).expect("read page"));
         let layout: Value =
             serde_json::from_slice(&std::fs::read(&json).expect("read layout")).expect("JSON");
@@ -100,12 +111,15 @@ impl Page {
             .filter(|id| leaves.contains(*id) && by_id[id]["virtual"] != true)
             .filter(|id| !neighbors_of(id).is_empty() && !partners_of(id).is_empty())
             .collect();
-        let target = candidates
-            .iter()
-            .find(|id| partners_of(id).values().any(|r| !r))
-            .or(candidates.first())
-            .unwrap_or_else(|| panic!("{name}: no leaf with neighbours and partners"))
-            .to_string();
+        let target = match target {
+            Some(id) => id.to_owned(),
+            None => candidates
+                .iter()
+                .find(|id| partners_of(id).values().any(|r| !r))
+                .or(candidates.first())
+                .unwrap_or_else(|| panic!("{name}: no leaf with neighbours and partners"))
+                .to_string(),
+        };
 
         let mut path = Vec::new();
         let mut at = by_id[target.as_str()];
@@ -187,6 +201,38 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
         movies.partners.values().any(|r| !r),
         "movies target has an unrealised partner"
     );
+    // Ids that are also names of every JavaScript object's properties
+    // (issue 11, item 14): with plain objects as maps, `constructor` and its
+    // kind counted as everyone's neighbours and never greyed out.
+    let special_input =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/html/special-ids.json");
+    let special: Vec<Page> = ["alpha", "constructor", "__proto__"]
+        .iter()
+        .map(|target| {
+            let name = format!("special-{}", target.trim_matches('_'));
+            Page::build_from(&dir, &special_input, &name, &[], Some(target))
+        })
+        .collect();
+    let greyed: BTreeSet<&String> = special
+        .iter()
+        .flat_map(|p| {
+            p.leaves
+                .iter()
+                .filter(|l| !p.neighbors.contains(*l) && **l != p.target)
+        })
+        .collect();
+    for id in [
+        "constructor",
+        "toString",
+        "__proto__",
+        "hasOwnProperty",
+        "valueOf",
+    ] {
+        assert!(
+            greyed.contains(&id.to_string()),
+            "{id} is to grey out on some hover: {greyed:?}"
+        );
+    }
 
     let mut browser = Browser::launch(&chromium, &dir, BUDGET);
     for domain in ["Page", "Runtime", "Log", "Network"] {
@@ -206,6 +252,33 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
     hover_and_leave(&mut browser, &movies);
     toggle_unrealized_links(&mut browser);
     step_through_frames(&mut browser);
+    for page in &special {
+        browser.open(&page.url);
+        hover_and_leave(&mut browser, page);
+    }
+    // Issue 13: a page that fits its container, keyboard focus, two maps in
+    // one document, and the zoom into a group and back.
+    fits_its_width(&mut browser, &countries.url);
+    browser.open(&countries.url);
+    dark_mode_follows_the_reader(&mut browser);
+    browser.open(&countries.url);
+    a_tap_acts_as_hover(&mut browser, &countries);
+    browser.open(&countries.url);
+    keyboard_focus_behaves_as_hover(&mut browser);
+    // The zoom needs a leaf whose top-level group is worth zooming into
+    // (Asia, the first candidate above, spans the whole map).
+    let zoomable = Page::build_from(
+        &dir,
+        &support::paper_data().join("country_pop_50M_AUS.json"),
+        "countries-zoom",
+        &[],
+        Some(&leaf_in_zoomable_group(&countries)),
+    );
+    browser.open(&zoomable.url);
+    zoom_into_a_group_and_back(&mut browser, &zoomable);
+    let both = two_maps_in_one_document(&dir, &countries, &movies);
+    browser.open(&both);
+    two_maps_stay_apart(&mut browser);
 
     // One more round trip, so every event sent before it has been read.
     browser.eval("0");
@@ -251,19 +324,20 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
 /// Everything the hover changes, read from the DOM: which cells carry the
 /// highlight classes, each cell's computed style, and the tooltip.
 const HOVER_STATE: &str = r##"(function () {
-  var map = document.getElementById("np-map");
-  var tip = document.getElementById("np-tooltip");
+  var map = document.querySelector(".np-map");
+  var tip = document.querySelector(".np-tooltip");
   function ids(selector) {
     return Array.prototype.map.call(map.querySelectorAll(selector), function (el) {
       return el.getAttribute("data-id");
     });
   }
-  var style = {};
+  // Pairs, not an object keyed by id: ids such as "__proto__" are data.
+  var style = [];
   Array.prototype.forEach.call(map.querySelectorAll("path[data-id]"), function (el) {
     var s = getComputedStyle(el);
-    style[el.getAttribute("data-id")] = {
+    style.push([el.getAttribute("data-id"), {
       opacity: s.opacity, stroke: s.stroke, width: s.strokeWidth, dash: s.strokeDasharray
-    };
+    }]);
   });
   var box = tip.getBoundingClientRect();
   return {
@@ -280,7 +354,7 @@ const HOVER_STATE: &str = r##"(function () {
 /// pointer would run out of the window, and checks it is flipped into view.
 fn tooltip_stays_in_view(browser: &mut Browser) {
     const EDGE: &str = r##"(function () {
-      var r = document.querySelector("#np-map svg").getBoundingClientRect();
+      var r = document.querySelector(".np-map svg").getBoundingClientRect();
       return [Math.min(r.right, window.innerWidth) - 6, r.top + 0.3 * r.height];
     })()"##;
     let at = browser.eval(EDGE);
@@ -318,7 +392,7 @@ fn hover_and_leave(browser: &mut Browser, page: &Page) {
 
     // Top-left corner: inside the body's margin, outside the map.
     let outside = browser
-        .eval("!document.getElementById('np-map').contains(document.elementFromPoint(2, 2))");
+        .eval("!document.querySelector('.np-map').contains(document.elementFromPoint(2, 2))");
     assert_eq!(outside, true, "(2, 2) lies outside the map");
     browser.mouse_move(2.0, 2.0);
     browser.wait_for(
@@ -334,7 +408,7 @@ fn hover_point(browser: &mut Browser, page: &Page) -> (f64, f64) {
     let script = format!(
         r##"(function (id, points) {{
   var cell = Array.prototype.find.call(
-    document.querySelectorAll("#np-map path[data-id]"),
+    document.querySelectorAll(".np-map path[data-id]"),
     function (el) {{ return el.getAttribute("data-id") === id; }});
   if (!cell) {{ return "no cell"; }}
   var m = cell.getScreenCTM();
@@ -359,12 +433,15 @@ fn hover_point(browser: &mut Browser, page: &Page) -> (f64, f64) {
 /// The hover state is the page's documented behaviour for `page.target`.
 fn check_hovered(state: &Value, page: &Page) -> Result<(), String> {
     let dimmed = id_set(&state["dimmed"]);
-    let expected: BTreeSet<String> = page.leaves.difference(&page.neighbors).cloned().collect();
+    // Every leaf but the hovered one and its neighbours (issue 11, item 14:
+    // the hovered cell used to grey itself out).
+    let mut expected: BTreeSet<String> = page.leaves.difference(&page.neighbors).cloned().collect();
+    expected.remove(&page.target);
     if dimmed != expected {
         return Err(format!("dimmed {dimmed:?}, expected {expected:?}"));
     }
     for leaf in &page.leaves {
-        let opacity = state["style"][leaf]["opacity"].as_str().unwrap_or("");
+        let opacity = style_of(state, leaf)["opacity"].as_str().unwrap_or("");
         let want = if expected.contains(leaf) { "0.25" } else { "1" };
         if opacity != want {
             return Err(format!("{leaf} has opacity {opacity}, expected {want}"));
@@ -386,7 +463,7 @@ fn check_hovered(state: &Value, page: &Page) -> Result<(), String> {
         return Err(format!("dashed {dashed:?}, expected {unrealized:?}"));
     }
     for (partner, realized) in &page.partners {
-        let style = &state["style"][partner];
+        let style = style_of(state, partner);
         let dash = style["dash"].as_str().unwrap_or("");
         if style["stroke"] != "rgb(0, 0, 0)"
             || style["width"] != "4px"
@@ -421,7 +498,7 @@ fn check_cleared(state: &Value, page: &Page) -> Result<(), String> {
         }
     }
     for leaf in &page.leaves {
-        let opacity = state["style"][leaf]["opacity"].as_str().unwrap_or("");
+        let opacity = style_of(state, leaf)["opacity"].as_str().unwrap_or("");
         if opacity != "1" {
             return Err(format!("{leaf} has opacity {opacity}"));
         }
@@ -435,9 +512,9 @@ fn check_cleared(state: &Value, page: &Page) -> Result<(), String> {
 
 /// The checkbox, its effect, and how many unrealised-link shapes are drawn.
 const LINKS_STATE: &str = r##"(function () {
-  var box = document.getElementById("np-unrealized");
+  var box = document.querySelector(".np-unrealized-toggle");
   var shapes = [];
-  Array.prototype.forEach.call(document.querySelectorAll("#np-map .np-unrealized"), function (g) {
+  Array.prototype.forEach.call(document.querySelectorAll(".np-map .np-unrealized"), function (g) {
     Array.prototype.push.apply(shapes, g.children);
   });
   var visible = shapes.filter(function (s) {
@@ -490,12 +567,12 @@ fn toggle_unrealized_links(browser: &mut Browser) {
 /// node of the page) with its caption, and the end shows the finished map.
 fn step_through_frames(browser: &mut Browser) {
     const SET: &str = r##"(function (k) {
-      var slider = document.getElementById("np-frame");
-      var data = JSON.parse(document.getElementById("nptreemap-data").textContent);
+      var slider = document.querySelector(".np-frame");
+      var data = JSON.parse(document.querySelector(".np-data").textContent);
       if (!slider) { return { slider: false }; }
       slider.value = String(k < 0 ? slider.max : k);
       slider.dispatchEvent(new Event("input"));
-      var layer = document.getElementById("np-frame-layer");
+      var layer = document.querySelector(".np-frame-layer");
       var known = {};
       data.nodes.forEach(function (n) { known[n.id] = true; });
       var drawn = Array.prototype.map.call(layer.querySelectorAll("path"), function (p) {
@@ -505,7 +582,7 @@ fn step_through_frames(browser: &mut Browser) {
         slider: true, max: parseInt(slider.max, 10), frames: data.frames.length,
         expected: k < 0 ? 0 : data.frames[k].cells.length,
         drawn: drawn.length, unknown: drawn.filter(function (id) { return !known[id]; }).length,
-        caption: document.getElementById("np-frame-label").textContent
+        caption: document.querySelector(".np-frame-label").textContent
       };
     })"##;
     let first = browser.eval(&format!("{SET}(0)"));
@@ -525,10 +602,340 @@ fn step_through_frames(browser: &mut Browser) {
     assert_eq!(last["caption"], "final layout", "{last}");
 }
 
+/// At several widths the picture fits the window's width without a
+/// horizontal scroll bar, keeps its aspect and shows its legend without
+/// scrolling.
+fn fits_its_width(browser: &mut Browser, url: &str) {
+    const FIT: &str = r##"(function () {
+      var svg = document.querySelector(".np-map svg");
+      var r = svg.getBoundingClientRect();
+      var vb = svg.getAttribute("viewBox").split(" ").map(Number);
+      var legend = svg.querySelector(".np-legend-labels").getBoundingClientRect();
+      return { width: r.width, height: r.height, aspect: vb[2] / vb[3],
+               inner: window.innerWidth, innerHeight: window.innerHeight,
+               scroll: document.documentElement.scrollWidth, legend: legend.bottom };
+    })()"##;
+    for (w, h) in [(420, 900), (800, 700), (1600, 1000)] {
+        browser.call(
+            "Emulation.setDeviceMetricsOverride",
+            json!({"width": w, "height": h, "deviceScaleFactor": 1, "mobile": false}),
+        );
+        browser.open(url);
+        let fit = browser.eval(FIT);
+        let f = |k: &str| fit[k].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            f("width") <= f("inner") && f("scroll") <= f("inner"),
+            "{w}x{h}: {fit}"
+        );
+        // The picture box keeps the view box's aspect (within a pixel).
+        assert!(
+            (f("width") - f("height") * f("aspect")).abs() <= 1.5,
+            "{w}x{h}: {fit}"
+        );
+        assert!(
+            f("legend") <= f("innerHeight") + 0.5,
+            "{w}x{h}: legend below the fold: {fit}"
+        );
+    }
+    browser.call(
+        "Emulation.setDeviceMetricsOverride",
+        json!({"width": VIEWPORT.0, "height": VIEWPORT.1, "deviceScaleFactor": 1, "mobile": false}),
+    );
+}
+
+fn press(browser: &mut Browser, key: &str, code: &str, vk: u32) {
+    for kind in ["keyDown", "keyUp"] {
+        browser.call(
+            "Input.dispatchKeyEvent",
+            json!({"type": kind, "key": key, "code": code, "windowsVirtualKeyCode": vk}),
+        );
+    }
+}
+
+/// Tab reaches the cells; the focused cell has a role and a label naming its
+/// path, and it is highlighted as hovered (neighbours kept, the rest greyed,
+/// the tooltip shown); the next Tab moves on to another cell.
+fn keyboard_focus_behaves_as_hover(browser: &mut Browser) {
+    const FOCUS: &str = r##"(function () {
+      var active = document.activeElement;
+      var el = active && active.matches && active.matches("path[data-id]") ? active : null;
+      var tip = document.querySelector(".np-tooltip");
+      return { id: el && el.getAttribute ? el.getAttribute("data-id") : null,
+               role: el && el.getAttribute ? el.getAttribute("role") : null,
+               label: el && el.getAttribute ? el.getAttribute("aria-label") : null,
+               dimmed: document.querySelectorAll(".np-map path.np-dim").length,
+               selfDimmed: !!(el && el.classList && el.classList.contains("np-dim")),
+               tip: !tip.hidden };
+    })()"##;
+    let mut first = None;
+    for _ in 0..6 {
+        press(browser, "Tab", "Tab", 9);
+        let state = browser.eval(FOCUS);
+        if state["id"].is_string() {
+            first = Some(state);
+            break;
+        }
+    }
+    let first = first.expect("Tab reaches a cell within six presses");
+    assert_eq!(first["role"], "img", "{first}");
+    assert!(
+        first["label"]
+            .as_str()
+            .is_some_and(|l| l.contains("weight")),
+        "{first}"
+    );
+    assert!(
+        first["dimmed"].as_u64() > Some(0) && first["selfDimmed"] == false,
+        "{first}"
+    );
+    assert_eq!(first["tip"], true, "{first}");
+    press(browser, "Tab", "Tab", 9);
+    let next = browser.eval(FOCUS);
+    assert!(
+        next["id"].is_string() && next["id"] != first["id"],
+        "{next}"
+    );
+    assert_eq!(next["tip"], true, "{next}");
+}
+
+/// A click on a cell zooms into its top-level group: the view box shrinks to
+/// the group, cells outside it fade, the breadcrumb names the group; its
+/// first entry zooms back to the whole map.
+fn zoom_into_a_group_and_back(browser: &mut Browser, page: &Page) {
+    const ZOOM: &str = r##"(function () {
+      var svg = document.querySelector(".np-map svg");
+      return { view: svg.getAttribute("viewBox"),
+               crumbs: Array.prototype.map.call(document.querySelectorAll(".np-crumbs button"),
+                 function (b) { return b.textContent; }),
+               outside: document.querySelectorAll(".np-map path.np-outside").length };
+    })()"##;
+    let before = browser.eval(ZOOM);
+    assert_eq!(before["outside"], 0, "{before}");
+    assert_eq!(
+        before["crumbs"].as_array().map(Vec::len),
+        Some(1),
+        "{before}"
+    );
+    let (x, y) = hover_point(browser, page);
+    browser.click(x, y);
+    let group = page.path[1].clone();
+    let whole = view_box(before["view"].as_str().unwrap_or(""));
+    browser.wait_for("the zoom into the group", ZOOM, |state| {
+        let crumbs: Vec<&str> = state["crumbs"]
+            .as_array()
+            .map(|a| a.iter().filter_map(|v| v.as_str()).collect())
+            .unwrap_or_default();
+        let view = view_box(state["view"].as_str().unwrap_or(""));
+        if crumbs.len() == 2
+            && crumbs[1] == group
+            && state["outside"].as_u64() > Some(0)
+            && view.len() == 4
+            && view[2] < 0.95 * whole[2]
+        {
+            Ok(())
+        } else {
+            Err(format!("{state}"))
+        }
+    });
+    const BACK: &str = r##"(function () {
+      var b = document.querySelector(".np-crumbs button");
+      var r = b.getBoundingClientRect();
+      return [Math.round(r.left + r.width / 2), Math.round(r.top + r.height / 2)];
+    })()"##;
+    let at = browser.eval(BACK);
+    browser.click(at[0].as_f64().expect("x"), at[1].as_f64().expect("y"));
+    browser.wait_for("the zoom back to the whole map", ZOOM, |state| {
+        let view = view_box(state["view"].as_str().unwrap_or(""));
+        let same = view.len() == 4
+            && whole.len() == 4
+            && view.iter().zip(&whole).all(|(a, b)| (a - b).abs() < 0.01);
+        if same && state["outside"] == 0 {
+            Ok(())
+        } else {
+            Err(format!("{state}"))
+        }
+    });
+}
+
+/// Both pages' map containers in one document, as a docs site would inline them.
+fn two_maps_in_one_document(dir: &Path, a: &Page, b: &Page) -> String {
+    let fragment = |page: &Page| {
+        let path = page.url.trim_start_matches("file://").to_owned();
+        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        let start = text
+            .find("<div class=\"nptreemap\"")
+            .expect("map container");
+        let end = text.rfind("</body>").expect("body end");
+        text[start..end].to_owned()
+    };
+    let doc = format!(
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>two</title></head><body>\n<h1>Two maps</h1>\n{}<p>between</p>\n{}</body></html>\n",
+        fragment(a),
+        fragment(b)
+    );
+    let path = dir.join("two-maps.html");
+    std::fs::write(&path, doc).expect("write");
+    file_url(&path)
+}
+
+/// Two maps in one document have distinct ids, and hovering a cell of the
+/// second greys cells of the second only.
+fn two_maps_stay_apart(browser: &mut Browser) {
+    const IDS: &str = r##"(function () {
+      var ids = Array.prototype.map.call(document.querySelectorAll("[id]"), function (e) { return e.id; });
+      var maps = document.querySelectorAll(".nptreemap");
+      return { ids: ids.length, unique: new Set(ids).size, maps: maps.length };
+    })()"##;
+    let ids = browser.eval(IDS);
+    assert_eq!(ids["maps"], 2, "{ids}");
+    assert_eq!(ids["ids"], ids["unique"], "duplicate ids: {ids}");
+    const POINT: &str = r##"(function () {
+      var map = document.querySelectorAll(".nptreemap")[1];
+      map.scrollIntoView();
+      var cells = map.querySelectorAll("path[tabindex]");
+      for (var i = 0; i < cells.length; i++) {
+        var r = cells[i].getBoundingClientRect();
+        var x = Math.round(r.left + r.width / 2), y = Math.round(r.top + r.height / 2);
+        if (x > 0 && y > 0 && x < innerWidth && y < innerHeight && document.elementFromPoint(x, y) === cells[i]) {
+          return [x, y];
+        }
+      }
+      return null;
+    })()"##;
+    let at = browser.eval(POINT);
+    let (x, y) = (at[0].as_f64().expect("x"), at[1].as_f64().expect("y"));
+    browser.mouse_move(x, y);
+    const DIMS: &str = r##"(function () {
+      var maps = document.querySelectorAll(".nptreemap");
+      return [maps[0].querySelectorAll("path.np-dim").length, maps[1].querySelectorAll("path.np-dim").length,
+              !maps[1].querySelector(".np-tooltip").hidden, !maps[0].querySelector(".np-tooltip").hidden];
+    })()"##;
+    browser.wait_for("the second map's hover", DIMS, |d| {
+        if d[0] == 0 && d[1].as_u64() > Some(0) && d[2] == true && d[3] == false {
+            Ok(())
+        } else {
+            Err(format!("{d}"))
+        }
+    });
+}
+
+/// With `prefers-color-scheme: dark` the page turns dark: a dark page
+/// background and light label text; dark text again in light mode.
+fn dark_mode_follows_the_reader(browser: &mut Browser) {
+    const COLORS: &str = r##"(function () {
+      var labels = document.querySelector(".nptreemap .np-labels");
+      return { bg: getComputedStyle(document.body).backgroundColor,
+               text: labels ? getComputedStyle(labels).fill : null };
+    })()"##;
+    // Channel sum of an `rgb(r, g, b)` value.
+    fn brightness(v: &Value) -> u32 {
+        v.as_str()
+            .unwrap_or("")
+            .split(|c: char| !c.is_ascii_digit())
+            .filter_map(|n| n.parse::<u32>().ok())
+            .take(3)
+            .sum()
+    }
+    for (scheme, dark) in [("dark", true), ("light", false)] {
+        browser.call(
+            "Emulation.setEmulatedMedia",
+            json!({"features": [{"name": "prefers-color-scheme", "value": scheme}]}),
+        );
+        browser.wait_for(&format!("the {scheme} colours"), COLORS, |c| {
+            let (bg, text) = (brightness(&c["bg"]), brightness(&c["text"]));
+            if c["text"].is_null() {
+                return Err(format!("no labels: {c}"));
+            }
+            // The page's own background: dark in dark mode, none (the
+            // document's white) in light mode.
+            let dark_page = c["bg"].as_str().is_some_and(|b| b.starts_with("rgb("));
+            let ok = if dark {
+                dark_page && bg < 3 * 128 && text > 3 * 128
+            } else {
+                text < 3 * 128
+            };
+            if ok {
+                Ok(())
+            } else {
+                Err(format!("{scheme}: {c}"))
+            }
+        });
+    }
+}
+
+/// A tap (a real touch event) on a cell shows its hover state and does not
+/// zoom: on touch screens the first tap is the hover.
+fn a_tap_acts_as_hover(browser: &mut Browser, page: &Page) {
+    let (x, y) = hover_point(browser, page);
+    for kind in ["touchStart", "touchEnd"] {
+        let points = if kind == "touchEnd" {
+            json!([])
+        } else {
+            json!([{"x": x, "y": y}])
+        };
+        browser.call(
+            "Input.dispatchTouchEvent",
+            json!({"type": kind, "touchPoints": points}),
+        );
+    }
+    browser.wait_for(
+        &format!("the tap's hover state of {}", page.target),
+        HOVER_STATE,
+        |state| check_hovered(state, page),
+    );
+    let crumbs = browser.eval("document.querySelectorAll('.np-crumbs button').length");
+    assert_eq!(crumbs, 1, "the first tap does not zoom");
+}
+
+/// The numbers of an SVG `viewBox` attribute.
+fn view_box(attribute: &str) -> Vec<f64> {
+    attribute
+        .split(' ')
+        .filter_map(|v| v.parse().ok())
+        .collect()
+}
+
+/// A leaf of `page` whose top-level group has a zoom box (the first in the
+/// page's node order).
+fn leaf_in_zoomable_group(page: &Page) -> String {
+    let path = page.url.trim_start_matches("file://");
+    let data = page_data(&std::fs::read_to_string(path).expect("read page"));
+    let nodes = data["nodes"].as_array().expect("page nodes");
+    let by_id: BTreeMap<&str, &Value> = nodes
+        .iter()
+        .filter_map(|n| Some((n["id"].as_str()?, n)))
+        .collect();
+    fn top_group<'a>(by_id: &BTreeMap<&'a str, &'a Value>, mut id: &'a str) -> Option<&'a str> {
+        loop {
+            let parent = by_id.get(id)?["parent"].as_str()?;
+            if by_id.get(parent)?["parent"].is_null() {
+                return Some(id);
+            }
+            id = parent;
+        }
+    }
+    nodes
+        .iter()
+        .filter(|n| n["leaf"] == true)
+        .filter_map(|n| n["id"].as_str())
+        .find(|id| top_group(&by_id, id).is_some_and(|g| g != *id && !by_id[g]["zoom"].is_null()))
+        .expect("a leaf in a zoomable top-level group")
+        .to_owned()
+}
+
+/// The computed style the hover state read for cell `id`.
+fn style_of<'a>(state: &'a Value, id: &str) -> &'a Value {
+    state["style"]
+        .as_array()
+        .and_then(|pairs| pairs.iter().find(|p| p[0] == id))
+        .map_or(&Value::Null, |p| &p[1])
+}
+
 /// The JSON node data embedded in a page.
 fn page_data(page: &str) -> Value {
-    let open = "<script type=\"application/json\" id=\"nptreemap-data\">";
-    let start = page.find(open).expect("data block") + open.len();
+    let open = "<script type=\"application/json\" class=\"np-data\"";
+    let at = page.find(open).expect("data block");
+    let start = at + page[at..].find('>').expect("tag end") + 1;
     let len = page[start..].find("</script>").expect("end of data block");
     serde_json::from_str(&page[start..start + len]).expect("data block is JSON")
 }

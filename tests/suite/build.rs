@@ -162,7 +162,7 @@ fn readme_main_job_builds_every_example() {
         }
     }
     let page = std::fs::read_to_string(out.join("countries.html")).expect("html written");
-    assert!(page.contains("data-id=\"CN\"") && page.contains("id=\"nptreemap-data\""));
+    assert!(page.contains("data-id=\"CN\"") && page.contains("class=\"np-data\""));
     let external =
         page.matches("http").count() - page.matches("http://www.w3.org/2000/svg").count();
     assert_eq!(

@@ -178,18 +178,50 @@ fn check_svg_document(svg: &str, what: &str) {
         );
     }
 
+    // Drawn text, per `<text>`: its lines (the element's own text, or its
+    // `<tspan>`s when a label wraps). Every line is part of a label, read
+    // back exactly (a cut label ends in an ellipsis).
     let labels = all_labels();
-    let drawn: Vec<&str> = elements
+    let drawn: Vec<Vec<&str>> = elements
         .iter()
-        .filter(|n| n.has_tag_name("text") && n.attribute("font-size").is_some())
-        .filter_map(|n| n.text())
+        .filter(|n| n.has_tag_name("text") && n.attribute("class") != Some("np-title"))
+        .filter(|n| {
+            !n.ancestors().any(|a| {
+                a.attribute("class")
+                    .is_some_and(|c| c.starts_with("np-legend") || c == "np-unlinked-count")
+            })
+        })
+        .map(|n| {
+            let spans: Vec<&str> = n
+                .children()
+                .filter(|c| c.has_tag_name("tspan"))
+                .filter_map(|c| c.text())
+                .collect();
+            if spans.is_empty() {
+                n.text().into_iter().collect()
+            } else {
+                spans
+            }
+        })
         .collect();
-    assert!(
-        drawn.iter().all(|t| labels.contains(t)),
-        "{what}: labels {drawn:?}"
-    );
+    for line in drawn.iter().flatten() {
+        let part = line.trim_end_matches('…');
+        assert!(
+            labels.iter().any(|l| l.contains(part)),
+            "{what}: drawn {line:?} is no label's text"
+        );
+    }
+    let whole: Vec<(String, String)> = drawn
+        .iter()
+        .map(|lines| (lines.join(" "), lines.concat()))
+        .collect();
     for must in [SCRIPT, LEAVES[0][2].1, LEAVES[1][3].1] {
-        assert!(drawn.contains(&must), "{what}: label {must:?} drawn");
+        assert!(
+            whole
+                .iter()
+                .any(|(spaced, joined)| spaced == must || joined == must),
+            "{what}: label {must:?} drawn: {drawn:?}"
+        );
     }
 }
 
@@ -250,15 +282,17 @@ fn html_page_runs_no_hostile_script_and_its_data_round_trips() {
     );
 
     // The inline SVG is the same well-formed document.
-    let open = "<div id=\"np-map\">\n";
-    let svg_start = page.find(open).expect("map div") + open.len();
+    let open = "<div class=\"np-map\"";
+    let at = page.find(open).expect("map div");
+    let svg_start = at + page[at..].find(">\n").expect("div end") + 2;
     let svg_end = svg_start + page[svg_start..].find("</svg>\n").expect("svg end") + 7;
     check_svg_document(&page[svg_start..svg_end], "HTML's SVG");
 
     // The data block holds no `<` at all (so neither `</script` nor `<!--`),
     // and parses back to exactly the strings we put in.
-    let open = "<script type=\"application/json\" id=\"nptreemap-data\">";
-    let start = page.find(open).expect("data block") + open.len();
+    let open = "<script type=\"application/json\" class=\"np-data\"";
+    let at = page.find(open).expect("data block");
+    let start = at + page[at..].find('>').expect("tag end") + 1;
     let end = start + page[start..].find("</script>").expect("block end");
     let block = &page[start..end];
     assert!(!block.contains('<'), "raw `<` in the data block");

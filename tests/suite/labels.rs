@@ -28,7 +28,7 @@ const CHAR_WIDTH_EM: f64 = 0.6;
 const ABOVE_BASELINE_EM: f64 = 1.0;
 /// Label ink is a neutral grey no lighter than this: the text colour
 /// (#1a1a1a) anti-aliased against its white halo stays neutral, and at the
-/// smallest label size (6 px) glyph cores reach about 100.
+/// smallest label size (9 px) glyph cores reach about 100.
 const INK_MAX: u8 = 150;
 /// Largest channel spread of a neutral grey. The cells are Tableau colours,
 /// none that neutral (the test checks), and white outlines are too light.
@@ -127,13 +127,25 @@ fn parse(svg: &str) -> Picture {
         .and_then(|t| t.ancestors().find_map(|a| a.attribute("fill")))
         .map(hex)
         .expect("labels have a fill colour");
+    // One label per line: the `<text>` itself, or each of its `<tspan>`s
+    // (a wrapped label, or a value line), with its own size if it has one.
     let labels = texts
         .iter()
-        .map(|t| Label {
-            text: t.text().unwrap_or_default().to_owned(),
-            x: number(*t, "x"),
-            baseline: number(*t, "y") - view_top,
-            size: number(*t, "font-size"),
+        .flat_map(|t| {
+            let spans: Vec<roxmltree::Node> =
+                t.children().filter(|c| c.has_tag_name("tspan")).collect();
+            let lines = if spans.is_empty() { vec![*t] } else { spans };
+            lines
+                .into_iter()
+                .map(|l| Label {
+                    text: l.text().unwrap_or_default().to_owned(),
+                    x: number(l, "x"),
+                    baseline: number(l, "y") - view_top,
+                    size: l
+                        .attribute("font-size")
+                        .map_or_else(|| number(*t, "font-size"), |_| number(l, "font-size")),
+                })
+                .collect::<Vec<_>>()
         })
         .collect();
     let fills = root
