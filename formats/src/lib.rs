@@ -40,6 +40,8 @@ pub mod format;
 pub mod genre_table;
 /// The paper's hierarchy JSON and d3-hierarchy style JSON.
 pub mod hierarchy_json;
+/// NumPy `.npy` matrices (embedding vectors saved by `numpy.save`).
+pub mod npy;
 /// The list of formats, looked up by name.
 pub mod registry;
 /// CSV/TSV rows with positions, and node tables → hierarchies.
