@@ -21,6 +21,7 @@ enum Command {
     Build(cmd::build::BuildArgs),
     /// Keep a config's outputs current: rebuild what changes, warm-started,
     /// until SIGINT or SIGTERM.
+    #[cfg(feature = "watch")]
     Watch(cmd::watch::WatchArgs),
     /// Validate a YAML config and its data without writing anything.
     Check(cmd::build::BuildArgs),
@@ -42,6 +43,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Build(args) => cmd::build::build(&args),
         Command::Check(args) => cmd::build::check(&args),
+        #[cfg(feature = "watch")]
         Command::Watch(args) => cmd::watch::run(&args),
         Command::Layout(args) => cmd::layout::run(&args),
         Command::Eval(args) => cmd::eval::run(&args),

@@ -11,7 +11,9 @@ use std::sync::Arc;
 
 use crate::config::{ConfigFileError, DatasetConfig, OutputConfig, OutputKind};
 use crate::layout::{compute, Computed, LayoutError, Previous, Request};
-use crate::render::{html_page, picture, png, PngError, Style};
+use crate::render::{html_page, picture, Style};
+#[cfg(feature = "png")]
+use crate::render::{png, PngError};
 use crate::workspace::FileError;
 use crate::{layout_json, store, workspace};
 use nptreemap_formats::{registry, Dataset, Inputs};
@@ -76,12 +78,27 @@ pub enum BuildError {
         source: LayoutError,
     },
     /// The PNG renderer refused the picture (see [`PngError`]).
+    #[cfg(feature = "png")]
     #[error("{}: {source}", .path.display())]
     Png {
         /// The output.
         path: PathBuf,
         /// Why.
         source: PngError,
+    },
+    /// An output needs a Cargo feature this build was compiled without.
+    #[error(
+        "{}: {what} needs nptreemap built with the `{feature}` feature \
+         (it is on by default: cargo install nptreemap, or --features {feature})",
+        .path.display()
+    )]
+    Unsupported {
+        /// The output.
+        path: PathBuf,
+        /// What it asks for (`PNG output`).
+        what: &'static str,
+        /// The feature that provides it.
+        feature: &'static str,
     },
     /// An output could not be written.
     #[error("{}: cannot write: {source}", .path.display())]
@@ -114,9 +131,11 @@ impl BuildError {
             | BuildError::UnknownRole { .. }
             | BuildError::File(_)
             | BuildError::Previous { .. }
-            | BuildError::Layout { .. } => Fault::Input,
+            | BuildError::Layout { .. }
+            | BuildError::Unsupported { .. } => Fault::Input,
             // A size is the user's `scale:`; anything else means our own SVG
             // did not parse or encode, which is a bug.
+            #[cfg(feature = "png")]
             BuildError::Png { source, .. } => match source {
                 PngError::Size { .. } => Fault::Input,
                 PngError::Svg(_) | PngError::Encode(_) => Fault::System,
@@ -282,12 +301,21 @@ pub fn render_outputs(
                     .get_or_insert_with(|| picture(computed, style))
                     .clone()
                     .into_bytes(),
+                #[cfg(feature = "png")]
                 OutputKind::Png => {
                     let text = svg_text.get_or_insert_with(|| picture(computed, style));
                     png(text, out.scale).map_err(|source| BuildError::Png {
                         path: out.path.clone(),
                         source,
                     })?
+                }
+                #[cfg(not(feature = "png"))]
+                OutputKind::Png => {
+                    return Err(BuildError::Unsupported {
+                        path: out.path.clone(),
+                        what: "PNG output",
+                        feature: "png",
+                    })
                 }
                 OutputKind::Json => layout_json::document(computed).into_bytes(),
                 OutputKind::Html => html_page(computed, style).into_bytes(),
@@ -392,4 +420,47 @@ pub fn store_layout(d: &DatasetConfig, computed: &Computed) -> std::io::Result<(
         return Ok(());
     };
     store::write_if_changed(&path, layout_json::state(computed).as_bytes()).map(|_| ())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nptreemap_formats::{DatasetBuilder, NodeSpec};
+
+    fn computed() -> Computed {
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("root"));
+        for (id, w) in [("a", 1.0), ("b", 2.0), ("c", 3.0)] {
+            b.add(NodeSpec::new(id).parent("root").weight(w));
+        }
+        compute(&b.build().expect("valid"), &Request::default()).expect("laid out")
+    }
+
+    /// Without the `png` feature a PNG output is the user's error naming the
+    /// output and the feature; the other outputs of the build still render.
+    #[test]
+    fn png_output_needs_the_png_feature() {
+        let out = |path: &str| OutputConfig {
+            path: PathBuf::from(path),
+            kind: crate::config::kind_of(Path::new(path)),
+            scale: 1.0,
+        };
+        let computed = computed();
+        let style = Style::default();
+        let svg = render_outputs(&computed, &style, &[out("out/a.svg")]).expect("svg");
+        assert!(String::from_utf8_lossy(&svg[0].bytes).starts_with("<svg"));
+        let png = render_outputs(&computed, &style, &[out("out/a.svg"), out("out/a.png")]);
+        if cfg!(feature = "png") {
+            let png = png.expect("png");
+            assert!(png[1].bytes.starts_with(b"\x89PNG"));
+        } else {
+            let e = png.expect_err("no png feature");
+            assert_eq!(e.fault(), Fault::Input);
+            assert_eq!(
+                e.to_string(),
+                "out/a.png: PNG output needs nptreemap built with the `png` feature (it is on \
+                 by default: cargo install nptreemap, or --features png)"
+            );
+        }
+    }
 }

@@ -8,6 +8,7 @@ pub(crate) mod build;
 pub(crate) mod eval;
 pub(crate) mod layout;
 mod progress;
+#[cfg(feature = "watch")]
 pub(crate) mod watch;
 
 use std::path::{Path, PathBuf};
@@ -217,14 +218,23 @@ pub(crate) fn exit_code(err: &anyhow::Error) -> u8 {
         e.is::<UsageError>()
             || e.downcast_ref::<BuildError>()
                 .is_some_and(|b| b.fault() == Fault::Input)
-            || e.downcast_ref::<nptreemap::daemon::DaemonError>()
-                .is_some_and(|d| d.fault() == Fault::Input)
+            || daemon_fault(e) == Some(Fault::Input)
     });
     if user {
         2
     } else {
         1
     }
+}
+
+/// Whose fault a daemon error is (there is none without the `watch` feature).
+fn daemon_fault(e: &(dyn std::error::Error + 'static)) -> Option<Fault> {
+    #[cfg(feature = "watch")]
+    if let Some(d) = e.downcast_ref::<nptreemap::daemon::DaemonError>() {
+        return Some(d.fault());
+    }
+    let _ = e;
+    None
 }
 
 /// Prints one line on stderr, for a fact the user should know but that is
