@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use super::similarity::{
     clamp_unit, cosine_from_parts, norm_of, pair_similarity, score, NodeFeatures, SimilarityKind,
 };
+use super::sparse_rows::{SparseLevel, SparseRow};
 
 /// Stage A keeps at most this many links from the top bin (`slice(0, 6)`, §3.3).
 const TOP_BIN_CAP: usize = 6;
@@ -23,7 +24,7 @@ const BIN_COUNT: usize = 5;
 /// How many of each bin's best entries are kept. Stage A reads at most
 /// [`TOP_BIN_CAP`]; Stage C enters a bin only while the node holds at most
 /// [`STAGE_C_STOP_ABOVE`] links, so among a bin's first 4 entries one is new.
-const BIN_HEAD: usize = 8;
+const BIN_HEAD: usize = super::sparse_rows::HEAD;
 /// A pair is a constraint when its score exceeds this (§3.6: `s > 1`).
 const MIN_PAIR_SCORE: u8 = 1;
 
@@ -250,13 +251,8 @@ fn bin_node(
             hi = hi.max(s);
         }
     }
-    let thresholds = thresholds(lo, hi);
-    // Bin of every possible score, so the per-pair work is a table lookup.
-    let mut bin_of = [0u8; 101];
-    for (s, slot) in bin_of.iter_mut().enumerate() {
-        *slot = bin_from_top(s as u8, &thresholds) as u8;
-    }
-    let mut bins = vec![Bin::default(); thresholds.len() + 1];
+    let bin_of = bin_table(lo, hi);
+    let mut bins = vec![Bin::default(); usize::from(bin_of[usize::from(lo)]) + 1];
     for (j, &s) in scores.iter().enumerate() {
         if j != i {
             let bin = &mut bins[usize::from(bin_of[usize::from(s)])];
@@ -265,6 +261,69 @@ fn bin_node(
         }
     }
     Bins { bins }
+}
+
+/// The bins of a node from its sparse row (the measures of [`SparseLevel`]): the same
+/// bins as [`bin_node`] gives from the full row, bit for bit. Entries go in level order,
+/// shown ones before the zeros; they never tie (shown similarities are non-zero), so
+/// every head gets the order of the full scan.
+fn bin_sparse(kind: SimilarityKind, row: &SparseRow, level: &[usize]) -> Bins {
+    if level.len() < 2 {
+        return Bins::default();
+    }
+    let candidate = |j: usize, similarity: f64| Candidate {
+        similarity,
+        node: level[j],
+        score: score(similarity),
+    };
+    if kind == SimilarityKind::NeighborList {
+        let mut bin = Bin::default();
+        for &(j, s) in row.shown.iter().filter(|&&(_, s)| score(s) > 0) {
+            bin.len += 1;
+            push_head(&mut bin.head, candidate(j, s));
+        }
+        return Bins { bins: vec![bin] };
+    }
+    let (mut lo, mut hi) = (u8::MAX, 0u8);
+    let scores = row
+        .shown
+        .iter()
+        .map(|&(_, s)| score(s))
+        .chain(row.hidden.filter(|h| h.1 > 0).map(|h| score(h.0)))
+        .chain((row.zeros > 0).then_some(0));
+    for s in scores {
+        lo = lo.min(s);
+        hi = hi.max(s);
+    }
+    let bin_of = bin_table(lo, hi);
+    let mut bins = vec![Bin::default(); usize::from(bin_of[usize::from(lo)]) + 1];
+    for &(j, s) in &row.shown {
+        let bin = &mut bins[usize::from(bin_of[usize::from(score(s))])];
+        bin.len += 1;
+        push_head(&mut bin.head, candidate(j, s));
+    }
+    if let Some((s, count)) = row.hidden {
+        bins[usize::from(bin_of[usize::from(score(s))])].len += count;
+    }
+    if row.zeros > 0 {
+        let bin = &mut bins[usize::from(bin_of[0])];
+        bin.len += row.zeros;
+        for &j in &row.zero_head {
+            push_head(&mut bin.head, candidate(j, 0.0));
+        }
+    }
+    Bins { bins }
+}
+
+/// The bin (from the top) of every possible score for a row with scores in `lo..=hi`,
+/// so the per-pair work is a table lookup.
+fn bin_table(lo: u8, hi: u8) -> [u8; 101] {
+    let thresholds = thresholds(lo, hi);
+    let mut bin_of = [0u8; 101];
+    for (s, slot) in bin_of.iter_mut().enumerate() {
+        *slot = bin_from_top(s as u8, &thresholds) as u8;
+    }
+    bin_of
 }
 
 /// Strength of a link taken from bin `bin` (0 = top) with this score.
@@ -287,9 +346,22 @@ fn has(list: &[ListEntry], target: usize) -> bool {
 /// leaf depth, vectors aggregated: [`super::prepare::prepare`]) and returns every
 /// node's list after Stage C and after Stage D.
 ///
-/// Similarities are computed level by level over all pairs (`O(n²·d)` per level;
-/// rows in parallel, results independent of the thread count).
+/// Similarities are computed level by level, rows in parallel (results independent
+/// of the thread count): neighbour lists, binary and Jaccard from sparse rows
+/// ([`SparseLevel`]: the relations, groups of equal vectors, an inverted index of
+/// supports; O(n + pairs that share a coordinate) per level), cosine and Pearson over
+/// all pairs (`O(n²·d)` per level).
 pub fn constraint_lists(prepared: &Dataset, kind: SimilarityKind) -> ConstraintLists {
+    constraint_lists_with(prepared, kind, true)
+}
+
+/// [`constraint_lists`], with the sparse rows allowed or not (the all-pairs scan is
+/// the reference the sparse rows are tested against).
+fn constraint_lists_with(
+    prepared: &Dataset,
+    kind: SimilarityKind,
+    sparse: bool,
+) -> ConstraintLists {
     let nodes = prepared.nodes();
 
     // Levels in breadth-first order: the tie-break order of §2.1.
@@ -306,20 +378,28 @@ pub fn constraint_lists(prepared: &Dataset, kind: SimilarityKind) -> ConstraintL
             .iter()
             .map(|&n| NodeFeatures::new(kind, prepared, n))
             .collect();
-        let transposed = Transposed::new(kind, &level_features);
+        let sparse_level = SparseLevel::new(kind, &level_features).filter(|_| sparse);
+        let transposed = match sparse_level {
+            Some(_) => None,
+            None => Transposed::new(kind, &level_features),
+        };
         let level_bins: Vec<Bins> = (0..level.len())
             .into_par_iter()
             .map_init(
-                || (Vec::new(), Vec::new()),
-                |buffers, i| {
-                    bin_node(
+                || ((Vec::new(), Vec::new()), Vec::new()),
+                |(buffers, counts), i| match &sparse_level {
+                    Some(index) => {
+                        let row = index.row(&level_features, level, i, counts);
+                        bin_sparse(kind, &row, level)
+                    }
+                    None => bin_node(
                         kind,
                         &level_features,
                         transposed.as_ref(),
                         level,
                         i,
                         buffers,
-                    )
+                    ),
                 },
             )
             .collect();
@@ -715,6 +795,78 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// Random two- and three-level datasets for the sparse measures: short 0/1-ish
+    /// vectors (many equal, many disjoint), some missing, some of another length, some
+    /// with −0, and relations to any node (own level or not, itself, repeated).
+    fn sparse_case(seed: u64, leaves: usize) -> Dataset {
+        use nptreemap_formats::{DatasetBuilder, NodeSpec};
+        let mut rng = crate::rng::Rng::new(seed);
+        let mut below = |n: u64| (rng.next_u64() % n) as usize;
+        let mut builder = DatasetBuilder::new();
+        builder.add(NodeSpec::new("r"));
+        let groups = 1 + below(5);
+        for g in 0..groups {
+            builder.add(NodeSpec::new(format!("g{g}")).parent("r"));
+        }
+        let total = groups + leaves + 1;
+        for i in 0..leaves {
+            let parent = format!("g{}", below(groups as u64));
+            let mut spec = NodeSpec::new(format!("n{i}")).parent(parent).weight(1.0);
+            match below(12) {
+                0 => {}
+                1 => spec = spec.features(vec![1.0; 3]),
+                2 => spec = spec.features(vec![0.0, 1.0]),
+                3 => spec = spec.features(vec![-0.0, 1.0, 0.0, 0.0]),
+                _ => {
+                    let v: Vec<f64> = (0..4).map(|_| (below(3) == 0) as u8 as f64).collect();
+                    spec = spec.features(v);
+                }
+            }
+            for _ in 0..below(4) {
+                let t = below(total as u64);
+                let id = match t {
+                    0 => "r".to_string(),
+                    t if t <= groups => format!("g{}", t - 1),
+                    t => format!("n{}", (t - groups - 1).min(leaves - 1)),
+                };
+                spec = spec.relation(id);
+            }
+            builder.add(spec);
+        }
+        builder.build().expect("valid")
+    }
+
+    #[test]
+    fn sparse_rows_match_the_all_pairs_scan() {
+        for seed in 0..60 {
+            let leaves = [2, 3, 9, 17, 40, 120][seed as usize % 6];
+            let d = sparse_case(seed, leaves);
+            let p = prepare(&d);
+            for kind in [
+                SimilarityKind::NeighborList,
+                SimilarityKind::Binary,
+                SimilarityKind::Jaccard,
+            ] {
+                let sparse = constraint_lists_with(&p, kind, true);
+                let dense = constraint_lists_with(&p, kind, false);
+                assert_eq!(sparse, dense, "seed {seed}, {kind:?}");
+            }
+        }
+        // Paper data through both paths (Flare is Jaccard, Country neighbour lists).
+        for name in [
+            "flare.json",
+            "country_pop_50M_AUS.json",
+            "imdb_100_genre_sim_2child.json",
+        ] {
+            let (p, kind) = paper(name);
+            assert_eq!(
+                constraint_lists_with(&p, kind, true),
+                constraint_lists_with(&p, kind, false),
+                "{name}"
+            );
         }
     }
 

@@ -6,14 +6,16 @@
 //! Pure: no I/O.
 /// Binning and filtering of similarities into constraints (stages A to E).
 pub mod constraints;
-/// Kuhn–Munkres assignment (minimum-cost perfect matching).
+/// Assignment: Kuhn–Munkres, and recursive bisection for large groups.
 pub mod matching;
 /// Virtual nodes for uniform depth and bottom-up aggregation (paper §4).
 pub mod prepare;
-/// 2-D projections: PCA of feature vectors, classical MDS of a similarity matrix.
+/// 2-D projections: PCA of feature vectors, classical (landmark) MDS of a dissimilarity.
 pub mod projection;
 /// Similarity functions between two nodes.
 pub mod similarity;
+/// Exact similarity rows without all-pairs work for the sparse measures.
+mod sparse_rows;
 
 pub use constraints::{build_constraints, Constraint};
 pub use prepare::prepare;

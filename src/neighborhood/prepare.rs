@@ -6,13 +6,22 @@ use std::collections::HashSet;
 
 use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
 
+/// Virtual nodes of a chain that get the prototype's compound id (§2.2); later ones
+/// are named after the leaf, so ids stay short on deep chains.
+const COMPOUND_IDS: usize = 4;
+
 /// Returns `dataset` with uniform leaf depth and aggregated feature vectors.
 ///
 /// - **Virtual nodes** (§2.2): every leaf shallower than the maximum depth `D`
 ///   becomes the head of a chain of single-child virtual nodes reaching depth `D`.
 ///   A virtual node's id is `<parent id>depth<parent depth>` (so a chain below
 ///   `X` at depth 1 is `Xdepth1`, `Xdepth1depth2`, ...); if that id is taken, `~2`,
-///   `~3`, ... is appended, the first free one in that order. Label, colour and
+///   `~3`, ... is appended, the first free one in that order. From the fifth virtual
+///   node of a chain on, the id is `<leaf id>depth<parent depth>` instead (`X` at
+///   depth 1: ..., `Xdepth1depth2depth3depth4`, then `Xdepth5`, `Xdepth6`): the
+///   prototype's ids grow by a segment per level, so a leaf at depth 1 under a
+///   5,000-deep chain would spell ids of 40 kB, O(D³) bytes over a caterpillar tree
+///   (issue 11 item 5). No paper dataset has a chain that long. Label, colour and
 ///   feature vector are copied from the node it hangs under; it has no relations
 ///   and [`nptreemap_formats::Node::is_virtual`] is set.
 /// - **Weights** (§2.3): the *last* virtual node of a chain carries the original
@@ -66,7 +75,12 @@ pub fn prepare(dataset: &Dataset) -> Dataset {
         let node = &nodes[leaf];
         let mut parent_id = node.id.clone();
         for (step, parent_depth) in (node.depth..node.depth + length).enumerate() {
-            let id = unique_id(format!("{parent_id}depth{parent_depth}"), &mut taken);
+            let stem = if step < COMPOUND_IDS {
+                &parent_id
+            } else {
+                &node.id
+            };
+            let id = unique_id(format!("{stem}depth{parent_depth}"), &mut taken);
             let mut spec = NodeSpec::new(id.clone())
                 .label(node.label.clone())
                 .parent(parent_id);
@@ -335,6 +349,44 @@ mod tests {
         // Only children with a vector count.
         assert_eq!(f("z"), Some(vec![4.0]));
         assert_eq!(f("r"), Some(vec![6.5]));
+    }
+
+    #[test]
+    fn long_chains_get_short_ids() {
+        // A leaf at depth 1 beside a chain 12 deep: 11 virtual nodes below it.
+        let mut specs = vec![
+            NodeSpec::new("r"),
+            NodeSpec::new("x").parent("r").weight(1.0),
+        ];
+        let mut parent = "r".to_string();
+        for i in 0..12 {
+            let id = format!("c{i}");
+            specs.push(NodeSpec::new(id.clone()).parent(parent).weight(1.0));
+            parent = id;
+        }
+        let p = prepare(&build(specs));
+        let chain: Vec<&str> = p
+            .nodes()
+            .iter()
+            .filter(|n| n.is_virtual)
+            .map(|n| n.id.as_str())
+            .collect();
+        assert_eq!(chain.len(), 11);
+        assert_eq!(
+            chain[..6],
+            [
+                "xdepth1",
+                "xdepth1depth2",
+                "xdepth1depth2depth3",
+                "xdepth1depth2depth3depth4",
+                "xdepth5",
+                "xdepth6"
+            ]
+        );
+        assert_eq!(chain[10], "xdepth11");
+        for leaf in p.leaves() {
+            assert_eq!(p.node(leaf).depth, 12);
+        }
     }
 
     #[test]

@@ -179,6 +179,16 @@ impl<'a> NodeFeatures<'a> {
     pub(crate) fn values(&self) -> Option<&[f64]> {
         self.values.as_ref().map(Cow::as_slice)
     }
+
+    /// Sorted positions of the non-zero values (computed for Jaccard only).
+    pub(crate) fn support(&self) -> &[u32] {
+        &self.support
+    }
+
+    /// Sorted relation targets (dataset indices).
+    pub(crate) fn relations(&self) -> &[usize] {
+        self.relations
+    }
 }
 
 /// Dot product, left to right from 0 (§1.4).
