@@ -32,6 +32,7 @@
 pub mod config;
 #[cfg(feature = "watch")]
 pub mod daemon;
+pub mod exec;
 pub mod geom;
 pub mod layout;
 pub mod layout_json;

@@ -8,8 +8,12 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Duration;
 
-use crate::config::{ConfigFileError, DatasetConfig, OutputConfig, OutputKind};
+use crate::config::{
+    ConfigFileError, DatasetConfig, OutputConfig, OutputKind, DEFAULT_EXEC_TIMEOUT, EXEC_FORMAT,
+};
+use crate::exec::{self, ExecError};
 use crate::layout::{compute, Computed, LayoutError, Previous, Request};
 use crate::render::{html_page, picture, Style};
 #[cfg(feature = "png")]
@@ -77,6 +81,14 @@ pub enum BuildError {
         /// Why.
         source: LayoutError,
     },
+    /// A `format: exec` command did not produce a dataset.
+    #[error("dataset {dataset:?}: {source}")]
+    Exec {
+        /// The dataset.
+        dataset: String,
+        /// What went wrong.
+        source: ExecError,
+    },
     /// The PNG renderer refused the picture (see [`PngError`]).
     #[cfg(feature = "png")]
     #[error("{}: {source}", .path.display())]
@@ -132,7 +144,8 @@ impl BuildError {
             | BuildError::File(_)
             | BuildError::Previous { .. }
             | BuildError::Layout { .. }
-            | BuildError::Unsupported { .. } => Fault::Input,
+            | BuildError::Unsupported { .. }
+            | BuildError::Exec { .. } => Fault::Input,
             // A size is the user's `scale:`; anything else means our own SVG
             // did not parse or encode, which is a bug.
             #[cfg(feature = "png")]
@@ -202,6 +215,9 @@ pub struct Written {
 /// Stage 1, read: a dataset's input files (after checking the config names
 /// the roles its format reads), not parsed yet.
 pub fn read_inputs(d: &DatasetConfig) -> Result<Vec<InputFile>, BuildError> {
+    if d.format == EXEC_FORMAT {
+        return run_exec(d).map(|file| vec![file]);
+    }
     let format = format_of(d)?;
     let roles = format.roles();
     for role in d.files.keys() {
@@ -236,11 +252,45 @@ pub fn read_inputs(d: &DatasetConfig) -> Result<Vec<InputFile>, BuildError> {
         .collect()
 }
 
+/// `format: exec`: the command's stdout, as the `hierarchy` input of
+/// hierarchy JSON, named after the command. The declared files must exist
+/// (a missing one is reported as a missing file, as for any format).
+fn run_exec(d: &DatasetConfig) -> Result<InputFile, BuildError> {
+    let files: Vec<PathBuf> = d.files.values().cloned().collect();
+    if let Some(missing) = files.iter().find(|f| !f.exists()) {
+        return Err(BuildError::File(FileError::Read {
+            path: missing.clone(),
+            source: std::io::Error::from(std::io::ErrorKind::NotFound),
+        }));
+    }
+    let dir = if d.base.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        d.base.as_path()
+    };
+    let timeout = Duration::from_secs_f64(d.timeout.unwrap_or(DEFAULT_EXEC_TIMEOUT));
+    let bytes = exec::run(&d.command, &files, dir, timeout).map_err(|source| BuildError::Exec {
+        dataset: d.name.clone(),
+        source,
+    })?;
+    Ok(InputFile {
+        role: "hierarchy".to_string(),
+        path: PathBuf::from(format!("`{}` (stdout)", exec::display(&d.command))),
+        bytes,
+    })
+}
+
 fn format_of(d: &DatasetConfig) -> Result<&'static dyn nptreemap_formats::Format, BuildError> {
-    registry::find(&d.format).ok_or_else(|| BuildError::UnknownFormat {
+    // An exec command prints hierarchy JSON.
+    let name = if d.format == EXEC_FORMAT {
+        "hierarchy-json"
+    } else {
+        &d.format
+    };
+    registry::find(name).ok_or_else(|| BuildError::UnknownFormat {
         dataset: d.name.clone(),
         format: d.format.clone(),
-        known: registry::names().join(", "),
+        known: format!("{}, {EXEC_FORMAT}", registry::names().join(", ")),
     })
 }
 

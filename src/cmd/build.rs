@@ -1,29 +1,54 @@
 //! `nptreemap build [CONFIG]` and `nptreemap check [CONFIG]`: every output of a
 //! config, or only the validation of config and data. All datasets are built in
 //! memory before anything is written, so a bad input leaves every output as it was.
+//! `build --check` compares instead of writing, as `cargo fmt --check` does.
 
 use std::path::PathBuf;
 
 use clap::Args;
 
+use super::config_file::ConfigArg;
 use super::progress::Progress;
 use nptreemap::config::Config;
 use nptreemap::pipeline::{self, BuildError};
 
-/// Arguments of `nptreemap build` and `nptreemap check`.
+/// Arguments of `nptreemap build`.
 #[derive(Debug, Args)]
 pub(crate) struct BuildArgs {
-    /// The config file.
-    #[arg(default_value = "nptreemap.yaml")]
-    config: PathBuf,
+    #[command(flatten)]
+    config: ConfigArg,
     /// Lay out from scratch instead of warm from the layout stored beside
     /// the outputs by the last build or watch.
     #[arg(long)]
     cold: bool,
+    /// Write nothing; exit 1 naming every output a build would change (for
+    /// CI: are the committed pictures up to date?).
+    #[arg(long)]
+    check: bool,
+}
+
+/// Arguments of `nptreemap check`.
+#[derive(Debug, Args)]
+pub(crate) struct CheckArgs {
+    #[command(flatten)]
+    config: ConfigArg,
+}
+
+/// `build --check` found outputs a build would change: exit code 1.
+#[derive(Debug, thiserror::Error)]
+#[error("{} output(s) out of date (`nptreemap build` would rewrite them): {}", .0.len(), list(.0))]
+pub(crate) struct Stale(Vec<PathBuf>);
+
+fn list(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
-    let config = Config::from_path(&args.config).map_err(BuildError::from)?;
+    let config = Config::from_path(&args.config.path()?).map_err(BuildError::from)?;
     let progress = Progress::new(config.datasets.len());
     let mut built = Vec::new();
     for (i, d) in config.datasets.iter().enumerate() {
@@ -35,6 +60,9 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
         built.push((d, result?));
     }
     progress.finish();
+    if args.check {
+        return check_outputs(built.iter().map(|(_, b)| b));
+    }
     for (d, b) in &built {
         let written = pipeline::write_outputs(&b.outputs);
         if let Some(e) = written.failed.into_iter().next() {
@@ -50,7 +78,7 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
             } else {
                 "unchanged"
             };
-            super::say(format_args!(
+            super::status(format_args!(
                 "{state} {} ({} bytes, dataset {})",
                 out.path.display(),
                 out.bytes.len(),
@@ -61,11 +89,32 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-pub(crate) fn check(args: &BuildArgs) -> anyhow::Result<()> {
-    let config = Config::from_path(&args.config).map_err(BuildError::from)?;
+/// Names each output whose file would change (or is missing); writes nothing.
+fn check_outputs<'a>(built: impl Iterator<Item = &'a pipeline::Built>) -> anyhow::Result<()> {
+    let mut stale = Vec::new();
+    let mut fresh = 0;
+    for out in built.flat_map(|b| &b.outputs) {
+        // A file that cannot be read is as stale as a missing one.
+        if nptreemap::workspace::read_bytes(&out.path).is_ok_and(|bytes| bytes == out.bytes) {
+            fresh += 1;
+        } else {
+            super::status(format_args!("stale {}", out.path.display()));
+            stale.push(out.path.clone());
+        }
+    }
+    if stale.is_empty() {
+        super::status(format_args!("{fresh} outputs up to date"));
+        Ok(())
+    } else {
+        Err(Stale(stale).into())
+    }
+}
+
+pub(crate) fn check(args: &CheckArgs) -> anyhow::Result<()> {
+    let config = Config::from_path(&args.config.path()?).map_err(BuildError::from)?;
     for d in &config.datasets {
         let dataset = pipeline::load(d)?;
-        super::say(format_args!(
+        super::status(format_args!(
             "ok {}: {} nodes, {} leaves, {} outputs",
             d.name,
             dataset.len(),

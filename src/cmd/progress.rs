@@ -13,7 +13,7 @@ impl Progress {
     pub(crate) fn new(total: usize) -> Self {
         Self {
             total,
-            enabled: std::io::stderr().is_terminal() && total > 0,
+            enabled: std::io::stderr().is_terminal() && total > 0 && !super::quiet(),
         }
     }
 

@@ -2,18 +2,17 @@
 //! SIGINT or SIGTERM, printing one status line per rebuild on stdout. A stop
 //! signal ends it cleanly with exit code 0.
 
-use std::path::PathBuf;
-
 use clap::Args;
+
+use super::config_file::ConfigArg;
 
 use nptreemap::daemon::{self, watcher::Message, Options};
 
 /// Arguments of `nptreemap watch`.
 #[derive(Debug, Args)]
 pub(crate) struct WatchArgs {
-    /// The config file.
-    #[arg(default_value = "nptreemap.yaml")]
-    config: PathBuf,
+    #[command(flatten)]
+    config: ConfigArg,
     /// Lay every dataset out from scratch at start instead of warm from the
     /// layout stored beside its outputs.
     #[arg(long)]
@@ -31,7 +30,7 @@ pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
         cold: args.cold,
         ..Options::default()
     };
-    daemon::run(&args.config, options, tx, &rx, &mut |status| {
+    daemon::run(&args.config.path()?, options, tx, &rx, &mut |status| {
         super::say(status);
     })?;
     Ok(())

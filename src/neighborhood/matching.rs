@@ -136,7 +136,8 @@ fn bisect(
         lo = lo.min(p);
         hi = hi.max(p);
     }
-    let along_x = !(hi.y - lo.y > hi.x - lo.x);
+    // Split along x unless the box is strictly taller (a NaN extent splits along x).
+    let along_x = (hi.y - lo.y).partial_cmp(&(hi.x - lo.x)) != Some(std::cmp::Ordering::Greater);
     let key = |p: Point| if along_x { p.x } else { p.y };
     // Total order (NaN last), ties by index: deterministic.
     site_ids.sort_by(|&a, &b| key(sites[a]).total_cmp(&key(sites[b])).then(a.cmp(&b)));
