@@ -25,9 +25,9 @@
 //! JSON and HTML, and a PNG output is an error naming the feature.
 //!
 //! A layout can start warm from the previous one ([`layout::Previous`], from a
-//! finished computation or read back from layout JSON by [`layout_json::read`]),
+//! finished computation or read back from layout JSON by [`layout_json::read()`]),
 //! so a small change of the data is a small change of the picture;
-//! [`measure::stability`] measures how small.
+//! [`measure::stability()`] measures how small.
 
 pub mod config;
 #[cfg(feature = "watch")]

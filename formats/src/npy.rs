@@ -1,7 +1,7 @@
 //! NumPy `.npy` matrices (the file `numpy.save` writes, which embedding pipelines
 //! save their vectors as): the magic bytes, a version 1, 2 or 3 preamble, the
 //! Python-dict header (`descr`, `fortran_order`, `shape`) and the raw values, read
-//! into a row-major [`Matrix`] of `f64`. Float32 and float64 in either byte order
+//! into a row-major [`Matrix`](crate::npy::Matrix) of `f64`. Float32 and float64 in either byte order
 //! and either memory order are read; anything else is an error saying what the
 //! file holds and what to save instead.
 //!
