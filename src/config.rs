@@ -12,7 +12,7 @@ use crate::layout::{Canvas, Method, NeighborParams, Outline, Params, Request};
 use crate::neighborhood::SimilarityKind;
 use crate::render::overlay::OverlayStyle;
 use crate::render::{Border, Rgb, Style, SvgStyle};
-use nptreemap_formats::FormatOptions;
+use nptreemap_formats::{FormatOptions, Limits};
 
 /// The built-in defaults, every key documented (`config/default.yaml`).
 pub const DEFAULT_YAML: &str = include_str!("../config/default.yaml");
@@ -24,6 +24,9 @@ pub struct Config {
     pub layout: LayoutConfig,
     /// How the pictures look, for every dataset.
     pub render: RenderConfig,
+    /// How large an input may be (nodes, depth, dimensions, file size), for
+    /// every dataset; each dataset's readers get them as `fields.limits`.
+    pub limits: Limits,
     /// The datasets, in file order.
     pub datasets: Vec<DatasetConfig>,
 }
@@ -285,6 +288,8 @@ struct RawConfig {
     #[serde(default)]
     render: RenderConfig,
     #[serde(default)]
+    limits: Limits,
+    #[serde(default)]
     datasets: Vec<DatasetConfig>,
 }
 
@@ -336,6 +341,7 @@ impl Config {
             RawConfig {
                 layout: LayoutConfig::default(),
                 render: RenderConfig::default(),
+                limits: Limits::default(),
                 datasets: Vec::new(),
             }
         } else {
@@ -348,9 +354,16 @@ impl Config {
                 }
             })?
         };
+        if let Some(key) = raw.limits.zero_limit() {
+            return Err(ConfigError::Value {
+                field: format!("limits.{key}"),
+                message: "must be at least 1".to_string(),
+            });
+        }
         let mut datasets = raw.datasets;
         let mut seen = std::collections::BTreeSet::new();
         for (i, d) in datasets.iter_mut().enumerate() {
+            d.fields.limits = raw.limits;
             if !seen.insert(d.name.clone()) {
                 return Err(ConfigError::Value {
                     field: format!("datasets[{i}].name"),
@@ -388,6 +401,7 @@ impl Config {
         let config = Config {
             layout: raw.layout,
             render: raw.render,
+            limits: raw.limits,
             datasets,
         };
         config.params().validate().map_err(|e| ConfigError::Value {
@@ -399,9 +413,10 @@ impl Config {
 
     /// Reads and parses a config file; paths in it are relative to its folder.
     pub fn from_path(path: &Path) -> Result<Config, ConfigFileError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ConfigFileError {
+        // Through the one reader: a FIFO or a device is refused, not read.
+        let text = crate::workspace::read_text(path).map_err(|e| ConfigFileError {
             path: path.to_path_buf(),
-            message: format!("cannot read: {e}"),
+            message: strip_path(&e.to_string(), path),
         })?;
         let base = path.parent().unwrap_or(Path::new("."));
         Config::from_str(&text, base).map_err(|e| ConfigFileError {
@@ -532,6 +547,13 @@ pub fn kind_of(path: &Path) -> Option<OutputKind> {
     }
 }
 
+/// The reader's messages start with the path, which [`ConfigFileError`] puts
+/// in front itself.
+fn strip_path(message: &str, path: &Path) -> String {
+    let prefix = format!("{}: ", path.display());
+    message.strip_prefix(&prefix).unwrap_or(message).to_string()
+}
+
 /// serde_yaml appends " at line L column C" to its messages; the position is
 /// reported separately, so drop it from the text.
 fn strip_location(message: &str) -> String {
@@ -554,6 +576,7 @@ mod tests {
         let c = parse(DEFAULT_YAML).expect("default.yaml parses");
         assert_eq!(c.layout, LayoutConfig::default());
         assert_eq!(c.render, RenderConfig::default());
+        assert_eq!(c.limits, Limits::default());
         let d = DatasetConfig {
             name: "d".to_string(),
             format: "f".to_string(),

@@ -120,6 +120,37 @@ pub enum BuildError {
         /// Why.
         source: std::io::Error,
     },
+    /// An output names a file the run reads, or another output (checked
+    /// before anything is written, after resolving links and `..`).
+    #[error(
+        "{}: {what} is the same file as {other_what} ({}); refusing to overwrite it",
+        .path.display(),
+        .other.display()
+    )]
+    OutputClash {
+        /// The output, as configured.
+        path: PathBuf,
+        /// Which output it is (`datasets[0].outputs[1]`, `--out`).
+        what: String,
+        /// The other file, as configured.
+        other: PathBuf,
+        /// What the other file is (`the config`, an input, an output).
+        other_what: String,
+    },
+    /// An output's path holds something that is not a regular file (a FIFO,
+    /// a device, a directory), which a rename would replace.
+    #[error(
+        "{}: {what} exists and is not a regular file ({kind}); refusing to replace it",
+        .path.display()
+    )]
+    OutputSpecial {
+        /// The output.
+        path: PathBuf,
+        /// Which output it is.
+        what: String,
+        /// What is there.
+        kind: &'static str,
+    },
 }
 
 /// Whose fault a failed build is.
@@ -145,7 +176,9 @@ impl BuildError {
             | BuildError::Previous { .. }
             | BuildError::Layout { .. }
             | BuildError::Unsupported { .. }
-            | BuildError::Exec { .. } => Fault::Input,
+            | BuildError::Exec { .. }
+            | BuildError::OutputClash { .. }
+            | BuildError::OutputSpecial { .. } => Fault::Input,
             // A size is the user's `scale:`; anything else means our own SVG
             // did not parse or encode, which is a bug.
             #[cfg(feature = "png")]
@@ -199,6 +232,9 @@ pub struct Built {
     pub computed: Computed,
     /// Every output, in config order.
     pub outputs: Vec<Rendered>,
+    /// What looked wrong but was read anyway ([`warnings`]), and an
+    /// unreadable stored layout, one line each.
+    pub warnings: Vec<String>,
 }
 
 /// What writing a set of outputs did.
@@ -246,7 +282,7 @@ pub fn read_inputs(d: &DatasetConfig) -> Result<Vec<InputFile>, BuildError> {
             Ok(InputFile {
                 role: role.clone(),
                 path: path.clone(),
-                bytes: workspace::read_bytes(path)?,
+                bytes: workspace::read_input(path, &d.fields.limits)?,
             })
         })
         .collect()
@@ -378,9 +414,29 @@ pub fn render_outputs(
         .collect()
 }
 
+/// The input warnings of a parsed dataset (a header without rows, a column
+/// named twice, a self pair, a pair repeated with another strength), one
+/// line each, `file: line L: message`.
+pub fn warnings(files: &[InputFile], dataset: &Dataset) -> Vec<String> {
+    dataset
+        .warnings()
+        .iter()
+        .map(|w| {
+            let file = files
+                .iter()
+                .find(|f| f.role == w.role)
+                .map_or_else(|| w.role.clone(), |f| f.path.display().to_string());
+            format!("{file}: {w}")
+        })
+        .collect()
+}
+
 /// Stage 5, write: every output atomically (temp file + rename), except those
-/// whose bytes would not change. A failure does not stop the others.
+/// whose bytes would not change. A failure does not stop the others. Holds
+/// [`store::writing`] throughout, so a forced exit never lands between two
+/// outputs of one set.
 pub fn write_outputs(outputs: &[Rendered]) -> Written {
+    let _writing = store::writing();
     let mut out = Written::default();
     for r in outputs {
         match store::write_if_changed(&r.path, &r.bytes) {
@@ -405,15 +461,22 @@ pub fn build(
     style: &Style,
     cold: bool,
 ) -> Result<Built, BuildError> {
-    let dataset = load(d)?;
+    let files = read_inputs(d)?;
+    let dataset = parse_inputs(d, &files)?;
+    let mut warned = warnings(&files, &dataset);
     let mut request = request.clone();
-    request.previous = if cold { None } else { stored_layout(d) };
+    if !cold {
+        let stored = stored_layout(d);
+        request.previous = stored.previous;
+        warned.extend(stored.warning);
+    }
     let computed = lay_out(d, &dataset, &request)?;
     let outputs = render_outputs(&computed, style, &d.outputs)?;
     Ok(Built {
         name: d.name.clone(),
         computed,
         outputs,
+        warnings: warned,
     })
 }
 
@@ -426,41 +489,175 @@ pub fn read_previous(path: &Path) -> Result<Previous, BuildError> {
     })
 }
 
-/// The layout stored for a dataset by [`store_layout`], if there is one.
-/// A stored layout that cannot be read is not an error the user must act on
-/// (the next build replaces it): it is logged and the layout starts cold.
-pub fn stored_layout(d: &DatasetConfig) -> Option<Arc<Previous>> {
-    let path = state_path(d)?;
-    let text = workspace::read_state(&path)?;
+/// A dataset's stored layout, as [`stored_layout`] found it.
+#[derive(Debug, Default)]
+pub struct StoredLayout {
+    /// The layout to start warm from, if there is a readable one.
+    pub previous: Option<Arc<Previous>>,
+    /// Why a stored layout that is there could not be used (truncated by a
+    /// full disk, edited by hand): the layout starts cold, so the picture
+    /// jumps; the user should hear of it. One line, naming the file.
+    pub warning: Option<String>,
+}
+
+/// The layout stored for a dataset by [`store_layout`], if there is one. One
+/// that cannot be read is not an error (the next build replaces it): it comes
+/// back as a warning and the layout starts cold.
+pub fn stored_layout(d: &DatasetConfig) -> StoredLayout {
+    let Some(path) = state_path(d) else {
+        return StoredLayout::default();
+    };
+    let unusable = |why: String| StoredLayout {
+        previous: None,
+        warning: Some(format!(
+            "{}: the stored layout cannot be used ({why}); laid out cold, so the picture may move",
+            path.display()
+        )),
+    };
+    let text = match workspace::read_state(&path, &d.fields.limits) {
+        Ok(Some(text)) => text,
+        Ok(None) => return StoredLayout::default(),
+        Err(e) => return unusable(e.to_string()),
+    };
     match layout_json::read(&text) {
-        Ok(previous) => Some(Arc::new(previous)),
-        Err(e) => {
-            tracing::warn!(path = %path.display(), error = %e, "stored layout unreadable; laying out cold");
-            None
-        }
+        Ok(previous) => StoredLayout {
+            previous: Some(Arc::new(previous)),
+            warning: None,
+        },
+        Err(e) => unusable(e.to_string()),
     }
 }
 
 /// Where a dataset's last layout is kept between runs: a hidden folder beside
 /// its first output (`out/.nptreemap/<name>.layout.json`), so it travels
 /// with the outputs and a restarted daemon or `build` starts warm. `None` for
-/// a dataset without outputs.
+/// a dataset without outputs. Distinct names give distinct files (see
+/// [`state_file_name`]).
 pub fn state_path(d: &DatasetConfig) -> Option<PathBuf> {
     let first = d.outputs.first()?;
     let dir = first.path.parent().unwrap_or(Path::new("."));
-    // The dataset name is free text; keep the file name portable.
-    let safe: String = d
-        .name
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
+    Some(dir.join(".nptreemap").join(state_file_name(&d.name)))
+}
+
+/// The state file's name for a dataset name: letters and digits of any script,
+/// `-` and `_` as they are, every other character percent-encoded (UTF-8
+/// bytes as `%XX`), which is injective (`日本` and `中国` stay themselves; `a b`
+/// is `a%20b`, `a/b` is `a%2Fb`, and `..` cannot escape the folder). A name
+/// over 200 bytes so encoded keeps its first 200 and adds `~` and a 64-bit
+/// FNV-1a hash of the whole name (`~` is encoded everywhere else).
+pub fn state_file_name(name: &str) -> String {
+    use std::fmt::Write;
+    let mut safe = String::new();
+    for c in name.chars() {
+        if c.is_alphanumeric() || c == '-' || c == '_' {
+            safe.push(c);
+        } else {
+            for b in c.encode_utf8(&mut [0; 4]).bytes() {
+                let _ = write!(safe, "%{b:02X}");
             }
-        })
-        .collect();
-    Some(dir.join(".nptreemap").join(format!("{safe}.layout.json")))
+        }
+    }
+    const KEEP: usize = 200;
+    if safe.len() > KEEP {
+        let mut cut = KEEP;
+        while !safe.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        safe.truncate(cut);
+        let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+        });
+        let _ = write!(safe, "~{hash:016x}");
+    }
+    format!("{safe}.layout.json")
+}
+
+/// A file a run reads or writes, with the words a message names it by.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Named {
+    /// The path, as configured.
+    pub path: PathBuf,
+    /// What it is: `the config`, `an input of dataset "d"`, `datasets[0].outputs[1]`.
+    pub what: String,
+}
+
+impl Named {
+    /// A path with its description.
+    pub fn new(path: impl Into<PathBuf>, what: impl Into<String>) -> Self {
+        Named {
+            path: path.into(),
+            what: what.into(),
+        }
+    }
+}
+
+/// The files building `datasets` of the config at `config_path` reads (the
+/// config, every input) and writes (every output, every stored layout).
+pub fn files_of(config_path: &Path, datasets: &[DatasetConfig]) -> (Vec<Named>, Vec<Named>) {
+    let mut reads = vec![Named::new(config_path, "the config")];
+    let mut writes = Vec::new();
+    for (i, d) in datasets.iter().enumerate() {
+        for (role, path) in &d.files {
+            reads.push(Named::new(
+                path,
+                format!("the {role} input of dataset {:?}", d.name),
+            ));
+        }
+        for (k, out) in d.outputs.iter().enumerate() {
+            writes.push(Named::new(
+                &out.path,
+                format!("datasets[{i}].outputs[{k}] (dataset {:?})", d.name),
+            ));
+        }
+        if let Some(state) = state_path(d) {
+            writes.push(Named::new(
+                state,
+                format!("the stored layout of dataset {:?}", d.name),
+            ));
+        }
+    }
+    (reads, writes)
+}
+
+/// Refuses, before anything is written, an output that is the same file as
+/// something the run reads or as another output (after resolving links and
+/// `..`), and an output whose path holds something other than a regular file
+/// (a FIFO, a device, a directory: a rename would replace it). Outputs outside
+/// the config's folder are allowed (`../site/static/` for a docs site).
+pub fn check_outputs(reads: &[Named], writes: &[Named]) -> Result<(), BuildError> {
+    let mut seen: std::collections::HashMap<PathBuf, &Named> = Default::default();
+    for r in reads {
+        seen.entry(workspace::resolve(&r.path)).or_insert(r);
+    }
+    for w in writes {
+        if let Some(kind) = workspace::special_at(&w.path) {
+            return Err(BuildError::OutputSpecial {
+                path: w.path.clone(),
+                what: w.what.clone(),
+                kind,
+            });
+        }
+        let real = workspace::resolve(&w.path);
+        if let Some(other) = seen.get(&real) {
+            return Err(BuildError::OutputClash {
+                path: w.path.clone(),
+                what: w.what.clone(),
+                other: other.path.clone(),
+                other_what: other.what.clone(),
+            });
+        }
+        seen.insert(real, w);
+    }
+    Ok(())
+}
+
+/// Removes the temp files killed runs left beside `writes` (see
+/// [`store::remove_stale_temps`]), logging each.
+pub fn remove_stale_temps(writes: &[Named]) {
+    let paths: Vec<PathBuf> = writes.iter().map(|w| w.path.clone()).collect();
+    for path in store::remove_stale_temps(&paths) {
+        tracing::info!(path = %path.display(), "removed a temp file left by an interrupted run");
+    }
 }
 
 /// Stores a dataset's layout at its [`state_path`] in full precision

@@ -9,15 +9,19 @@
 //! ([`FormatOptions::strength`], else `strength` when present) holds a finite number
 //! `>= 0`; a pair with strength 0 is dropped. The model keeps no per-pair weight, so
 //! any other strength just means "related". Pairs are symmetric: `a,b` relates `b` to
-//! `a` too, and repeats collapse. A pair of a node with itself is ignored. Every id
-//! must be a node of the table (a row or a group id).
+//! `a` too, and repeats collapse (a repeat with another strength is a warning). A
+//! pair of a node with itself is ignored, with a warning. Every id must be a node
+//! of the table (a row or a group id).
 //!
 //! The dataset's similarity hint is [`SimilarityHint::NeighborList`].
+
+use std::collections::HashMap;
 
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
 use crate::table::{node_tree, read_table, Table, TableTree, NODES_ROLE};
+use crate::warning::Warning;
 
 /// The border-list [`Format`] (name `border-list`, inputs `nodes` and `pairs`).
 #[derive(Clone, Copy, Debug, Default)]
@@ -48,6 +52,7 @@ impl Format for BorderList {
         let in_pairs = |error| InputError::new("pairs", error);
         let mut tree = node_tree(inputs, options)?;
         let pair_table = read_table(pairs, options.delimiter).map_err(in_pairs)?;
+        tree.warnings.extend(pair_table.warnings_in("pairs"));
         add_pairs(&mut tree, &pair_table, options).map_err(in_pairs)?;
         tree.build(Some(SimilarityHint::NeighborList))
             .map_err(in_nodes)
@@ -79,6 +84,9 @@ fn add_pairs(
         "the strength column",
         &["strength"],
     )?;
+    // The first line and strength of each unordered pair, to warn about a
+    // repeat that says something else (the model keeps no strengths).
+    let mut seen: HashMap<(usize, usize), (usize, Option<f64>)> = HashMap::new();
     for row in &pairs.rows {
         let node = |column: usize| -> Result<usize, FormatError> {
             let id = &row.fields[column];
@@ -91,6 +99,7 @@ fn add_pairs(
             })
         };
         let (first, second) = (node(a)?, node(b)?);
+        let mut given = None;
         if let Some(column) = strength {
             let text = &row.fields[column];
             let value: Option<f64> = text
@@ -106,12 +115,43 @@ fn add_pairs(
                     message: format!("expected a finite number >= 0, found {text:?}"),
                 });
             };
-            if value == 0.0 {
-                continue;
-            }
+            given = Some(value);
         }
         // A self pair is ignored (the model would drop it anyway).
         if first == second {
+            tree.warnings.push(Warning::new(
+                "pairs",
+                Some(row.line),
+                format!(
+                    "the pair ({0}, {0}) joins a node to itself; it is ignored",
+                    tree.specs[first].id
+                ),
+            ));
+            continue;
+        }
+        let key = (first.min(second), first.max(second));
+        match seen.get(&key) {
+            Some(&(line, before)) if before != given => {
+                let say = |s: Option<f64>| s.map_or_else(|| "none".to_owned(), |v| v.to_string());
+                tree.warnings.push(Warning::new(
+                    "pairs",
+                    Some(row.line),
+                    format!(
+                        "the pair ({}, {}) repeats line {line} with another strength ({} there, {} here); \
+                         strengths only say whether two nodes are related",
+                        tree.specs[first].id,
+                        tree.specs[second].id,
+                        say(before),
+                        say(given)
+                    ),
+                ));
+            }
+            Some(_) => {}
+            None => {
+                seen.insert(key, (row.line, given));
+            }
+        }
+        if given == Some(0.0) {
             continue;
         }
         let (first_id, second_id) = (tree.specs[first].id.clone(), tree.specs[second].id.clone());

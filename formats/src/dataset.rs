@@ -6,6 +6,8 @@
 use std::collections::HashMap;
 
 use crate::color::Rgb;
+use crate::limits::{Limit, LimitError, Limits};
+use crate::warning::Warning;
 
 /// A validated hierarchy. Only [`DatasetBuilder::build`] makes one, so code that
 /// receives a `Dataset` can trust its invariants:
@@ -23,6 +25,7 @@ pub struct Dataset {
     index: HashMap<String, usize>,
     similarity_hint: Option<SimilarityHint>,
     max_depth: usize,
+    warnings: Vec<Warning>,
 }
 
 /// One node of a [`Dataset`]. Indices (`parent`, `children`, `relations`) point into
@@ -133,7 +136,40 @@ pub enum ModelError {
         /// The id it names.
         target: String,
     },
+    /// The weights of a node and everything below it add up to more than
+    /// the largest finite number (the sum would be written as infinity).
+    #[error(
+        "node {id:?}: its weight and those below it sum to more than 1.8e308, not a finite number"
+    )]
+    WeightOverflow {
+        /// The node whose sum overflows (the lowest such node).
+        id: String,
+    },
+    /// A feature value so large that the sums of squares and products the
+    /// similarities and projections take would overflow.
+    #[error(
+        "node {id:?}: feature {index} is {value:e}; feature values must lie within ±{FEATURE_BOUND:e} (sums of their squares would overflow)"
+    )]
+    FeatureTooLarge {
+        /// The node.
+        id: String,
+        /// Position of the value (0-based).
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// The dataset is larger than the [`Limits`] allow (too many nodes, too deep).
+    #[error(transparent)]
+    TooLarge(#[from] LimitError),
 }
+
+/// The largest feature magnitude accepted. Similarities, the mean aggregation
+/// of vectors (paper §4) and the projections sum squares and products of
+/// feature values over all dimensions and nodes; within ±1e100 those sums stay
+/// below 1e210 for any input within the limits, far from f64's 1.8e308, so no
+/// similarity silently becomes 0 (values near 1e308 used to give 0
+/// constraints). Real embeddings are O(1).
+pub const FEATURE_BOUND: f64 = 1e100;
 
 /// Words for what is wrong with a weight that failed [`is_valid_weight`].
 fn weight_problem(value: f64) -> &'static str {
@@ -155,7 +191,10 @@ impl ModelError {
             | ModelError::Cycle { id }
             | ModelError::InvalidWeight { id, .. }
             | ModelError::InvalidFeature { id, .. }
-            | ModelError::UnknownRelation { id, .. } => Some(id),
+            | ModelError::UnknownRelation { id, .. }
+            | ModelError::WeightOverflow { id }
+            | ModelError::FeatureTooLarge { id, .. } => Some(id),
+            ModelError::TooLarge(_) => None,
             ModelError::MultipleRoots { second, .. } => Some(second),
         }
     }
@@ -234,6 +273,11 @@ impl Dataset {
     pub fn similarity_hint(&self) -> Option<SimilarityHint> {
         self.similarity_hint
     }
+
+    /// What the reader found suspicious but read anyway, in input order.
+    pub fn warnings(&self) -> &[Warning] {
+        &self.warnings
+    }
 }
 
 /// The description of one node handed to [`DatasetBuilder::add`]. Parents and
@@ -310,6 +354,9 @@ pub struct DatasetBuilder {
     // `NodeSpec` so readers that build specs field by field are unaffected.
     virtual_flags: Vec<bool>,
     similarity_hint: Option<SimilarityHint>,
+    // `None`: no limits (the layout's own rebuild with virtual nodes, tests).
+    limits: Option<Limits>,
+    warnings: Vec<Warning>,
 }
 
 impl DatasetBuilder {
@@ -340,6 +387,19 @@ impl DatasetBuilder {
         self
     }
 
+    /// Checks the node count and depth against `limits` in [`DatasetBuilder::build`]
+    /// (without, there are none).
+    pub fn limits(&mut self, limits: Limits) -> &mut Self {
+        self.limits = Some(limits);
+        self
+    }
+
+    /// Adds a warning for the dataset to carry.
+    pub fn warn(&mut self, warning: Warning) -> &mut Self {
+        self.warnings.push(warning);
+        self
+    }
+
     /// Checks the nodes and builds the dataset in breadth-first order.
     ///
     /// Checks run in a fixed order, so the same input always reports the same error:
@@ -351,9 +411,14 @@ impl DatasetBuilder {
             specs,
             virtual_flags,
             similarity_hint,
+            limits,
+            warnings,
         } = self;
         if specs.is_empty() {
             return Err(ModelError::Empty);
+        }
+        if let Some(limits) = &limits {
+            limits.check_nodes(specs.len())?;
         }
 
         let mut index_of: HashMap<&str, usize> = HashMap::with_capacity(specs.len());
@@ -459,6 +524,14 @@ impl DatasetBuilder {
             let spec = std::mem::take(&mut specs[old]);
             let parent = parent_of[old].map(|p| new_index[p]);
             let depth = parent.map_or(0, |p| nodes[p].depth + 1);
+            if let Some(limits) = limits.filter(|l| depth > l.max_depth) {
+                return Err(limits
+                    .exceeded(
+                        Limit::Depth,
+                        format_args!("node {:?} is at depth {depth}", spec.id),
+                    )
+                    .into());
+            }
             let mut relations: Vec<usize> = relations_of[old]
                 .iter()
                 .map(|&target| new_index[target])
@@ -491,6 +564,11 @@ impl DatasetBuilder {
             for &child in nodes[i].children.iter().rev() {
                 value += nodes[child].value;
             }
+            if !value.is_finite() {
+                return Err(ModelError::WeightOverflow {
+                    id: nodes[i].id.clone(),
+                });
+            }
             nodes[i].value = value;
         }
 
@@ -500,6 +578,7 @@ impl DatasetBuilder {
             index,
             similarity_hint,
             max_depth,
+            warnings,
         })
     }
 }
@@ -517,6 +596,17 @@ fn check_values(spec: &NodeSpec) -> Result<(), ModelError> {
     if let Some(features) = &spec.features {
         if let Some((index, &value)) = features.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(ModelError::InvalidFeature {
+                id: spec.id.clone(),
+                index,
+                value,
+            });
+        }
+        if let Some((index, &value)) = features
+            .iter()
+            .enumerate()
+            .find(|(_, v)| v.abs() > FEATURE_BOUND)
+        {
+            return Err(ModelError::FeatureTooLarge {
                 id: spec.id.clone(),
                 index,
                 value,

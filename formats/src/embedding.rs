@@ -24,10 +24,12 @@
 //! the rules above (finite values, no zero vector, every leaf a vector) hold.
 
 use crate::dataset::{Dataset, SimilarityHint};
+use crate::dataset::{ModelError, FEATURE_BOUND};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
+use crate::limits::{Limit, Limits};
 use crate::npy::{is_npy, read_npy, Matrix};
-use crate::table::{node_tree, read_rows, Row, TableTree, NODES_ROLE};
+use crate::table::{node_tree, read_rows, read_rows_capped, Row, RowCap, TableTree, NODES_ROLE};
 
 /// The embedding-matrix [`Format`] (name `embedding-matrix`, inputs `nodes` and
 /// `vectors`).
@@ -82,8 +84,11 @@ impl Format for EmbeddingMatrix {
                     },
                 ));
             }
-            let rows = read_rows(vectors, options.delimiter).map_err(in_vectors)?;
-            add_vectors(&mut tree, &rows).map_err(in_vectors)?;
+            // One vector per node, plus an optional header row.
+            let cap = RowCap::new(options.limits, Limit::Nodes, 1, "vector rows");
+            let rows =
+                read_rows_capped(vectors, options.delimiter, Some(cap)).map_err(in_vectors)?;
+            add_vectors(&mut tree, &rows, &options.limits).map_err(in_vectors)?;
         }
         check_leaves(&tree).map_err(in_vectors)?;
         tree.build(Some(SimilarityHint::Cosine)).map_err(in_nodes)
@@ -96,7 +101,7 @@ fn all_numbers(row: &Row) -> bool {
 }
 
 /// Reads the vector rows and sets them as features on the tree's nodes.
-fn add_vectors(tree: &mut TableTree, rows: &[Row]) -> Result<(), FormatError> {
+fn add_vectors(tree: &mut TableTree, rows: &[Row], limits: &Limits) -> Result<(), FormatError> {
     // A first row that is not all numbers is a header, unless its first field is a
     // node id: then it is a data row with a bad value, reported as such below.
     let header = rows
@@ -118,6 +123,13 @@ fn add_vectors(tree: &mut TableTree, rows: &[Row]) -> Result<(), FormatError> {
             message: "a vector row needs an id and at least one value".to_owned(),
         });
     }
+    limits
+        .check_dimensions(width - 1, "the vectors")
+        .map_err(|e| FormatError::Model {
+            line: Some(first.line),
+            column: None,
+            source: ModelError::TooLarge(e),
+        })?;
     let value_name = |index: usize| -> String {
         header
             .and_then(|h| h.fields.get(index))
@@ -175,6 +187,17 @@ fn add_vectors(tree: &mut TableTree, rows: &[Row]) -> Result<(), FormatError> {
                     message: format!("expected a finite number, found {text:?}"),
                 });
             };
+            if value.abs() > FEATURE_BOUND {
+                return Err(FormatError::Field {
+                    line: Some(row.line),
+                    column: Some(column + 1),
+                    node: Some(id.clone()),
+                    field: value_name(column),
+                    message: format!(
+                        "{text}: vector values must lie within ±{FEATURE_BOUND:e} (sums of their squares would overflow)"
+                    ),
+                });
+            }
             vector.push(value);
         }
         if vector.iter().all(|&v| v == 0.0) {

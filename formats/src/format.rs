@@ -108,6 +108,10 @@ pub struct FormatOptions {
     /// Time series: fill a missing value with the previous date's value (and leading
     /// missing values with the first value given) instead of failing.
     pub fill_missing: bool,
+    /// How large an input may be. Not a `fields:` key: a config sets it for
+    /// every dataset in its `limits:` section.
+    #[serde(skip)]
+    pub limits: crate::limits::Limits,
 }
 
 /// An input format: reads the bytes of its inputs into a validated [`Dataset`].

@@ -29,10 +29,12 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use crate::dataset::ModelError;
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
-use crate::table::{read_table, tree_from_table, Table, TableTree};
+use crate::limits::Limits;
+use crate::table::{read_node_table, tree_from_table, Table, TableTree};
 
 /// The genre-table [`Format`] (name `genre-table`, one input `nodes`).
 #[derive(Clone, Copy, Debug, Default)]
@@ -57,7 +59,7 @@ impl Format for GenreTable {
 
     fn parse(&self, inputs: &Inputs<'_>, options: &FormatOptions) -> Result<Dataset, InputError> {
         let in_nodes = |error| InputError::new("nodes", error);
-        let table = read_table(inputs.require("nodes")?, options.delimiter).map_err(in_nodes)?;
+        let table = read_node_table(inputs.require("nodes")?, options).map_err(in_nodes)?;
         let mut tree = tree_from_table(&table, options).map_err(in_nodes)?;
         // Row nodes are pushed one per row, in row order, so the k-th spec made from
         // a row belongs to the k-th row.
@@ -69,7 +71,7 @@ impl Format for GenreTable {
             .map(|&i| tree.specs[i].id.as_str())
             .collect();
         let genres = read_genres(&table, &ids, options).map_err(in_nodes)?;
-        set_features(&mut tree, &row_specs, &table, &genres).map_err(in_nodes)?;
+        set_features(&mut tree, &row_specs, &table, &genres, &options.limits).map_err(in_nodes)?;
         tree.build(Some(SimilarityHint::Jaccard)).map_err(in_nodes)
     }
 }
@@ -181,6 +183,7 @@ fn set_features(
     row_specs: &[usize],
     table: &Table,
     genres: &[BTreeSet<String>],
+    limits: &Limits,
 ) -> Result<(), FormatError> {
     let all: BTreeSet<&str> = genres.iter().flatten().map(String::as_str).collect();
     if all.is_empty() {
@@ -190,6 +193,15 @@ fn set_features(
             message: "no row has a genre, so there is nothing to compare".to_owned(),
         });
     }
+    // Every row gets a vector over all genres: bound them before allocating
+    // rows × genres values (a column of unique genres would be quadratic).
+    limits
+        .check_dimensions(all.len(), "the genres")
+        .map_err(|e| FormatError::Model {
+            line: Some(table.header_line),
+            column: None,
+            source: ModelError::TooLarge(e),
+        })?;
     let position: BTreeMap<&str, usize> = all.iter().enumerate().map(|(i, &g)| (g, i)).collect();
     for (&spec, set) in row_specs.iter().zip(genres) {
         let mut vector = vec![0.0; all.len()];

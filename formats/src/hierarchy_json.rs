@@ -49,6 +49,7 @@ use crate::dataset::{
 };
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
+use crate::limits::{Limit, Limits};
 
 /// Options for [`parse_hierarchy_json`]. The defaults honour the file's own flags.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -57,6 +58,9 @@ pub struct HierarchyJsonOptions {
     /// flag; `"none"` means every node weighs 1, as for the flag. Default: `None`
     /// (use the flag, else the first of `value`, `weight`, `size` found on leaves).
     pub weight_field: Option<String>,
+    /// How many nodes, how deep and how long feature vectors may be. Default:
+    /// [`Limits::default`].
+    pub limits: Limits,
 }
 
 /// Reads a hierarchy JSON document (see the module docs for the format).
@@ -68,7 +72,12 @@ pub fn parse_hierarchy_json(
     options: &HierarchyJsonOptions,
 ) -> Result<Dataset, FormatError> {
     let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-    let root: Value = serde_json::from_slice(text).map_err(|error| syntax_error(text, &error))?;
+    let root: Value = serde_json::from_slice(text).map_err(|error| {
+        if error.to_string().starts_with("recursion limit exceeded") {
+            return too_deep(text, &error, &options.limits);
+        }
+        syntax_error(text, &error)
+    })?;
     let reader = Reader { text };
     let Some(root_object) = root.as_object() else {
         let (line, column) = line_column(text, skip_whitespace(text, 0));
@@ -88,8 +97,9 @@ pub fn parse_hierarchy_json(
         flags: &flags,
         specs: Vec::new(),
         origins: Vec::new(),
+        limits: options.limits,
     };
-    walk.visit(&root, None)?;
+    walk.visit(&root, None, 0)?;
     let Walk { specs, origins, .. } = walk;
 
     // Drop relations to ids that are not in the file (see the module docs).
@@ -113,6 +123,7 @@ pub fn parse_hierarchy_json(
 
     let node_ids: Vec<String> = specs.iter().map(|spec| spec.id.clone()).collect();
     let mut builder = DatasetBuilder::new();
+    builder.limits(options.limits);
     for (mut spec, relations) in specs.into_iter().zip(relations) {
         spec.relations = relations;
         builder.add(spec);
@@ -169,6 +180,7 @@ struct Walk<'r, 't> {
     flags: &'r Flags,
     specs: Vec<NodeSpec>,
     origins: Vec<Origin>,
+    limits: Limits,
 }
 
 /// The weight-field names tried on leaves when neither the options nor the file say.
@@ -312,11 +324,34 @@ impl Reader<'_> {
 impl Walk<'_, '_> {
     /// Turns the node object `value` (and, depth-first, its subtree) into specs.
     /// `parent` is the parent's spec index and this node's index among its children.
-    fn visit(&mut self, value: &Value, parent: Option<(usize, usize)>) -> Result<(), FormatError> {
+    fn visit(
+        &mut self,
+        value: &Value,
+        parent: Option<(usize, usize)>,
+        depth: usize,
+    ) -> Result<(), FormatError> {
         let index = self.specs.len();
         self.origins.push(Origin { parent });
         let path = node_path(index, &self.origins);
         let reader = self.reader;
+        let limits = self.limits;
+        let over = |limit: Limit, what: String| {
+            let (line, column) = reader.position(&path);
+            FormatError::Model {
+                line,
+                column,
+                source: ModelError::TooLarge(limits.exceeded(limit, what)),
+            }
+        };
+        if index >= limits.max_nodes {
+            return Err(over(
+                Limit::Nodes,
+                format!("more than {} nodes", limits.max_nodes),
+            ));
+        }
+        if depth > limits.max_depth {
+            return Err(over(Limit::Depth, format!("a node at depth {depth}")));
+        }
 
         let Some(object) = value.as_object() else {
             return Err(reader.structure_error(
@@ -423,6 +458,12 @@ impl Walk<'_, '_> {
                     }
                     _ => outer,
                 };
+                if entries.len() > limits.max_dimensions {
+                    return Err(over(
+                        Limit::Dimensions,
+                        format!("node {id:?}: a feature vector of {} values", entries.len()),
+                    ));
+                }
                 let mut features = Vec::with_capacity(entries.len());
                 for (k, entry) in entries.iter().enumerate() {
                     match entry.as_f64() {
@@ -507,7 +548,7 @@ impl Walk<'_, '_> {
             relations,
         });
         for (child_index, child) in children.iter().enumerate() {
-            self.visit(child, Some((index, child_index)))?;
+            self.visit(child, Some((index, child_index)), depth + 1)?;
         }
         Ok(())
     }
@@ -603,6 +644,36 @@ fn syntax_error(text: &[u8], error: &serde_json::Error) -> FormatError {
         message,
     }
 }
+
+/// The error for JSON nested deeper than serde_json reads (128 levels: a node
+/// is an object and its `children` an array, so nodes down to depth 63). With
+/// a smaller `limits.max_depth` the limit is what the user can change.
+fn too_deep(text: &[u8], error: &serde_json::Error, limits: &Limits) -> FormatError {
+    let FormatError::Syntax { line, column, .. } = syntax_error(text, error) else {
+        unreachable!("syntax_error makes a syntax error")
+    };
+    if limits.max_depth < JSON_MAX_NODE_DEPTH {
+        return FormatError::Model {
+            line: Some(line),
+            column: Some(column),
+            source: ModelError::TooLarge(limits.exceeded(
+                Limit::Depth,
+                format_args!("nodes nested deeper than depth {}", limits.max_depth),
+            )),
+        };
+    }
+    FormatError::Syntax {
+        line,
+        column,
+        message: format!(
+            "nested deeper than the JSON reader's 128 levels: hierarchy JSON holds nodes down to \
+             depth {JSON_MAX_NODE_DEPTH} (`limits.max_depth` cannot raise this)"
+        ),
+    }
+}
+
+/// The deepest node serde_json's nesting limit of 128 lets through.
+const JSON_MAX_NODE_DEPTH: usize = 63;
 
 /// Number of UTF-8 characters in `bytes` (continuation bytes are not counted).
 fn count_chars(bytes: &[u8]) -> usize {
@@ -773,6 +844,7 @@ impl Format for HierarchyJson {
         let bytes = inputs.require("hierarchy")?;
         let json_options = HierarchyJsonOptions {
             weight_field: options.weight.clone(),
+            limits: options.limits,
         };
         parse_hierarchy_json(bytes, &json_options)
             .map_err(|error| InputError::new("hierarchy", error))

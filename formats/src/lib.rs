@@ -40,6 +40,8 @@ pub mod format;
 pub mod genre_table;
 /// The paper's hierarchy JSON and d3-hierarchy style JSON.
 pub mod hierarchy_json;
+/// [`Limits`]: how large an input the readers accept.
+pub mod limits;
 /// NumPy `.npy` matrices (embedding vectors saved by `numpy.save`).
 pub mod npy;
 /// The list of formats, looked up by name.
@@ -48,6 +50,8 @@ pub mod registry;
 pub mod table;
 /// Time series: a node table plus values by date, compared by Pearson correlation.
 pub mod time_series;
+/// [`Warning`]: a suspicious but readable input.
+pub mod warning;
 
 pub use border_list::BorderList;
 pub use color::{ColorError, Rgb};
@@ -57,4 +61,6 @@ pub use error::FormatError;
 pub use format::{Format, FormatOptions, InputError, Inputs, Role};
 pub use genre_table::GenreTable;
 pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};
+pub use limits::{Limit, LimitError, Limits};
 pub use time_series::TimeSeries;
+pub use warning::Warning;

@@ -28,8 +28,9 @@
 //!
 //! - **grouping columns** ([`FormatOptions::groups`], outermost first): each distinct
 //!   value becomes a group node with id `group:` + the values joined by `/`
-//!   (`group:Asia`, `group:Asia/EastAsia`) and the value as its label; the row's node
-//!   hangs under its innermost group.
+//!   (`group:Asia`, `group:Asia/EastAsia`; a `/` or `\` inside a value is escaped
+//!   with `\`, so `Asia/East` is `group:Asia\/East`) and the value as its label;
+//!   the row's node hangs under its innermost group.
 //! - **a path column** ([`FormatOptions::path`], segments split by
 //!   [`FormatOptions::path_separator`], default `/`): without an id column the last
 //!   segment is the row's node (id = the whole path, label = the last segment) and
@@ -48,9 +49,13 @@
 use std::collections::HashMap;
 
 use crate::color::Rgb;
-use crate::dataset::{is_valid_weight, Dataset, DatasetBuilder, NodeSpec, SimilarityHint};
+use crate::dataset::{
+    is_valid_weight, Dataset, DatasetBuilder, ModelError, NodeSpec, SimilarityHint,
+};
 use crate::error::FormatError;
 use crate::format::{FormatOptions, InputError, Inputs, Role};
+use crate::limits::{Limit, Limits};
+use crate::warning::Warning;
 
 /// One record of a CSV/TSV input, fields trimmed.
 #[derive(Clone, Debug, PartialEq)]
@@ -70,9 +75,21 @@ pub struct Table {
     pub header_line: usize,
     /// The data rows.
     pub rows: Vec<Row>,
+    /// Repeated column names (the first of each is the one used), as
+    /// warnings without a role: [`Table::warnings_in`] gives them one.
+    pub warnings: Vec<Warning>,
 }
 
 impl Table {
+    /// The table's warnings, as warnings about input `role`.
+    pub fn warnings_in(&self, role: &str) -> impl Iterator<Item = Warning> + '_ {
+        let role = role.to_owned();
+        self.warnings.iter().map(move |w| Warning {
+            role: role.clone(),
+            ..w.clone()
+        })
+    }
+
     /// Index of the column called `name` (ASCII case-insensitive), if any.
     pub fn column(&self, name: &str) -> Option<usize> {
         self.header
@@ -134,9 +151,59 @@ fn strip_bom(bytes: &[u8]) -> &[u8] {
     bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
 }
 
+/// A bound on the records a reader keeps: past `rows` records it stops with
+/// `limit`'s error (naming what the records are, e.g. `rows`, `dates`), so an
+/// oversized input costs memory for `rows` records only.
+#[derive(Clone, Copy, Debug)]
+pub struct RowCap {
+    /// Most records kept (a header row included).
+    pub rows: usize,
+    /// The limit this enforces.
+    pub limit: Limit,
+    /// The limits (for the error's figures).
+    pub limits: Limits,
+    /// What a record is, for the message.
+    pub what: &'static str,
+}
+
+impl RowCap {
+    /// A cap of `limit`'s value plus `extra` records (a header).
+    pub fn new(limits: Limits, limit: Limit, extra: usize, what: &'static str) -> Self {
+        RowCap {
+            rows: usize::try_from(limits.get(limit))
+                .unwrap_or(usize::MAX)
+                .saturating_add(extra),
+            limit,
+            limits,
+            what,
+        }
+    }
+
+    fn error(&self, line: usize) -> FormatError {
+        let allowed = self.limits.get(self.limit);
+        FormatError::Model {
+            line: Some(line),
+            column: None,
+            source: ModelError::TooLarge(self.limits.exceeded(
+                self.limit,
+                format_args!("more than {allowed} {}", self.what),
+            )),
+        }
+    }
+}
+
 /// Reads every record of a CSV/TSV input, without interpreting a header. Records may
 /// have different lengths; callers check. An input without any record is an error.
 pub fn read_rows(bytes: &[u8], delimiter: Option<u8>) -> Result<Vec<Row>, FormatError> {
+    read_rows_capped(bytes, delimiter, None)
+}
+
+/// [`read_rows`], stopping with an error past `cap`'s records.
+pub fn read_rows_capped(
+    bytes: &[u8],
+    delimiter: Option<u8>,
+    cap: Option<RowCap>,
+) -> Result<Vec<Row>, FormatError> {
     let delimiter = detect_delimiter(bytes, delimiter);
     let bytes = strip_bom(bytes);
     check_text(bytes, delimiter)?;
@@ -195,6 +262,11 @@ pub fn read_rows(bytes: &[u8], delimiter: Option<u8>) -> Result<Vec<Row>, Format
         if fields.len() == 1 && fields[0].is_empty() {
             continue;
         }
+        if let Some(cap) = &cap {
+            if rows.len() >= cap.rows {
+                return Err(cap.error(line));
+            }
+        }
         rows.push(Row { line, fields });
     }
     if rows.is_empty() {
@@ -210,7 +282,21 @@ pub fn read_rows(bytes: &[u8], delimiter: Option<u8>) -> Result<Vec<Row>, Format
 /// Reads a CSV/TSV input whose first row is a header; every row must have as many
 /// fields as the header.
 pub fn read_table(bytes: &[u8], delimiter: Option<u8>) -> Result<Table, FormatError> {
-    let mut rows = read_rows(bytes, delimiter)?.into_iter();
+    read_table_capped(bytes, delimiter, None)
+}
+
+/// [`read_table`], stopping with an error past `cap`'s data rows (the header
+/// does not count).
+pub fn read_table_capped(
+    bytes: &[u8],
+    delimiter: Option<u8>,
+    cap: Option<RowCap>,
+) -> Result<Table, FormatError> {
+    let cap = cap.map(|c| RowCap {
+        rows: c.rows.saturating_add(1),
+        ..c
+    });
+    let mut rows = read_rows_capped(bytes, delimiter, cap)?.into_iter();
     let Some(header_row) = rows.next() else {
         // read_rows never returns no rows; keep the error rather than a panic.
         return Err(FormatError::Structure {
@@ -226,6 +312,24 @@ pub fn read_table(bytes: &[u8], delimiter: Option<u8>) -> Result<Table, FormatEr
                 column: Some(index + 1),
                 message: format!("header column {} has no name", index + 1),
             });
+        }
+    }
+    let mut warnings = Vec::new();
+    for (index, name) in header_row.fields.iter().enumerate() {
+        if let Some(first) = header_row.fields[..index]
+            .iter()
+            .position(|earlier| earlier.eq_ignore_ascii_case(name))
+        {
+            warnings.push(Warning::new(
+                "",
+                Some(header_row.line),
+                format!(
+                    "column {} repeats the name {name:?} of column {}; only column {} is read",
+                    index + 1,
+                    first + 1,
+                    first + 1
+                ),
+            ));
         }
     }
     let width = header_row.fields.len();
@@ -247,6 +351,7 @@ pub fn read_table(bytes: &[u8], delimiter: Option<u8>) -> Result<Table, FormatEr
         header: header_row.fields,
         header_line: header_row.line,
         rows,
+        warnings,
     })
 }
 
@@ -341,6 +446,10 @@ pub struct TableTree {
     /// Parallel to `specs`: true for nodes that are a row of the table (not groups or
     /// the synthetic root).
     pub from_row: Vec<bool>,
+    /// What the readers found suspicious, carried into the dataset.
+    pub warnings: Vec<Warning>,
+    /// The limits the tree is built within (node count here; depth by the builder).
+    pub limits: Limits,
     // Lookup by id only; never iterated, so its order cannot reach results.
     index: HashMap<String, usize>,
 }
@@ -381,6 +490,16 @@ impl TableTree {
                 message: format!("duplicate id {:?}: already used by {first_line}", spec.id),
             });
         }
+        if self.specs.len() >= self.limits.max_nodes {
+            return Err(FormatError::Model {
+                line,
+                column,
+                source: ModelError::TooLarge(self.limits.exceeded(
+                    Limit::Nodes,
+                    format_args!("more than {} nodes", self.limits.max_nodes),
+                )),
+            });
+        }
         self.index.insert(spec.id.clone(), self.specs.len());
         self.specs.push(spec);
         self.lines.push(line);
@@ -395,11 +514,17 @@ impl TableTree {
             specs,
             lines,
             index,
+            warnings,
+            limits,
             ..
         } = self;
         let mut builder = DatasetBuilder::new();
+        builder.limits(limits);
         for spec in specs {
             builder.add(spec);
+        }
+        for warning in warnings {
+            builder.warn(warning);
         }
         if let Some(hint) = hint {
             builder.similarity_hint(hint);
@@ -466,7 +591,18 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
         .collect::<Result<Vec<_>, _>>()?;
     let separator = options.path_separator.unwrap_or('/');
 
-    let mut tree = TableTree::default();
+    let mut tree = TableTree {
+        limits: options.limits,
+        ..TableTree::default()
+    };
+    tree.warnings.extend(table.warnings_in(NODES_ROLE.name));
+    if table.rows.is_empty() {
+        tree.warnings.push(Warning::new(
+            NODES_ROLE.name,
+            Some(table.header_line),
+            "the table has a header but no rows: the picture is empty",
+        ));
+    }
     let root_label = options
         .root_label
         .clone()
@@ -541,7 +677,7 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
             if !joined.is_empty() {
                 joined.push('/');
             }
-            joined.push_str(value);
+            push_escaped(&mut joined, value);
             let group_id = format!("group:{joined}");
             if tree.find(&group_id).is_none() {
                 let mut spec = NodeSpec::new(group_id.clone()).label(value.clone());
@@ -588,6 +724,19 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
     }
     check_parent_cycles(&tree)?;
     Ok(tree)
+}
+
+/// Appends a group value to a group id, escaping the separator `/` (and the
+/// escape `\` itself) so that the id is the tuple of values: the group
+/// `Asia/East` is `group:Asia\/East`, never the group `East` inside `Asia`
+/// (`group:Asia/East`). Values without either character are unchanged.
+fn push_escaped(id: &mut String, value: &str) {
+    for c in value.chars() {
+        if c == '/' || c == '\\' {
+            id.push('\\');
+        }
+        id.push(c);
+    }
 }
 
 /// A weight cell: a finite number `>= 0`.
@@ -676,7 +825,13 @@ pub const NODES_ROLE: Role = Role {
 #[allow(clippy::result_large_err)] // InputError's shape is the Format API's
 pub fn node_tree(inputs: &Inputs<'_>, options: &FormatOptions) -> Result<TableTree, InputError> {
     let in_nodes = |error| InputError::new(NODES_ROLE.name, error);
-    let table =
-        read_table(inputs.require(NODES_ROLE.name)?, options.delimiter).map_err(in_nodes)?;
+    let table = read_node_table(inputs.require(NODES_ROLE.name)?, options).map_err(in_nodes)?;
     tree_from_table(&table, options).map_err(in_nodes)
+}
+
+/// Reads a node table within `options.limits` (one row per node, so at most
+/// `max_nodes` rows are kept).
+pub fn read_node_table(bytes: &[u8], options: &FormatOptions) -> Result<Table, FormatError> {
+    let cap = RowCap::new(options.limits, Limit::Nodes, 0, "rows");
+    read_table_capped(bytes, options.delimiter, Some(cap))
 }

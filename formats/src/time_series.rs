@@ -22,10 +22,12 @@
 //!
 //! The dataset's similarity hint is [`SimilarityHint::Pearson`].
 
+use crate::dataset::FEATURE_BOUND;
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
-use crate::table::{node_tree, read_table, Table, TableTree, NODES_ROLE};
+use crate::limits::Limit;
+use crate::table::{node_tree, read_table_capped, RowCap, Table, TableTree, NODES_ROLE};
 
 /// The time-series [`Format`] (name `time-series`, inputs `nodes` and `series`).
 #[derive(Clone, Copy, Debug, Default)]
@@ -58,7 +60,10 @@ impl Format for TimeSeries {
         let in_nodes = |error| InputError::new("nodes", error);
         let in_series = |error| InputError::new("series", error);
         let mut tree = node_tree(inputs, options)?;
-        let series = read_table(series, options.delimiter).map_err(in_series)?;
+        // One row per date, and the dates are each node's dimensions.
+        let cap = RowCap::new(options.limits, Limit::Dimensions, 0, "dates");
+        let series = read_table_capped(series, options.delimiter, Some(cap)).map_err(in_series)?;
+        tree.warnings.extend(series.warnings_in("series"));
         add_series(&mut tree, &series, options.fill_missing).map_err(in_series)?;
         tree.build(Some(SimilarityHint::Pearson)).map_err(in_nodes)
     }
@@ -134,6 +139,11 @@ fn add_series(tree: &mut TableTree, series: &Table, fill: bool) -> Result<(), Fo
                 continue;
             }
             match text.parse::<f64>().ok().filter(|v| v.is_finite()) {
+                Some(value) if value.abs() > FEATURE_BOUND => {
+                    return Err(cell_error(format!(
+                        "{text}: values must lie within ±{FEATURE_BOUND:e} (sums of their squares would overflow)"
+                    )))
+                }
                 Some(value) => values.push(Some(value)),
                 None => {
                     return Err(cell_error(format!(

@@ -603,6 +603,7 @@ fn weight_field_choice() {
     // The option overrides the guess and the file's flag.
     let options = HierarchyJsonOptions {
         weight_field: Some("size".into()),
+        ..HierarchyJsonOptions::default()
     };
     let error = parse_hierarchy_json(json.as_bytes(), &options).expect_err("a has no size");
     assert!(
@@ -615,6 +616,7 @@ fn weight_field_choice() {
     // "none" through the option counts every node, the root too.
     let options = HierarchyJsonOptions {
         weight_field: Some("none".into()),
+        ..HierarchyJsonOptions::default()
     };
     let dataset = parse_hierarchy_json(json.as_bytes(), &options).expect("valid");
     assert_eq!(dataset.node(0).value, 3.0);

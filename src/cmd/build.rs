@@ -48,7 +48,15 @@ fn list(paths: &[PathBuf]) -> String {
 }
 
 pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
-    let config = Config::from_path(&args.config.path()?).map_err(BuildError::from)?;
+    let path = args.config.path()?;
+    let config = Config::from_path(&path).map_err(BuildError::from)?;
+    // Before anything is read or written: no output may land on an input,
+    // the config, another output or a special file.
+    let (reads, writes) = pipeline::files_of(&path, &config.datasets);
+    pipeline::check_outputs(&reads, &writes)?;
+    if !args.check {
+        pipeline::remove_stale_temps(&writes);
+    }
     let progress = Progress::new(config.datasets.len());
     let mut built = Vec::new();
     for (i, d) in config.datasets.iter().enumerate() {
@@ -61,9 +69,12 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
     }
     progress.finish();
     if args.check {
-        return check_outputs(built.iter().map(|(_, b)| b));
+        return compare_outputs(built.iter().map(|(_, b)| b));
     }
     for (d, b) in &built {
+        for line in &b.warnings {
+            super::warn(line);
+        }
         let written = pipeline::write_outputs(&b.outputs);
         if let Some(e) = written.failed.into_iter().next() {
             return Err(e.into());
@@ -90,7 +101,7 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
 }
 
 /// Names each output whose file would change (or is missing); writes nothing.
-fn check_outputs<'a>(built: impl Iterator<Item = &'a pipeline::Built>) -> anyhow::Result<()> {
+fn compare_outputs<'a>(built: impl Iterator<Item = &'a pipeline::Built>) -> anyhow::Result<()> {
     let mut stale = Vec::new();
     let mut fresh = 0;
     for out in built.flat_map(|b| &b.outputs) {
@@ -111,9 +122,19 @@ fn check_outputs<'a>(built: impl Iterator<Item = &'a pipeline::Built>) -> anyhow
 }
 
 pub(crate) fn check(args: &CheckArgs) -> anyhow::Result<()> {
-    let config = Config::from_path(&args.config.path()?).map_err(BuildError::from)?;
+    let path = args.config.path()?;
+    let config = Config::from_path(&path).map_err(BuildError::from)?;
+    let (reads, writes) = pipeline::files_of(&path, &config.datasets);
+    pipeline::check_outputs(&reads, &writes)?;
     for d in &config.datasets {
-        let dataset = pipeline::load(d)?;
+        let files = pipeline::read_inputs(d)?;
+        let dataset = pipeline::parse_inputs(d, &files)?;
+        for line in pipeline::warnings(&files, &dataset) {
+            super::warn(line);
+        }
+        if let Some(line) = pipeline::stored_layout(d).warning {
+            super::warn(line);
+        }
         super::status(format_args!(
             "ok {}: {} nodes, {} leaves, {} outputs",
             d.name,

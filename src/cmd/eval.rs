@@ -74,6 +74,7 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
         _ => None,
     };
     let job = args.options.job(one)?;
+    job.check_outputs(args.out.as_slice())?;
     // Read even with --cold: the figures compare both starts with it.
     let previous = args.options.previous_layout()?;
     let methods: Vec<Option<Method>> = if all {

@@ -59,6 +59,7 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
         })
         .collect::<Result<Vec<_>, UsageError>>()?;
     let mut job = args.options.job(args.method)?;
+    job.check_outputs(&args.out)?;
     job.request.previous = args.options.warm_start()?;
     let computed = pipeline::lay_out(&job.config, &job.dataset, &job.request)?;
     if let Start::Refused(why) = &computed.start {

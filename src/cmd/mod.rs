@@ -22,7 +22,7 @@ use clap::Args;
 use nptreemap::config::{Config, DatasetConfig};
 use nptreemap::layout::{Method, Outline, Previous, Request};
 use nptreemap::neighborhood::SimilarityKind;
-use nptreemap::pipeline::{self, BuildError, Fault};
+use nptreemap::pipeline::{self, BuildError, Fault, Named};
 use nptreemap::render::Style;
 use nptreemap::Dataset;
 
@@ -94,6 +94,23 @@ pub(crate) struct Job {
     pub(crate) request: Request,
     /// The picture style.
     pub(crate) style: Style,
+    /// Every file the job reads (the config, the inputs, `--previous`), which
+    /// no output may overwrite.
+    pub(crate) reads: Vec<Named>,
+}
+
+impl Job {
+    /// Refuses outputs over what the job reads, over each other or over
+    /// special files, then removes temp files killed runs left beside them.
+    pub(crate) fn check_outputs(&self, outputs: &[PathBuf]) -> Result<(), BuildError> {
+        let writes: Vec<Named> = outputs
+            .iter()
+            .map(|p| Named::new(p, format!("the output --out {}", p.display())))
+            .collect();
+        pipeline::check_outputs(&self.reads, &writes)?;
+        pipeline::remove_stale_temps(&writes);
+        Ok(())
+    }
 }
 
 impl LayoutOptions {
@@ -101,6 +118,7 @@ impl LayoutOptions {
     /// flags to the source's settings. `method` is the method asked for, if
     /// any (each command has its own `--method`).
     pub(crate) fn job(&self, method: Option<Method>) -> anyhow::Result<Job> {
+        let mut reads = Vec::new();
         let (config, mut request, style) = match (&self.input, &self.config) {
             (Some(input), _) => (
                 DatasetConfig::hierarchy_file(input, self.weight.clone()),
@@ -110,6 +128,7 @@ impl LayoutOptions {
             (None, Some(path)) => {
                 let config = Config::from_path(path).map_err(BuildError::from)?;
                 let d = pick_dataset(&config, self.dataset.as_deref(), path)?;
+                reads.push(Named::new(path, "the config"));
                 (d.clone(), config.request(d), config.style(d))
             }
             (None, None) => {
@@ -146,11 +165,18 @@ impl LayoutOptions {
             request.neighbor.frames = frames;
         }
         let dataset = pipeline::load(&config)?;
+        for (role, path) in &config.files {
+            reads.push(Named::new(path, format!("the {role} input")));
+        }
+        if let Some(previous) = &self.previous {
+            reads.push(Named::new(previous, "the --previous layout"));
+        }
         Ok(Job {
             config,
             dataset,
             request,
             style,
+            reads,
         })
     }
 
@@ -239,6 +265,13 @@ fn daemon_fault(e: &(dyn std::error::Error + 'static)) -> Option<Fault> {
     }
     let _ = e;
     None
+}
+
+/// Prints one warning line on stderr: something in the input that was read
+/// but probably not meant (a header without rows, a self pair).
+pub(crate) fn warn(line: impl std::fmt::Display) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr().lock(), "warning: {line}");
 }
 
 /// `-q`: status lines, notes and progress are left out.

@@ -1,8 +1,24 @@
 //! `nptreemap watch [CONFIG]`: runs the daemon ([`nptreemap::daemon`]) until
-//! SIGINT or SIGTERM, printing one status line per rebuild on stdout. A stop
-//! signal ends it cleanly with exit code 0.
+//! SIGINT or SIGTERM, printing one status line per rebuild on stdout. Owns
+//! the signals: SIGHUP reloads the config (as daemons do; the systemd unit's
+//! `ExecReload` sends it); SIGINT and SIGTERM stop the daemon with exit code
+//! 0, between the stages of a rebuild, or, when a layout runs on, after a
+//! grace period by exiting outright.
+//!
+//! Why exiting outright is safe: every output is written to a temp file and
+//! renamed into place ([`nptreemap::store`]), so a process that ends at any
+//! instant leaves each output either old or new, never torn; the exit waits
+//! for the write lock, so it never falls between two outputs of one dataset;
+//! the temp file of an interrupted write is removed by the next start. What
+//! is lost is only the rebuild under way, which the next start redoes (warm,
+//! from the stored layout).
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
 
 use clap::Args;
+use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 
 use super::config_file::ConfigArg;
 
@@ -19,19 +35,52 @@ pub(crate) struct WatchArgs {
     cold: bool,
 }
 
+/// How long a stop signal waits for the daemon to stop by itself (it checks
+/// between the stages of a rebuild) before the process exits: short enough
+/// that SIGTERM ends the process within a second (issue 11), long enough for
+/// a write under way to finish.
+const GRACE: Duration = Duration::from_millis(600);
+
 pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
     let (tx, rx) = daemon::channel();
-    let stop = tx.clone();
-    // ctrlc's `termination` feature also routes SIGTERM (systemd's stop) here.
-    ctrlc::set_handler(move || {
-        let _ = stop.send(Message::Stop);
-    })?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
+    {
+        let (tx, stop) = (tx.clone(), stop.clone());
+        std::thread::spawn(move || {
+            for signal in signals.forever() {
+                if signal == SIGHUP {
+                    let _ = tx.send(Message::Reload);
+                    continue;
+                }
+                let again = stop.swap(true, Ordering::SeqCst);
+                let _ = tx.send(Message::Stop);
+                if again {
+                    // A second stop signal: no more waiting.
+                    exit_now();
+                }
+                std::thread::spawn(|| {
+                    std::thread::sleep(GRACE);
+                    exit_now();
+                });
+            }
+        });
+    }
     let options = Options {
         cold: args.cold,
+        stop: Some(stop),
         ..Options::default()
     };
     daemon::run(&args.config.path()?, options, tx, &rx, &mut |status| {
         super::say(status);
     })?;
     Ok(())
+}
+
+/// Ends the process with exit code 0 once no set of outputs is being written
+/// (see the module docs for why this is safe).
+fn exit_now() -> ! {
+    let _writing = nptreemap::store::writing();
+    super::say("stopped (a rebuild under way was abandoned; it is redone at the next start)");
+    std::process::exit(0);
 }

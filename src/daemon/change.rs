@@ -23,6 +23,9 @@ pub enum Reason {
     Render,
     /// The dataset is new in the config.
     Added,
+    /// SIGHUP: everything read again (a dataset whose inputs did not change
+    /// is not rebuilt).
+    Reload,
 }
 
 impl std::fmt::Display for Reason {
@@ -33,6 +36,7 @@ impl std::fmt::Display for Reason {
             Reason::Layout => f.write_str("config: layout"),
             Reason::Render => f.write_str("config: render"),
             Reason::Added => f.write_str("config: new dataset"),
+            Reason::Reload => f.write_str("reload"),
         }
     }
 }

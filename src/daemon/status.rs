@@ -45,6 +45,11 @@ pub enum Status {
         written: Vec<PathBuf>,
         /// Outputs left alone because their bytes would not change.
         unchanged: usize,
+        /// Outputs that could not be written (each reported as a problem).
+        failed: usize,
+        /// Whether the dataset had a problem reported since its last good
+        /// build: the line then says it is ok again.
+        recovered: bool,
     },
     /// Something went wrong; the last good outputs stay.
     Problem {
@@ -53,7 +58,14 @@ pub enum Status {
         /// The error chain, outermost first.
         message: String,
         /// What the daemon does about it.
-        consequence: &'static str,
+        consequence: String,
+    },
+    /// Something in an input that was read but probably not meant.
+    Warning {
+        /// The dataset.
+        subject: String,
+        /// The warning, naming the file and line.
+        message: String,
     },
     /// A note that is not an error (a dataset left the config, ...).
     Note {
@@ -71,7 +83,7 @@ impl Status {
     pub fn problem(
         subject: impl Into<String>,
         error: &(dyn std::error::Error + 'static),
-        consequence: &'static str,
+        consequence: impl Into<String>,
     ) -> Self {
         let mut message = error.to_string();
         let mut source = error.source();
@@ -88,7 +100,7 @@ impl Status {
         Status::Problem {
             subject: subject.into(),
             message,
-            consequence,
+            consequence: consequence.into(),
         }
     }
 }
@@ -119,20 +131,35 @@ impl fmt::Display for Status {
                 ms,
                 written,
                 unchanged,
+                failed,
+                recovered,
             } => {
                 let how = match layout {
                     LayoutKind::Cold => "laid out",
                     LayoutKind::Warm => "laid out warm",
                     LayoutKind::Reused => "re-rendered",
                 };
-                write!(f, "{dataset}: {reason}; {how} in {ms:.0} ms; ")?;
-                if written.is_empty() {
+                let again = if *recovered { "ok again, " } else { "" };
+                write!(f, "{dataset}: {again}{reason}; {how} in {ms:.0} ms; ")?;
+                if written.is_empty() && *failed == 0 {
                     f.write_str("no output changed")?;
+                } else if written.is_empty() {
+                    write!(f, "{failed} output(s) not written")?;
+                    if *unchanged > 0 {
+                        write!(f, ", {unchanged} unchanged")?;
+                    }
                 } else {
                     let names: Vec<String> = written.iter().map(|p| file_name(p)).collect();
                     write!(f, "wrote {}", names.join(", "))?;
+                    let mut rest = Vec::new();
                     if *unchanged > 0 {
-                        write!(f, " ({unchanged} unchanged)")?;
+                        rest.push(format!("{unchanged} unchanged"));
+                    }
+                    if *failed > 0 {
+                        rest.push(format!("{failed} not written"));
+                    }
+                    if !rest.is_empty() {
+                        write!(f, " ({})", rest.join(", "))?;
                     }
                 }
                 Ok(())
@@ -142,6 +169,7 @@ impl fmt::Display for Status {
                 message,
                 consequence,
             } => write!(f, "{subject}: error: {message} ({consequence})"),
+            Status::Warning { subject, message } => write!(f, "{subject}: warning: {message}"),
             Status::Note { subject, message } => write!(f, "{subject}: {message}"),
             Status::Stopped => f.write_str("stopped"),
         }
@@ -161,11 +189,38 @@ mod tests {
             ms: 41.6,
             written: vec![PathBuf::from("out/c.svg"), PathBuf::from("out/c.png")],
             unchanged: 1,
+            failed: 0,
+            recovered: false,
         }
         .to_string();
         assert_eq!(
             line,
             "countries: data: borders.csv; laid out warm in 42 ms; wrote c.svg, c.png (1 unchanged)"
+        );
+    }
+
+    #[test]
+    fn failed_writes_and_recoveries_are_said() {
+        let built = |written: Vec<PathBuf>, failed, recovered| {
+            Status::Built {
+                dataset: "c".to_string(),
+                reason: Reason::Start,
+                layout: LayoutKind::Cold,
+                ms: 5.0,
+                written,
+                unchanged: 0,
+                failed,
+                recovered,
+            }
+            .to_string()
+        };
+        assert_eq!(
+            built(Vec::new(), 3, false),
+            "c: start; laid out in 5 ms; 3 output(s) not written"
+        );
+        assert_eq!(
+            built(vec![PathBuf::from("o/a.svg")], 1, true),
+            "c: ok again, start; laid out in 5 ms; wrote a.svg (1 not written)"
         );
     }
 

@@ -4,9 +4,12 @@
 //! follow), and the batching of its events into one rebuild (100 ms of quiet,
 //! 500 ms at most, as typst's watcher does, so a burst of saves is one rebuild
 //! and a steady stream of them cannot postpone it forever). Owns event
-//! filtering and batching; may not know about datasets or configs.
+//! filtering and batching, and noticing watched folders that were deleted,
+//! replaced or created (inotify drops the watch of a deleted folder, so a
+//! folder made again under the same name would go unwatched; missing folders
+//! are polled until they exist); may not know about datasets or configs.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender};
 use std::time::{Duration, Instant};
@@ -19,6 +22,8 @@ use notify::{RecursiveMode, Watcher as _};
 pub enum Message {
     /// A file-system event (or a watcher error).
     Fs(notify::Result<notify::Event>),
+    /// SIGHUP: read the config (and every input) again.
+    Reload,
     /// SIGINT / SIGTERM: finish cleanly.
     Stop,
 }
@@ -28,6 +33,8 @@ pub enum Message {
 pub enum Batch {
     /// Paths touched by relevant events, each once, sorted.
     Paths(BTreeSet<PathBuf>),
+    /// A reload was asked for, with the paths of the batch it interrupted.
+    Reload(BTreeSet<PathBuf>),
     /// No relevant event came within the idle time asked for.
     Idle,
     /// Stop was asked for (or every sender is gone).
@@ -52,10 +59,33 @@ impl Default for Timing {
     }
 }
 
-/// A notify watcher over directories, updated by mark-and-sweep.
+/// A folder's identity (device and inode), to tell a folder made again under
+/// the same name from the one that was watched.
+type DirId = (u64, u64);
+
+fn dir_id(dir: &Path) -> Option<DirId> {
+    let meta = std::fs::metadata(dir)
+        .ok()
+        .filter(std::fs::Metadata::is_dir)?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        Some((meta.dev(), meta.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        Some((0, 0))
+    }
+}
+
+/// A notify watcher over directories, updated by mark-and-sweep; a wanted
+/// directory that does not exist is remembered and polled ([`DirWatcher::check`]).
 pub struct DirWatcher {
     inner: notify::RecommendedWatcher,
-    watched: BTreeSet<PathBuf>,
+    /// Every wanted directory: its identity when watched, `None` while it is
+    /// missing (or cannot be watched).
+    dirs: BTreeMap<PathBuf, Option<DirId>>,
 }
 
 impl DirWatcher {
@@ -67,35 +97,91 @@ impl DirWatcher {
         })?;
         Ok(Self {
             inner,
-            watched: BTreeSet::new(),
+            dirs: BTreeMap::new(),
         })
     }
 
     /// Watches exactly `dirs` (non-recursively): new ones are added, ones no
     /// longer wanted removed. A directory that does not exist (yet) cannot be
-    /// watched; it is returned so the caller can report it, and retried at the
-    /// next sync.
+    /// watched; it is returned with the error so the caller can report it,
+    /// and polled by [`DirWatcher::check`] until it exists.
     pub fn sync(&mut self, dirs: &BTreeSet<PathBuf>) -> Vec<(PathBuf, notify::Error)> {
-        let stale: Vec<PathBuf> = self.watched.difference(dirs).cloned().collect();
+        let stale: Vec<PathBuf> = self
+            .dirs
+            .keys()
+            .filter(|d| !dirs.contains(*d))
+            .cloned()
+            .collect();
         for dir in stale {
-            let _ = self.inner.unwatch(&dir);
-            self.watched.remove(&dir);
+            if let Some(Some(_)) = self.dirs.remove(&dir) {
+                let _ = self.inner.unwatch(&dir);
+            }
         }
         let mut failed = Vec::new();
-        for dir in dirs.difference(&self.watched.clone()) {
-            match self.inner.watch(dir, RecursiveMode::NonRecursive) {
-                Ok(()) => {
-                    self.watched.insert(dir.clone());
+        for dir in dirs {
+            if self.dirs.contains_key(dir) {
+                continue;
+            }
+            match self.watch(dir) {
+                Ok(id) => {
+                    self.dirs.insert(dir.clone(), Some(id));
                 }
-                Err(e) => failed.push((dir.clone(), e)),
+                Err(e) => {
+                    self.dirs.insert(dir.clone(), None);
+                    failed.push((dir.clone(), e));
+                }
             }
         }
         failed
     }
 
+    fn watch(&mut self, dir: &Path) -> notify::Result<DirId> {
+        let id = dir_id(dir)
+            .ok_or_else(|| notify::Error::path_not_found().add_path(dir.to_path_buf()))?;
+        self.inner.watch(dir, RecursiveMode::NonRecursive)?;
+        Ok(id)
+    }
+
+    /// Looks at every wanted directory (a few `stat`s; the daemon calls it
+    /// between batches) and returns those whose content may have changed
+    /// unseen: one that appeared (it is watched from now on), one replaced by
+    /// another of the same name (watched anew), one that disappeared (its
+    /// files are gone; polled until it is back).
+    pub fn check(&mut self) -> Vec<PathBuf> {
+        let mut changed = Vec::new();
+        let dirs: Vec<(PathBuf, Option<DirId>)> =
+            self.dirs.iter().map(|(d, id)| (d.clone(), *id)).collect();
+        for (dir, known) in dirs {
+            let now = dir_id(&dir);
+            if now == known {
+                continue;
+            }
+            if known.is_some() {
+                // Deleted or replaced: the old watch is dead either way.
+                let _ = self.inner.unwatch(&dir);
+            }
+            let watched = match now {
+                Some(_) => self.watch(&dir).ok(),
+                None => None,
+            };
+            tracing::debug!(dir = %dir.display(), ?known, ?watched, "watched folder changed");
+            self.dirs.insert(dir.clone(), watched);
+            // A folder that exists but cannot be watched yet is retried at
+            // the next check; it counts as changed once it is watched.
+            if watched.is_some() || known.is_some() {
+                changed.push(dir);
+            }
+        }
+        changed
+    }
+
     /// The directories currently watched.
-    pub fn watched(&self) -> &BTreeSet<PathBuf> {
-        &self.watched
+    pub fn watched(&self) -> BTreeSet<PathBuf> {
+        self.dirs
+            .iter()
+            .filter(|(_, id)| id.is_some())
+            .map(|(d, _)| d.clone())
+            .collect()
     }
 }
 
@@ -160,6 +246,7 @@ pub fn next_batch(
         };
         match message {
             Message::Stop => return Batch::Stop,
+            Message::Reload => return Batch::Reload(paths),
             Message::Fs(Err(e)) => {
                 tracing::warn!(error = %e, "file watcher error");
             }

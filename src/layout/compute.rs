@@ -101,6 +101,8 @@ pub struct Request {
 
 /// Runs the layout step.
 pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutError> {
+    // Every method relies on a canvas in range; check before any of them runs.
+    request.params.validate()?;
     let kind = request
         .similarity
         .or_else(|| dataset.similarity_hint().map(SimilarityKind::from_hint));

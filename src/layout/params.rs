@@ -90,6 +90,17 @@ impl Outline {
     }
 }
 
+/// The smallest canvas side. The geometry's tolerances are absolute at the
+/// scale of a unit (the checker's shared-edge length among them), so below 1
+/// cells stop sharing edges and areas stop converging (a 0.01 canvas fails
+/// the checker; 1e-100 ran for minutes).
+pub const CANVAS_MIN: f64 = 1.0;
+
+/// The largest canvas side: a million output units (pixels) is past any
+/// screen or print; far beyond it the projections' constants lose precision
+/// (1e100 panicked in the neighbourhood optimiser). Tested up to 1e10.
+pub const CANVAS_MAX: f64 = 1_000_000.0;
+
 /// Parameters of a layout run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
@@ -139,11 +150,12 @@ impl Params {
             })
         };
         let c = self.canvas;
-        if !(c.width.is_finite() && c.width > 0.0) {
-            return bad("width", "must be a positive number");
+        let range = format!("must be a number from {CANVAS_MIN} to {CANVAS_MAX}");
+        if !(CANVAS_MIN..=CANVAS_MAX).contains(&c.width) {
+            return bad("width", &range);
         }
-        if !(c.height.is_finite() && c.height > 0.0) {
-            return bad("height", "must be a positive number");
+        if !(CANVAS_MIN..=CANVAS_MAX).contains(&c.height) {
+            return bad("height", &range);
         }
         if !(self.convergence_ratio.is_finite() && self.convergence_ratio >= 0.0) {
             return bad("convergence_ratio", "must be a number >= 0");

@@ -150,7 +150,19 @@ pub fn target_areas(values: &[f64], area: f64, min_weight_ratio: f64) -> Vec<f64
     let floor = max * min_weight_ratio.max(1e-9);
     let eff: Vec<f64> = values.iter().map(|v| v.max(floor)).collect();
     let total: f64 = eff.iter().sum();
-    eff.iter().map(|v| area * v / total).collect()
+    eff.iter()
+        .map(|v| {
+            let target = area * v / total;
+            // Weights near f64's maximum overflow `area * v` (a 1e308 leaf
+            // beside a weight of 2 got half the cell); the share first keeps
+            // it finite. Not always: the product's rounding is the goldens'.
+            if target.is_finite() {
+                target
+            } else {
+                area * (v / total)
+            }
+        })
+        .collect()
 }
 
 /// The cold start of one diagram: well-spread sites, equal weights, the full

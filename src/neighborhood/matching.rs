@@ -136,7 +136,6 @@ fn bisect(
         lo = lo.min(p);
         hi = hi.max(p);
     }
-    // Split along x unless the box is strictly taller (a NaN extent splits along x).
     let along_x = (hi.y - lo.y).partial_cmp(&(hi.x - lo.x)) != Some(std::cmp::Ordering::Greater);
     let key = |p: Point| if along_x { p.x } else { p.y };
     // Total order (NaN last), ties by index: deterministic.

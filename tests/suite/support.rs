@@ -142,3 +142,56 @@ pub(crate) fn generate(dir: &Path, leaves: usize, depth: usize, seed: u64) -> Pa
     assert!(status.status.success(), "gen.py failed");
     path
 }
+
+/// Runs `cmd` to completion, or kills it after `secs` seconds and fails the
+/// test: a command that hangs (a FIFO read, a runaway layout) must not hang
+/// the suite.
+pub(crate) fn output_within(cmd: &mut Command, secs: u64) -> Output {
+    use std::io::Read;
+    let mut child = cmd
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    // Drain the pipes on threads so a chatty child cannot block on a full pipe.
+    let mut out_pipe = child.stdout.take().expect("stdout");
+    let mut err_pipe = child.stderr.take().expect("stderr");
+    let out_reader = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        let _ = out_pipe.read_to_end(&mut v);
+        v
+    });
+    let err_reader = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        let _ = err_pipe.read_to_end(&mut v);
+        v
+    });
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(secs);
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            break status;
+        }
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{cmd:?} did not finish within {secs} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    Output {
+        status,
+        stdout: out_reader.join().expect("stdout reader"),
+        stderr: err_reader.join().expect("stderr reader"),
+    }
+}
+
+/// Makes a FIFO at `path` (through python3, which the suite needs anyway;
+/// std has no mkfifo).
+pub(crate) fn mkfifo(path: &Path) {
+    let status = Command::new("python3")
+        .args(["-c", "import os, sys; os.mkfifo(sys.argv[1])"])
+        .arg(path)
+        .status()
+        .expect("run python3");
+    assert!(status.success(), "mkfifo {}", path.display());
+}

@@ -80,8 +80,9 @@ impl Daemon {
         let mut child = support::bin()
             .arg("watch")
             .arg(config)
+            .env("RUST_LOG", "nptreemap=debug")
             .stdout(Stdio::piped())
-            .stderr(Stdio::null())
+            .stderr(std::fs::File::create(config.with_extension("log")).expect("log"))
             .spawn()
             .expect("start nptreemap watch");
         let stdout = child.stdout.take().expect("piped stdout");
@@ -335,7 +336,12 @@ fn the_daemon_follows_edits_and_survives_bad_ones() {
     let tmp = dir.join("data/.nodes.csv.swp");
     std::fs::write(&tmp, nodes_csv(&leaves)).expect("temp");
     std::fs::rename(&tmp, &nodes).expect("rename");
-    daemon.expect(&["grid: data: nodes.csv", "wrote"]);
+    let line = daemon.expect(&["grid: ", "data: nodes.csv", "wrote"]);
+    // The error of step 4 was reported, so its fix is announced.
+    assert!(
+        line.starts_with("grid: ok again, data: nodes.csv"),
+        "{line}"
+    );
     assert_outputs_match(&out, &leaves);
 
     // 6. An invalid config keeps the previous one; its fix applies.
@@ -427,5 +433,284 @@ fn a_burst_of_edits_ends_in_the_last_data() {
     // So does SIGINT (Ctrl-C).
     signal(&daemon.child, "INT");
     daemon.expect(&["stopped"]);
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
+/// Issue 11 item 3: a data folder deleted and created again is watched again
+/// (the dead path used to stay in the watched set and nothing ever rebuilt),
+/// and so is the config's own folder.
+#[test]
+fn a_recreated_folder_is_watched_again() {
+    let dir = support::temp_dir("watch_recreated");
+    let data = dir.join("data");
+    let conf = dir.join("conf");
+    std::fs::create_dir_all(&data).expect("data");
+    std::fs::create_dir_all(&conf).expect("conf");
+    let write_data = |leaves: &[(String, f64)]| {
+        std::fs::write(data.join("nodes.csv"), nodes_csv(leaves)).expect("nodes");
+        std::fs::write(data.join("pairs.csv"), pairs_csv()).expect("pairs");
+    };
+    let mut leaves = initial_leaves();
+    write_data(&leaves);
+    let config_text = CONFIG
+        .replace("data/", "../data/")
+        .replace("out/", "../out/");
+    let config = conf.join("nptreemap.yaml");
+    std::fs::write(&config, &config_text).expect("config");
+    let out = dir.join("out");
+    let mut daemon = Daemon::start(&config);
+    daemon.expect(&["grid: start", "wrote"]);
+
+    std::fs::remove_dir_all(&data).expect("rm data");
+    daemon.expect(&["grid: error", "nodes.csv"]);
+    std::fs::create_dir_all(&data).expect("mkdir data");
+    leaves[2].1 = 91.0;
+    write_data(&leaves);
+    let line = daemon.expect(&["grid: ", "wrote"]);
+    assert!(line.contains("ok again"), "the recovery is said: {line}");
+    assert_outputs_match(&out, &leaves);
+    // And the new folder is watched: a later edit is seen.
+    leaves[5].1 = 12.0;
+    write_data(&leaves);
+    daemon.expect(&["grid: data", "wrote"]);
+    assert_outputs_match(&out, &leaves);
+
+    // The config's own folder, deleted and made again with a changed config.
+    std::fs::remove_dir_all(&conf).expect("rm conf");
+    daemon.expect(&["config: error"]);
+    std::fs::create_dir_all(&conf).expect("mkdir conf");
+    std::fs::write(&config, format!("render: {{legend: false}}\n{config_text}")).expect("config");
+    daemon.expect(&["grid: config: render"]);
+    // Watched again: one more config edit is seen.
+    std::fs::write(&config, format!("render: {{legend: true}}\n{config_text}")).expect("config");
+    daemon.expect(&["grid: config: render"]);
+    signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
+/// Issue 11 item 4: a FIFO in place of an input is reported, never read (the
+/// daemon used to block in the read and stop handling events).
+#[test]
+fn a_fifo_input_does_not_block_the_daemon() {
+    let (dir, config, out) = setup("watch_fifo");
+    let nodes = dir.join("data/nodes.csv");
+    let mut daemon = Daemon::start(&config);
+    daemon.expect(&["grid: start", "wrote"]);
+    std::fs::remove_file(&nodes).expect("rm nodes");
+    support::mkfifo(&nodes);
+    daemon.expect(&["grid: error", "nodes.csv", "not a regular file"]);
+    // Still handling events: the file is back and the picture follows.
+    let mut leaves = initial_leaves();
+    leaves[1].1 = 66.0;
+    std::fs::remove_file(&nodes).expect("rm fifo");
+    std::fs::write(&nodes, nodes_csv(&leaves)).expect("nodes");
+    daemon.expect(&["grid: ", "wrote"]);
+    assert_outputs_match(&out, &leaves);
+    signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
+/// Issue 11 item 12: SIGHUP reloads the config (it used to stop the daemon
+/// with exit 0, so systemd's `Restart=on-failure` never restarted it).
+#[test]
+fn sighup_reloads_the_config() {
+    let (_dir, config, out) = setup("watch_hup");
+    let mut daemon = Daemon::start(&config);
+    daemon.expect(&["grid: start", "wrote"]);
+    signal(&daemon.child, "HUP");
+    daemon.expect(&["config: reloaded"]);
+    // Still running, and the reloaded config applies.
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(
+        daemon.child.try_wait().expect("try_wait").is_none(),
+        "SIGHUP stopped the daemon"
+    );
+    std::fs::write(&config, format!("render: {{legend: false}}\n{CONFIG}")).expect("config");
+    daemon.expect(&["grid: config: render"]);
+    assert_outputs_match(&out, &initial_leaves());
+    signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
+/// The shipped unit reloads with SIGHUP and stops with SIGTERM, which the
+/// daemon answers as the tests above check; a failure exit (not 0, not 2)
+/// restarts it.
+#[test]
+fn the_systemd_unit_matches_the_daemon() {
+    let unit = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/systemd/nptreemap-watch.service"),
+    )
+    .expect("unit");
+    let lines: Vec<&str> = unit.lines().map(str::trim).collect();
+    for wanted in [
+        "ExecReload=/bin/kill -HUP $MAINPID",
+        "KillSignal=SIGTERM",
+        "Restart=on-failure",
+        "RestartPreventExitStatus=2",
+    ] {
+        assert!(lines.contains(&wanted), "the unit lacks {wanted:?}");
+    }
+    assert!(lines
+        .iter()
+        .any(|l| l.starts_with("ExecStart=") && l.contains("nptreemap watch")));
+}
+
+/// A dataset slow enough to be caught mid-layout: 1,500 leaves by the
+/// neighbourhood method (seconds in the test build).
+fn slow_setup(name: &str) -> (PathBuf, PathBuf) {
+    let dir = support::temp_dir(name);
+    let (n, g) = (1500, 30);
+    let mut nodes = String::from("id,weight,group\n");
+    let mut pairs = String::from("a,b\n");
+    for i in 0..n {
+        nodes.push_str(&format!("n{i},{},g{}\n", 1 + i % 17, i % g));
+        pairs.push_str(&format!("n{i},n{}\n", (i + g) % n));
+    }
+    std::fs::write(dir.join("nodes.csv"), nodes).expect("nodes");
+    std::fs::write(dir.join("pairs.csv"), pairs).expect("pairs");
+    let config = dir.join("nptreemap.yaml");
+    std::fs::write(
+        &config,
+        "datasets:\n  - name: slow\n    format: border-list\n    files: {nodes: nodes.csv, pairs: pairs.csv}\n    fields: {groups: [group]}\n    outputs: [{path: out/slow.svg}, {path: out/slow.json}]\n",
+    )
+    .expect("config");
+    (dir, config)
+}
+
+/// Issue 11 item 12: SIGTERM during a long rebuild ends the daemon with exit
+/// code 0 within a second (it used to wait for the layout, or need SIGKILL),
+/// leaving no output half-written.
+#[test]
+fn sigterm_during_a_long_rebuild_ends_within_a_second() {
+    let (dir, config) = slow_setup("watch_term_busy");
+    let mut daemon = Daemon::start(&config);
+    daemon.expect(&["watching"]);
+    // The start build is under way now (it takes seconds).
+    std::thread::sleep(Duration::from_millis(800));
+    assert!(daemon.child.try_wait().expect("try_wait").is_none());
+    let sent = Instant::now();
+    // Directly, not through python3 (whose start-up takes a while on a busy
+    // machine and would be counted).
+    // SAFETY: kill(2) with the pid of our own child and a valid signal.
+    let sent_ok = unsafe { libc::kill(daemon.child.id() as libc::pid_t, libc::SIGTERM) };
+    assert_eq!(sent_ok, 0, "kill");
+    let status = loop {
+        if let Some(status) = daemon.child.try_wait().expect("try_wait") {
+            break status;
+        }
+        assert!(
+            sent.elapsed() < Duration::from_secs(10),
+            "still running 10 s after SIGTERM"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let took = sent.elapsed();
+    assert_eq!(status.code(), Some(0), "exit code after SIGTERM");
+    // One second, plus scheduling slack on a loaded two-core machine.
+    assert!(took < Duration::from_millis(1500), "took {took:?}");
+    // Whatever is there is whole: the rebuild was interrupted before writing.
+    for name in ["slow.svg", "slow.json"] {
+        if let Ok(bytes) = std::fs::read(dir.join("out").join(name)) {
+            assert!(
+                bytes.ends_with(b">\n") || bytes.ends_with(b"}\n"),
+                "{name} torn"
+            );
+        }
+    }
+}
+
+/// Issue 11 item 13: every status line is true. An output folder replaced by
+/// a file: the failures do not claim other outputs were written, the rebuild
+/// line does not say "no output changed"; the fix is announced ("ok again").
+#[test]
+fn status_lines_tell_the_truth() {
+    let (dir, config, out) = setup("watch_truth");
+    let nodes = dir.join("data/nodes.csv");
+    let mut daemon = Daemon::start(&config);
+    daemon.expect(&["grid: start", "wrote"]);
+    // The stored layout is written after the status line: wait for it, so
+    // the folder is not removed while the daemon still writes in it.
+    let state = out.join(".nptreemap/grid.layout.json");
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while !state.exists() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(200));
+    std::fs::remove_dir_all(&out).expect("rm out");
+    std::fs::write(&out, "not a folder").expect("out as a file");
+    let mut leaves = initial_leaves();
+    leaves[0].1 = 44.0;
+    std::fs::write(&nodes, nodes_csv(&leaves)).expect("edit");
+    let first = daemon.expect(&["grid: error", "grid.svg"]);
+    assert!(!first.contains("other outputs written"), "{first}");
+    let summary = daemon.expect(&["grid: data: nodes.csv"]);
+    assert!(!summary.contains("no output changed"), "{summary}");
+    assert!(summary.contains("not written"), "{summary}");
+    // The folder is back: the next rebuild writes and says it recovered.
+    std::fs::remove_file(&out).expect("rm file");
+    leaves[0].1 = 45.0;
+    std::fs::write(&nodes, nodes_csv(&leaves)).expect("edit");
+    let line = daemon.expect(&["grid: ", "wrote"]);
+    assert!(line.contains("ok again"), "{line}");
+    assert_outputs_match(&out, &leaves);
+
+    // A data error, then its fix: the fix is announced.
+    std::fs::write(
+        &nodes,
+        format!("{}n999,Broken,x,north\n", nodes_csv(&leaves)),
+    )
+    .expect("bad");
+    daemon.expect(&["grid: error", "line "]);
+    std::fs::write(&nodes, nodes_csv(&leaves)).expect("fix");
+    let line = daemon.expect(&["grid: ok again"]);
+    assert!(!line.contains("error"), "{line}");
+    // A bad config, then its fix.
+    std::fs::write(&config, format!("{CONFIG}  - name: [\n")).expect("bad yaml");
+    daemon.expect(&["config: error"]);
+    std::fs::write(&config, CONFIG).expect("fix");
+    daemon.expect(&["config: ok again"]);
+    signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
+/// Issue 11 item 13: with an input missing at start there are no last
+/// outputs to keep, and the line does not claim any.
+#[test]
+fn no_outputs_kept_when_there_are_none() {
+    let (dir, config, _out) = setup("watch_none_kept");
+    std::fs::remove_file(dir.join("data/pairs.csv")).expect("rm");
+    let mut daemon = Daemon::start(&config);
+    let line = daemon.expect(&["grid: error", "pairs.csv"]);
+    assert!(!line.contains("outputs kept"), "{line}");
+    std::fs::write(dir.join("data/pairs.csv"), pairs_csv()).expect("pairs");
+    daemon.expect(&["grid: ", "wrote"]);
+    signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
+/// Issue 11 item 15: what `check` warns about is a status line in `watch`:
+/// a self pair, and a stored layout that cannot be read (a silent cold start
+/// made the picture jump).
+#[test]
+fn warnings_are_status_lines() {
+    let (dir, config, out) = setup("watch_warnings");
+    std::fs::create_dir_all(out.join(".nptreemap")).expect("state dir");
+    std::fs::write(
+        out.join(".nptreemap/grid.layout.json"),
+        "{\"format\": \"nptreemap-layout/1\", \"nod",
+    )
+    .expect("truncated state");
+    std::fs::write(
+        dir.join("data/pairs.csv"),
+        format!("{}n001,n001\n", pairs_csv()),
+    )
+    .expect("pairs");
+    let mut daemon = Daemon::start(&config);
+    let state = daemon.expect(&["grid: warning", "grid.layout.json"]);
+    assert!(state.contains("cold"), "{state}");
+    let pair = daemon.expect(&["grid: warning", "pairs.csv", "itself"]);
+    assert!(pair.contains("line "), "{pair}");
+    daemon.expect(&["grid: start", "wrote"]);
+    signal(&daemon.child, "TERM");
     assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
 }

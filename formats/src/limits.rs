@@ -1,0 +1,175 @@
+//! [`Limits`]: how large an input the readers accept (nodes, depth, feature
+//! dimensions, file size), and [`LimitError`], the refusal that names the
+//! limit and the config key raising it. Readers check them as they go, before
+//! any allocation that grows with the quantity limited, so an oversized input
+//! costs memory in proportion to the limit, never to the input's claims.
+//!
+//! The defaults are generous for the tool's use (pictures of a few dozen to a
+//! few thousand items; real datasets here reach 3,041 leaves, depth 5): a
+//! picture of more than 100,000 cells has cells below a pixel on any screen,
+//! and a hierarchy deeper than 32 levels nests cells too thin to see.
+
+use std::fmt;
+
+/// Limits on what readers accept. The config's `limits:` section sets them
+/// (`config/default.yaml` documents each key); every field must be >= 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Limits {
+    /// Most nodes a dataset may have (rows, groups and the root together).
+    /// Default: 100,000.
+    pub max_nodes: usize,
+    /// Deepest level a node may sit at (the root is depth 0). Default: 32.
+    pub max_depth: usize,
+    /// Longest feature vector: values per embedding row, distinct genres of a
+    /// genre table, dates of a time series. Default: 1,024.
+    pub max_dimensions: usize,
+    /// Largest input file, in MiB (checked before it is read). Default: 256.
+    pub max_file_mb: u64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_nodes: 100_000,
+            max_depth: 32,
+            max_dimensions: 1_024,
+            max_file_mb: 256,
+        }
+    }
+}
+
+/// Which limit an input exceeds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Limit {
+    /// [`Limits::max_nodes`].
+    Nodes,
+    /// [`Limits::max_depth`].
+    Depth,
+    /// [`Limits::max_dimensions`].
+    Dimensions,
+    /// [`Limits::max_file_mb`].
+    FileSize,
+}
+
+impl Limit {
+    /// The config key that raises this limit (under `limits:`).
+    pub fn key(self) -> &'static str {
+        match self {
+            Limit::Nodes => "max_nodes",
+            Limit::Depth => "max_depth",
+            Limit::Dimensions => "max_dimensions",
+            Limit::FileSize => "max_file_mb",
+        }
+    }
+}
+
+/// An input larger than a [`Limits`] allows.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "{what}: over the limit of {allowed} (`limits.{key}` in the config raises it)",
+    key = .limit.key()
+)]
+pub struct LimitError {
+    /// The limit exceeded.
+    pub limit: Limit,
+    /// Its value.
+    pub allowed: u64,
+    /// What was found, for people ("more than 100000 nodes", "node \"x\" at depth 33").
+    pub what: String,
+}
+
+impl Limits {
+    /// The value of `limit`.
+    pub fn get(&self, limit: Limit) -> u64 {
+        match limit {
+            Limit::Nodes => self.max_nodes as u64,
+            Limit::Depth => self.max_depth as u64,
+            Limit::Dimensions => self.max_dimensions as u64,
+            Limit::FileSize => self.max_file_mb,
+        }
+    }
+
+    /// The largest file accepted, in bytes.
+    pub fn max_file_bytes(&self) -> u64 {
+        self.max_file_mb.saturating_mul(1 << 20)
+    }
+
+    /// The refusal for `limit`, describing what was found.
+    pub fn exceeded(&self, limit: Limit, what: impl fmt::Display) -> LimitError {
+        LimitError {
+            limit,
+            allowed: self.get(limit),
+            what: what.to_string(),
+        }
+    }
+
+    /// An error when `count` nodes are more than allowed.
+    pub fn check_nodes(&self, count: usize) -> Result<(), LimitError> {
+        if count > self.max_nodes {
+            return Err(self.exceeded(
+                Limit::Nodes,
+                format_args!("more than {} nodes", self.max_nodes),
+            ));
+        }
+        Ok(())
+    }
+
+    /// An error when a feature vector of `len` values is longer than allowed;
+    /// `what` names it ("the vectors", "genres").
+    pub fn check_dimensions(&self, len: usize, what: &str) -> Result<(), LimitError> {
+        if len > self.max_dimensions {
+            return Err(self.exceeded(
+                Limit::Dimensions,
+                format_args!("{what} have {len} dimensions"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The first limit that is 0 (every limit must be at least 1), with its key.
+    pub fn zero_limit(&self) -> Option<&'static str> {
+        [
+            Limit::Nodes,
+            Limit::Depth,
+            Limit::Dimensions,
+            Limit::FileSize,
+        ]
+        .into_iter()
+        .find(|&l| self.get(l) == 0)
+        .map(Limit::key)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_refusal_names_the_limit_and_its_key() {
+        let limits = Limits::default();
+        let error = limits.check_nodes(100_001).expect_err("too many");
+        assert_eq!(
+            error.to_string(),
+            "more than 100000 nodes: over the limit of 100000 (`limits.max_nodes` in the config raises it)"
+        );
+        assert!(limits.check_nodes(100_000).is_ok());
+        let error = limits
+            .check_dimensions(2000, "the vectors")
+            .expect_err("too wide");
+        assert!(
+            error.to_string().contains("`limits.max_dimensions`"),
+            "{error}"
+        );
+        assert_eq!(
+            Limits {
+                max_depth: 0,
+                ..limits
+            }
+            .zero_limit(),
+            Some("max_depth")
+        );
+        assert_eq!(limits.zero_limit(), None);
+        assert_eq!(limits.max_file_bytes(), 256 << 20);
+    }
+}

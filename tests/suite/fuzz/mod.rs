@@ -1,0 +1,127 @@
+//! The fuzzing harness's short, deterministic slice (issue 11): every parser
+//! (CSV tables through each table format, hierarchy JSON, the YAML config,
+//! layout JSON state files) and the layout on random small datasets, a few
+//! thousand cases each from fixed seeds, with no panic, no case over its time
+//! bound and no case allocating past its bound. The long run (≥ 10 million
+//! cases per parser) is `cargo bench --bench fuzz`; BENCHMARKS.md has its
+//! figures.
+
+mod targets;
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use targets::{Bounds, Summary};
+
+/// Counts allocations per thread, for the allocation bound (it forwards to
+/// the system allocator, so the rest of the suite is unaffected).
+#[global_allocator]
+static ALLOCATOR: targets::Counting = targets::Counting;
+
+/// Parsers: a case is a few hundred bytes, so 5 s is a hang (debug build,
+/// a shared machine), and 64 MiB a runaway allocation.
+const PARSER: Bounds = Bounds {
+    time: Duration::from_secs(5),
+    bytes: 64 << 20,
+};
+
+/// The layout of at most 20 leaves.
+const LAYOUT: Bounds = Bounds {
+    time: Duration::from_secs(30),
+    bytes: 256 << 20,
+};
+
+/// Fails with the summary when the run found anything, and checks it ran
+/// the cases asked for and exercised both paths (accepted and refused).
+fn assert_clean(s: &Summary, cases: u64) {
+    let line = format!(
+        "fuzz {}: {} cases, {} accepted, slowest {:.1} ms, largest {} bytes, {:.1} s",
+        s.target, s.cases, s.accepted, s.max_case_ms, s.max_case_bytes, s.seconds
+    );
+    eprintln!("{line}");
+    if let Some(failure) = &s.failure {
+        panic!("{line}\n{failure}");
+    }
+    assert!(s.cases >= cases, "{line}: fewer cases than asked for");
+    assert!(s.max_case_bytes <= PARSER.bytes.max(LAYOUT.bytes), "{line}");
+}
+
+#[test]
+fn csv_tables_never_panic() {
+    let s = targets::drive(
+        "csv",
+        targets::csv_cases(),
+        targets::check_csv,
+        3_000,
+        11,
+        PARSER,
+    );
+    assert_clean(&s, 3_000);
+    assert!(s.accepted > 0 && s.accepted < s.cases, "both paths: {s:?}");
+}
+
+#[test]
+fn hierarchy_json_never_panics() {
+    let s = targets::drive(
+        "json",
+        targets::json_cases(),
+        targets::check_json,
+        3_000,
+        12,
+        PARSER,
+    );
+    assert_clean(&s, 3_000);
+    assert!(s.accepted > 0 && s.accepted < s.cases, "both paths: {s:?}");
+}
+
+#[test]
+fn yaml_config_never_panics() {
+    let s = targets::drive(
+        "yaml",
+        targets::yaml_cases(),
+        targets::check_yaml,
+        3_000,
+        13,
+        PARSER,
+    );
+    assert_clean(&s, 3_000);
+    assert!(s.accepted > 0 && s.accepted < s.cases, "both paths: {s:?}");
+}
+
+#[test]
+fn state_files_never_panic() {
+    let seeds = Arc::new(targets::state_seeds());
+    assert!(!seeds.is_empty(), "no state documents to mutate");
+    let s = targets::drive(
+        "state",
+        targets::state_cases(seeds),
+        targets::check_state,
+        3_000,
+        14,
+        PARSER,
+    );
+    assert_clean(&s, 3_000);
+    assert!(s.accepted > 0 && s.accepted < s.cases, "both paths: {s:?}");
+}
+
+#[test]
+fn small_layouts_never_panic() {
+    let s = targets::drive(
+        "layout",
+        targets::layout_cases(),
+        targets::check_layout,
+        60,
+        15,
+        LAYOUT,
+    );
+    assert_clean(&s, 60);
+    assert!(s.accepted > 0, "no layout succeeded: {s:?}");
+}
+
+/// The allocation counter counts: a 1 MiB vector shows as at least 1 MiB.
+#[test]
+fn the_allocation_bound_is_measured() {
+    let (v, peak) = targets::peak_during(|| vec![1u8; 1 << 20]);
+    assert_eq!(v.len(), 1 << 20);
+    assert!(peak >= 1 << 20, "peak {peak}");
+}
