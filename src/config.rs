@@ -353,7 +353,26 @@ pub struct DatasetConfig {
     /// What to write.
     #[serde(default)]
     pub outputs: Vec<OutputConfig>,
+    /// `format: exec` only: the adapter command (program and arguments) that
+    /// prints the dataset as hierarchy JSON; it gets the `files:` paths as
+    /// further arguments, in the order of their role names.
+    #[serde(default)]
+    pub command: Vec<String>,
+    /// `format: exec` only: seconds the command may run (default 60).
+    #[serde(default)]
+    pub timeout: Option<f64>,
+    /// The folder relative paths were resolved against (the config's), where
+    /// an exec command runs.
+    #[serde(skip)]
+    pub base: PathBuf,
 }
+
+/// The format name of the runtime plugin: an external command produces the
+/// dataset.
+pub const EXEC_FORMAT: &str = "exec";
+
+/// How long an exec command may run when the config does not say.
+pub const DEFAULT_EXEC_TIMEOUT: f64 = 60.0;
 
 /// One output file.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -481,6 +500,8 @@ impl Config {
             for path in d.files.values_mut() {
                 *path = base.join(&*path);
             }
+            d.base = base.to_path_buf();
+            check_exec(d, i)?;
             for (k, out) in d.outputs.iter_mut().enumerate() {
                 out.path = base.join(&out.path);
                 if out.kind.is_none() {
@@ -612,8 +633,36 @@ impl DatasetConfig {
             similarity: None,
             title: None,
             outputs: Vec::new(),
+            command: Vec::new(),
+            timeout: None,
+            base: PathBuf::new(),
         }
     }
+}
+
+/// The exec keys are given exactly when the format is `exec`.
+fn check_exec(d: &DatasetConfig, i: usize) -> Result<(), ConfigError> {
+    let exec = d.format == EXEC_FORMAT;
+    let wrong = |key: &str, message: &str| ConfigError::Value {
+        field: format!("datasets[{i}].{key}"),
+        message: message.to_string(),
+    };
+    if exec && d.command.is_empty() {
+        return Err(wrong(
+            "command",
+            "format exec needs `command: [program, args...]`, the adapter that prints the dataset",
+        ));
+    }
+    if !exec && !d.command.is_empty() {
+        return Err(wrong("command", "only format exec runs a command"));
+    }
+    if !exec && d.timeout.is_some() {
+        return Err(wrong("timeout", "only format exec has a timeout"));
+    }
+    if d.timeout.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
+        return Err(wrong("timeout", "must be a positive number of seconds"));
+    }
+    Ok(())
 }
 
 /// The output kind a path's extension names.
@@ -666,6 +715,9 @@ mod tests {
             similarity: None,
             title: None,
             outputs: Vec::new(),
+            command: Vec::new(),
+            timeout: None,
+            base: PathBuf::new(),
         };
         assert_eq!(c.style(&d), Style::default());
         assert_eq!(c.params(), Params::default());

@@ -19,13 +19,20 @@
 //! goes through: read → parse → lay out → render → write) and [`daemon`]
 //! (`nptreemap watch`: rebuild on change, warm-started).
 //!
+//! Cargo features: `png` (PNG output through resvg), `watch` ([`daemon`], on
+//! notify) and `cli` (the `nptreemap` binary) are on by default; without them
+//! (`default-features = false`) the library lays out and renders SVG, layout
+//! JSON and HTML, and a PNG output is an error naming the feature.
+//!
 //! A layout can start warm from the previous one ([`layout::Previous`], from a
-//! finished computation or read back from layout JSON by [`layout_json::read`]),
+//! finished computation or read back from layout JSON by [`layout_json::read()`]),
 //! so a small change of the data is a small change of the picture;
-//! [`measure::stability`] measures how small.
+//! [`measure::stability()`] measures how small.
 
 pub mod config;
+#[cfg(feature = "watch")]
 pub mod daemon;
+pub mod exec;
 pub mod geom;
 pub mod layout;
 pub mod layout_json;

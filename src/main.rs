@@ -5,7 +5,7 @@ mod cmd;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 /// Neighborhood-preserving Voronoi treemaps.
 #[derive(Debug, Parser)]
@@ -13,17 +13,30 @@ use clap::{Parser, Subcommand};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Print errors only: no status lines of build and check, no notes, no
+    /// progress (watch's status lines and eval's and bench's results stay).
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
+    /// Log more on stderr: -v what each stage does, -vv details (RUST_LOG, when
+    /// set, decides instead).
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    verbose: u8,
 }
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Build every output of a YAML config (default: ./nptreemap.yaml).
+    /// Build every output of a YAML config (default: the nearest
+    /// nptreemap.yaml from the working directory upward).
     Build(cmd::build::BuildArgs),
     /// Keep a config's outputs current: rebuild what changes, warm-started,
     /// until SIGINT or SIGTERM.
+    #[cfg(feature = "watch")]
     Watch(cmd::watch::WatchArgs),
+    /// Write a commented nptreemap.yaml for your tables (CSV or TSV): the node
+    /// table and a pairs, vectors or series table, or a genres column.
+    Init(cmd::init::InitArgs),
     /// Validate a YAML config and its data without writing anything.
-    Check(cmd::build::BuildArgs),
+    Check(cmd::build::CheckArgs),
     /// Lay out one hierarchy file and write JSON, SVG, PNG and/or HTML.
     Layout(cmd::layout::LayoutArgs),
     /// Print the paper's Table 2 row (constraints realised, area error, graph
@@ -31,21 +44,38 @@ enum Command {
     Eval(cmd::eval::EvalArgs),
     /// Time the layout of one file (parsing excluded) and print one JSON line.
     Bench(cmd::bench::BenchArgs),
+    /// Print a shell completion script.
+    Completions(cmd::shell::CompletionsArgs),
+    /// Print the man page (roff).
+    Man,
 }
 
 fn main() -> ExitCode {
+    let cli = Cli::parse();
+    cmd::set_quiet(cli.quiet);
+    let level = match (cli.quiet, cli.verbose) {
+        (true, _) => "error",
+        (false, 0) => "warn",
+        (false, 1) => "info",
+        (false, _) => "debug",
+    };
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
     tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_env_filter(filter)
         .with_writer(std::io::stderr)
         .init();
-    let cli = Cli::parse();
     let result = match cli.command {
         Command::Build(args) => cmd::build::build(&args),
         Command::Check(args) => cmd::build::check(&args),
+        Command::Init(args) => cmd::init::run(&args),
+        #[cfg(feature = "watch")]
         Command::Watch(args) => cmd::watch::run(&args),
         Command::Layout(args) => cmd::layout::run(&args),
         Command::Eval(args) => cmd::eval::run(&args),
         Command::Bench(args) => cmd::bench::run(&args),
+        Command::Completions(args) => cmd::shell::completions(&args, Cli::command()),
+        Command::Man => cmd::shell::man(Cli::command()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

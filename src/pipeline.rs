@@ -8,10 +8,16 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Duration;
 
-use crate::config::{ConfigFileError, DatasetConfig, OutputConfig, OutputKind};
+use crate::config::{
+    ConfigFileError, DatasetConfig, OutputConfig, OutputKind, DEFAULT_EXEC_TIMEOUT, EXEC_FORMAT,
+};
+use crate::exec::{self, ExecError};
 use crate::layout::{compute, Computed, LayoutError, Previous, Request};
-use crate::render::{html_page, picture, png, PngError, Style};
+use crate::render::{html_page, picture, Style};
+#[cfg(feature = "png")]
+use crate::render::{png, PngError};
 use crate::workspace::FileError;
 use crate::{layout_json, store, workspace};
 use nptreemap_formats::{registry, Dataset, Inputs};
@@ -75,13 +81,36 @@ pub enum BuildError {
         /// Why.
         source: LayoutError,
     },
+    /// A `format: exec` command did not produce a dataset.
+    #[error("dataset {dataset:?}: {source}")]
+    Exec {
+        /// The dataset.
+        dataset: String,
+        /// What went wrong.
+        source: ExecError,
+    },
     /// The PNG renderer refused the picture (see [`PngError`]).
+    #[cfg(feature = "png")]
     #[error("{}: {source}", .path.display())]
     Png {
         /// The output.
         path: PathBuf,
         /// Why.
         source: PngError,
+    },
+    /// An output needs a Cargo feature this build was compiled without.
+    #[error(
+        "{}: {what} needs nptreemap built with the `{feature}` feature \
+         (it is on by default: cargo install nptreemap, or --features {feature})",
+        .path.display()
+    )]
+    Unsupported {
+        /// The output.
+        path: PathBuf,
+        /// What it asks for (`PNG output`).
+        what: &'static str,
+        /// The feature that provides it.
+        feature: &'static str,
     },
     /// An output could not be written.
     #[error("{}: cannot write: {source}", .path.display())]
@@ -146,10 +175,13 @@ impl BuildError {
             | BuildError::File(_)
             | BuildError::Previous { .. }
             | BuildError::Layout { .. }
+            | BuildError::Unsupported { .. }
+            | BuildError::Exec { .. }
             | BuildError::OutputClash { .. }
             | BuildError::OutputSpecial { .. } => Fault::Input,
             // A size is the user's `scale:`; anything else means our own SVG
             // did not parse or encode, which is a bug.
+            #[cfg(feature = "png")]
             BuildError::Png { source, .. } => match source {
                 PngError::Size { .. } => Fault::Input,
                 PngError::Svg(_) | PngError::Encode(_) => Fault::System,
@@ -219,6 +251,9 @@ pub struct Written {
 /// Stage 1, read: a dataset's input files (after checking the config names
 /// the roles its format reads), not parsed yet.
 pub fn read_inputs(d: &DatasetConfig) -> Result<Vec<InputFile>, BuildError> {
+    if d.format == EXEC_FORMAT {
+        return run_exec(d).map(|file| vec![file]);
+    }
     let format = format_of(d)?;
     let roles = format.roles();
     for role in d.files.keys() {
@@ -253,11 +288,45 @@ pub fn read_inputs(d: &DatasetConfig) -> Result<Vec<InputFile>, BuildError> {
         .collect()
 }
 
+/// `format: exec`: the command's stdout, as the `hierarchy` input of
+/// hierarchy JSON, named after the command. The declared files must exist
+/// (a missing one is reported as a missing file, as for any format).
+fn run_exec(d: &DatasetConfig) -> Result<InputFile, BuildError> {
+    let files: Vec<PathBuf> = d.files.values().cloned().collect();
+    if let Some(missing) = files.iter().find(|f| !f.exists()) {
+        return Err(BuildError::File(FileError::Read {
+            path: missing.clone(),
+            source: std::io::Error::from(std::io::ErrorKind::NotFound),
+        }));
+    }
+    let dir = if d.base.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        d.base.as_path()
+    };
+    let timeout = Duration::from_secs_f64(d.timeout.unwrap_or(DEFAULT_EXEC_TIMEOUT));
+    let bytes = exec::run(&d.command, &files, dir, timeout).map_err(|source| BuildError::Exec {
+        dataset: d.name.clone(),
+        source,
+    })?;
+    Ok(InputFile {
+        role: "hierarchy".to_string(),
+        path: PathBuf::from(format!("`{}` (stdout)", exec::display(&d.command))),
+        bytes,
+    })
+}
+
 fn format_of(d: &DatasetConfig) -> Result<&'static dyn nptreemap_formats::Format, BuildError> {
-    registry::find(&d.format).ok_or_else(|| BuildError::UnknownFormat {
+    // An exec command prints hierarchy JSON.
+    let name = if d.format == EXEC_FORMAT {
+        "hierarchy-json"
+    } else {
+        &d.format
+    };
+    registry::find(name).ok_or_else(|| BuildError::UnknownFormat {
         dataset: d.name.clone(),
         format: d.format.clone(),
-        known: registry::names().join(", "),
+        known: format!("{}, {EXEC_FORMAT}", registry::names().join(", ")),
     })
 }
 
@@ -318,12 +387,21 @@ pub fn render_outputs(
                     .get_or_insert_with(|| picture(computed, style))
                     .clone()
                     .into_bytes(),
+                #[cfg(feature = "png")]
                 OutputKind::Png => {
                     let text = svg_text.get_or_insert_with(|| picture(computed, style));
                     png(text, out.scale).map_err(|source| BuildError::Png {
                         path: out.path.clone(),
                         source,
                     })?
+                }
+                #[cfg(not(feature = "png"))]
+                OutputKind::Png => {
+                    return Err(BuildError::Unsupported {
+                        path: out.path.clone(),
+                        what: "PNG output",
+                        feature: "png",
+                    })
                 }
                 OutputKind::Json => layout_json::document(computed).into_bytes(),
                 OutputKind::Html => html_page(computed, style).into_bytes(),
@@ -589,4 +667,47 @@ pub fn store_layout(d: &DatasetConfig, computed: &Computed) -> std::io::Result<(
         return Ok(());
     };
     store::write_if_changed(&path, layout_json::state(computed).as_bytes()).map(|_| ())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nptreemap_formats::{DatasetBuilder, NodeSpec};
+
+    fn computed() -> Computed {
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("root"));
+        for (id, w) in [("a", 1.0), ("b", 2.0), ("c", 3.0)] {
+            b.add(NodeSpec::new(id).parent("root").weight(w));
+        }
+        compute(&b.build().expect("valid"), &Request::default()).expect("laid out")
+    }
+
+    /// Without the `png` feature a PNG output is the user's error naming the
+    /// output and the feature; the other outputs of the build still render.
+    #[test]
+    fn png_output_needs_the_png_feature() {
+        let out = |path: &str| OutputConfig {
+            path: PathBuf::from(path),
+            kind: crate::config::kind_of(Path::new(path)),
+            scale: 1.0,
+        };
+        let computed = computed();
+        let style = Style::default();
+        let svg = render_outputs(&computed, &style, &[out("out/a.svg")]).expect("svg");
+        assert!(String::from_utf8_lossy(&svg[0].bytes).starts_with("<svg"));
+        let png = render_outputs(&computed, &style, &[out("out/a.svg"), out("out/a.png")]);
+        if cfg!(feature = "png") {
+            let png = png.expect("png");
+            assert!(png[1].bytes.starts_with(b"\x89PNG"));
+        } else {
+            let e = png.expect_err("no png feature");
+            assert_eq!(e.fault(), Fault::Input);
+            assert_eq!(
+                e.to_string(),
+                "out/a.png: PNG output needs nptreemap built with the `png` feature (it is on \
+                 by default: cargo install nptreemap, or --features png)"
+            );
+        }
+    }
 }

@@ -12,13 +12,24 @@
 //! cosine similarity is undefined for it. Each id must be a node of the table and
 //! appear once; every leaf of the table needs a vector, and a table row that has
 //! children may have one. The dataset's similarity hint is [`SimilarityHint::Cosine`].
+//!
+//! # NumPy matrices
+//!
+//! The `vectors` input may instead be a `.npy` file (recognised by its magic bytes,
+//! whatever its name; read by [`crate::npy`]): a float32 or float64 matrix with one
+//! row per node. Row `i` belongs to the `i`-th row of the node table, or, when an
+//! `ids` input is given, to the node named on its `i`-th line (one id per line, the
+//! first field of a CSV/TSV row; a first line that is not a node id is a header).
+//! The counts must match, and
+//! the rules above (finite values, no zero vector, every leaf a vector) hold.
 
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::dataset::{ModelError, FEATURE_BOUND};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
 use crate::limits::{Limit, Limits};
-use crate::table::{node_tree, read_rows_capped, Row, RowCap, TableTree, NODES_ROLE};
+use crate::npy::{is_npy, read_npy, Matrix};
+use crate::table::{node_tree, read_rows, read_rows_capped, Row, RowCap, TableTree, NODES_ROLE};
 
 /// The embedding-matrix [`Format`] (name `embedding-matrix`, inputs `nodes` and
 /// `vectors`).
@@ -31,7 +42,14 @@ const ROLES: &[Role] = &[
     Role {
         name: "vectors",
         required: true,
-        description: "CSV/TSV rows id,v1..vd (header optional), one per leaf",
+        description: "CSV/TSV rows id,v1..vd (header optional), one per leaf; or a .npy \
+                      float32/float64 matrix, one row per node",
+    },
+    Role {
+        name: "ids",
+        required: false,
+        description: "for a .npy matrix: the node id of each row, one per line \
+                      (default: the node table's row order)",
     },
 ];
 
@@ -49,10 +67,30 @@ impl Format for EmbeddingMatrix {
         let in_nodes = |error| InputError::new("nodes", error);
         let in_vectors = |error| InputError::new("vectors", error);
         let mut tree = node_tree(inputs, options)?;
-        // One vector per node, plus an optional header row.
-        let cap = RowCap::new(options.limits, Limit::Nodes, 1, "vector rows");
-        let rows = read_rows_capped(vectors, options.delimiter, Some(cap)).map_err(in_vectors)?;
-        add_vectors(&mut tree, &rows, &options.limits).map_err(in_vectors)?;
+        if is_npy(vectors) {
+            let matrix = read_npy(vectors).map_err(in_vectors)?;
+            let owners = matrix_owners(&tree, &matrix, inputs.get("ids"), options)?;
+            add_matrix(&mut tree, &matrix, &owners).map_err(in_vectors)?;
+        } else {
+            if inputs.get("ids").is_some() {
+                return Err(InputError::new(
+                    "ids",
+                    FormatError::Structure {
+                        line: None,
+                        column: None,
+                        message: "ids are for a .npy vectors file; a CSV/TSV vectors file \
+                                  names each row's node in its first column"
+                            .to_owned(),
+                    },
+                ));
+            }
+            // One vector per node, plus an optional header row.
+            let cap = RowCap::new(options.limits, Limit::Nodes, 1, "vector rows");
+            let rows =
+                read_rows_capped(vectors, options.delimiter, Some(cap)).map_err(in_vectors)?;
+            add_vectors(&mut tree, &rows, &options.limits).map_err(in_vectors)?;
+        }
+        check_leaves(&tree).map_err(in_vectors)?;
         tree.build(Some(SimilarityHint::Cosine)).map_err(in_nodes)
     }
 }
@@ -163,17 +201,133 @@ fn add_vectors(tree: &mut TableTree, rows: &[Row], limits: &Limits) -> Result<()
             vector.push(value);
         }
         if vector.iter().all(|&v| v == 0.0) {
-            return Err(FormatError::Structure {
-                line: Some(row.line),
-                column: None,
-                message: format!(
-                    "node {id:?}: the vector is all zeros, and cosine similarity is undefined \
-                     for a zero vector"
-                ),
-            });
+            return Err(zero_vector(Some(row.line), &format!("node {id:?}")));
         }
         tree.specs[index].features = Some(vector);
     }
+    Ok(())
+}
+
+fn zero_vector(line: Option<usize>, what: &str) -> FormatError {
+    FormatError::Structure {
+        line,
+        column: None,
+        message: format!(
+            "{what}: the vector is all zeros, and cosine similarity is undefined for a zero \
+             vector"
+        ),
+    }
+}
+
+/// The node (index into the tree's specs) of each row of a `.npy` matrix: from
+/// the `ids` input when given, else the node table's rows in order.
+#[allow(clippy::result_large_err)] // InputError's shape is the Format API's
+fn matrix_owners(
+    tree: &TableTree,
+    matrix: &Matrix,
+    ids: Option<&[u8]>,
+    options: &FormatOptions,
+) -> Result<Vec<usize>, InputError> {
+    let shape = format!("shape ({}, {})", matrix.rows, matrix.cols);
+    let Some(ids) = ids else {
+        let rows: Vec<usize> = (0..tree.specs.len())
+            .filter(|&i| tree.from_row[i])
+            .collect();
+        if rows.len() != matrix.rows {
+            return Err(InputError::new(
+                "vectors",
+                FormatError::Structure {
+                    line: None,
+                    column: None,
+                    message: format!(
+                        "the matrix has {} rows ({shape}) but the node table has {} rows; \
+                         row i of the matrix is the vector of the table's row i, unless an \
+                         `ids` file names the node of each matrix row",
+                        matrix.rows,
+                        rows.len()
+                    ),
+                },
+            ));
+        }
+        return Ok(rows);
+    };
+    let in_ids = |error| InputError::new("ids", error);
+    let rows = read_rows(ids, options.delimiter).map_err(in_ids)?;
+    // A first line that names no node is a header (`id`); a typo there shows in
+    // the count, and the message says it was taken for one.
+    let header = rows
+        .first()
+        .filter(|row| tree.find(&row.fields[0]).is_none());
+    let data = &rows[usize::from(header.is_some())..];
+    if data.len() != matrix.rows {
+        let note = header.map_or_else(String::new, |h| {
+            format!(
+                " (line {}, {:?}, names no node and was taken for a header)",
+                h.line, h.fields[0]
+            )
+        });
+        return Err(in_ids(FormatError::Structure {
+            line: None,
+            column: None,
+            message: format!(
+                "{} ids for a matrix of {} rows ({shape}): give one node id per matrix \
+                 row{note}",
+                data.len(),
+                matrix.rows
+            ),
+        }));
+    }
+    let mut seen: Vec<Option<usize>> = vec![None; tree.specs.len()];
+    data.iter()
+        .map(|row| {
+            let id = &row.fields[0];
+            let index = tree.find(id).ok_or_else(|| {
+                in_ids(FormatError::Field {
+                    line: Some(row.line),
+                    column: Some(1),
+                    node: None,
+                    field: "id".to_owned(),
+                    message: format!("unknown id {id:?}: no node of the node table has it"),
+                })
+            })?;
+            if let Some(first) = seen[index].replace(row.line) {
+                return Err(in_ids(FormatError::Structure {
+                    line: Some(row.line),
+                    column: Some(1),
+                    message: format!("node {id:?} is named twice (first on line {first})"),
+                }));
+            }
+            Ok(index)
+        })
+        .collect()
+}
+
+/// Sets row `i` of the matrix as the features of node `owners[i]`.
+fn add_matrix(tree: &mut TableTree, matrix: &Matrix, owners: &[usize]) -> Result<(), FormatError> {
+    for (i, &index) in owners.iter().enumerate() {
+        let row = matrix.row(i);
+        let what = format!("matrix row {} (node {:?})", i + 1, tree.specs[index].id);
+        if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+            return Err(FormatError::Structure {
+                line: None,
+                column: None,
+                message: format!(
+                    "{what}, column {}: {}; every value must be a finite number",
+                    j + 1,
+                    row[j]
+                ),
+            });
+        }
+        if row.iter().all(|&v| v == 0.0) {
+            return Err(zero_vector(None, &what));
+        }
+        tree.specs[index].features = Some(row.to_vec());
+    }
+    Ok(())
+}
+
+/// Every leaf of the table needs a vector.
+fn check_leaves(tree: &TableTree) -> Result<(), FormatError> {
     let leaves = tree.leaf_flags();
     for (index, spec) in tree.specs.iter().enumerate() {
         if leaves[index] && spec.features.is_none() {

@@ -89,8 +89,9 @@ pub struct FormatOptions {
     pub groups: Vec<String>,
     /// Pair lists: the strength column (default `strength` when present).
     pub strength: Option<String>,
-    /// Field delimiter; default `,`, or tab when the input's first line has tabs
-    /// and no commas. In a config: a one-byte string such as `";"` or `"\t"`.
+    /// Field delimiter; default `,` when the input's first line has a comma, else
+    /// the first of tab, `;` and `|` it has. In a config: a one-byte string such
+    /// as `";"` or `"\t"`.
     #[serde(deserialize_with = "one_byte")]
     pub delimiter: Option<u8>,
     /// Label of the synthetic root of a table (default `root`).

@@ -42,6 +42,8 @@ pub mod genre_table;
 pub mod hierarchy_json;
 /// [`Limits`]: how large an input the readers accept.
 pub mod limits;
+/// NumPy `.npy` matrices (embedding vectors saved by `numpy.save`).
+pub mod npy;
 /// The list of formats, looked up by name.
 pub mod registry;
 /// CSV/TSV rows with positions, and node tables → hierarchies.

@@ -125,8 +125,9 @@ impl Table {
     }
 }
 
-/// The delimiter to use: the given one, else tab when the first non-empty line has
-/// tabs and no commas, else comma.
+/// The delimiter to use: the given one, else comma when the first non-empty line
+/// (the header) has a comma, else the first of tab, `;` and `|` it has (spreadsheets
+/// in many locales save `;`), else comma.
 pub fn detect_delimiter(bytes: &[u8], given: Option<u8>) -> u8 {
     if let Some(delimiter) = given {
         return delimiter;
@@ -136,11 +137,13 @@ pub fn detect_delimiter(bytes: &[u8], given: Option<u8>) -> u8 {
         .split(|&b| b == b'\n')
         .find(|line| !line.iter().all(u8::is_ascii_whitespace))
         .unwrap_or(&[]);
-    if first_line.contains(&b'\t') && !first_line.contains(&b',') {
-        b'\t'
-    } else {
-        b','
+    if first_line.contains(&b',') {
+        return b',';
     }
+    [b'\t', b';', b'|']
+        .into_iter()
+        .find(|d| first_line.contains(d))
+        .unwrap_or(b',')
 }
 
 /// The bytes without a leading UTF-8 byte order mark.

@@ -62,7 +62,8 @@ fn foods_with_vectors() {
     assert_eq!(nuts.features, None, "groups get no vector");
     assert_eq!(
         registry::find("embedding-matrix").map(|f| f.roles().len()),
-        Some(2)
+        Some(3),
+        "nodes, vectors and the optional ids of a .npy matrix"
     );
 }
 

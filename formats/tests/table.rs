@@ -394,3 +394,24 @@ fn positions_survive_bom_crlf_and_quoted_newlines() {
     let (error, _) = error_text(tsv, &FormatOptions::default());
     assert_eq!((error.line(), error.column()), (Some(2), Some(2)));
 }
+
+/// With no delimiter given, the header decides: a comma wins (a `|` inside
+/// cells is a genre list), else tab, `;` (spreadsheets in many locales) or `|`.
+#[test]
+fn the_delimiter_is_sniffed_from_the_header() {
+    use nptreemap_formats::table::detect_delimiter;
+    for (text, d) in [
+        ("id,name\na,b\n", b','),
+        ("id\tname\na\tb\n", b'\t'),
+        ("id;name;weight\na;A;1,5\n", b';'),
+        ("id|name\na|b\n", b'|'),
+        ("id\n", b','),
+        ("id,genres\na,Drama|Crime\n", b','),
+    ] {
+        assert_eq!(detect_delimiter(text.as_bytes(), None), d, "{text:?}");
+    }
+    assert_eq!(detect_delimiter(b"id;name", Some(b',')), b',');
+    let t = read_table(b"id;name;population\nfr;France;68\n", None).expect("semicolons");
+    assert_eq!(t.header, ["id", "name", "population"]);
+    assert_eq!(t.rows[0].fields, ["fr", "France", "68"]);
+}

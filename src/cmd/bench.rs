@@ -95,21 +95,30 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if args.render {
         let style = &job.style;
-        let (mut svg_ms, mut png_ms) = (Vec::new(), Vec::new());
+        let mut svg_ms = Vec::new();
+        #[cfg_attr(not(feature = "png"), allow(unused_mut))]
+        let mut png_ms: Vec<f64> = Vec::new();
         let mut sizes = (0, 0);
         for _ in 0..args.repeat.max(1) {
             let t = Instant::now();
             let svg = picture(&computed, style);
             svg_ms.push(t.elapsed().as_secs_f64() * 1000.0);
-            let t = Instant::now();
-            let png = nptreemap::render::png(&svg, 1.0)?;
-            png_ms.push(t.elapsed().as_secs_f64() * 1000.0);
-            sizes = (svg.len(), png.len());
+            sizes.0 = svg.len();
+            #[cfg(feature = "png")]
+            {
+                let t = Instant::now();
+                let png = nptreemap::render::png(&svg, 1.0)?;
+                png_ms.push(t.elapsed().as_secs_f64() * 1000.0);
+                sizes.1 = png.len();
+            }
         }
         line["render_svg_ms"] = median(&svg_ms).into();
-        line["render_png_ms"] = median(&png_ms).into();
         line["svg_bytes"] = sizes.0.into();
-        line["png_bytes"] = sizes.1.into();
+        // Without the `png` feature there is no PNG to time.
+        if !png_ms.is_empty() {
+            line["render_png_ms"] = median(&png_ms).into();
+            line["png_bytes"] = sizes.1.into();
+        }
     }
     super::say(format_args!("{line}"));
     Ok(())

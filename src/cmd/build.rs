@@ -1,34 +1,62 @@
 //! `nptreemap build [CONFIG]` and `nptreemap check [CONFIG]`: every output of a
 //! config, or only the validation of config and data. All datasets are built in
 //! memory before anything is written, so a bad input leaves every output as it was.
+//! `build --check` compares instead of writing, as `cargo fmt --check` does.
 
 use std::path::PathBuf;
 
 use clap::Args;
 
+use super::config_file::ConfigArg;
 use super::progress::LayoutBar;
 use nptreemap::config::Config;
 use nptreemap::pipeline::{self, BuildError};
 
-/// Arguments of `nptreemap build` and `nptreemap check`.
+/// Arguments of `nptreemap build`.
 #[derive(Debug, Args)]
 pub(crate) struct BuildArgs {
-    /// The config file.
-    #[arg(default_value = "nptreemap.yaml")]
-    config: PathBuf,
+    #[command(flatten)]
+    config: ConfigArg,
     /// Lay out from scratch instead of warm from the layout stored beside
     /// the outputs by the last build or watch.
     #[arg(long)]
     cold: bool,
+    /// Write nothing; exit 1 naming every output a build would change (for
+    /// CI: are the committed pictures up to date?).
+    #[arg(long)]
+    check: bool,
+}
+
+/// Arguments of `nptreemap check`.
+#[derive(Debug, Args)]
+pub(crate) struct CheckArgs {
+    #[command(flatten)]
+    config: ConfigArg,
+}
+
+/// `build --check` found outputs a build would change: exit code 1.
+#[derive(Debug, thiserror::Error)]
+#[error("{} output(s) out of date (`nptreemap build` would rewrite them): {}", .0.len(), list(.0))]
+pub(crate) struct Stale(Vec<PathBuf>);
+
+fn list(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
-    let config = Config::from_path(&args.config).map_err(BuildError::from)?;
+    let path = args.config.path()?;
+    let config = Config::from_path(&path).map_err(BuildError::from)?;
     // Before anything is read or written: no output may land on an input,
     // the config, another output or a special file.
-    let (reads, writes) = pipeline::files_of(&args.config, &config.datasets);
+    let (reads, writes) = pipeline::files_of(&path, &config.datasets);
     pipeline::check_outputs(&reads, &writes)?;
-    pipeline::remove_stale_temps(&writes);
+    if !args.check {
+        pipeline::remove_stale_temps(&writes);
+    }
     let mut built = Vec::new();
     let total = config.datasets.len();
     for (i, d) in config.datasets.iter().enumerate() {
@@ -38,6 +66,9 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
         let result = pipeline::build(d, &request, &config.style(d), args.cold);
         drop(bar);
         built.push((d, result?));
+    }
+    if args.check {
+        return compare_outputs(built.iter().map(|(_, b)| b));
     }
     for (d, b) in &built {
         for line in &b.warnings {
@@ -57,7 +88,7 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
             } else {
                 "unchanged"
             };
-            super::say(format_args!(
+            super::status(format_args!(
                 "{state} {} ({} bytes, dataset {})",
                 out.path.display(),
                 out.bytes.len(),
@@ -68,9 +99,31 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-pub(crate) fn check(args: &BuildArgs) -> anyhow::Result<()> {
-    let config = Config::from_path(&args.config).map_err(BuildError::from)?;
-    let (reads, writes) = pipeline::files_of(&args.config, &config.datasets);
+/// Names each output whose file would change (or is missing); writes nothing.
+fn compare_outputs<'a>(built: impl Iterator<Item = &'a pipeline::Built>) -> anyhow::Result<()> {
+    let mut stale = Vec::new();
+    let mut fresh = 0;
+    for out in built.flat_map(|b| &b.outputs) {
+        // A file that cannot be read is as stale as a missing one.
+        if nptreemap::workspace::read_bytes(&out.path).is_ok_and(|bytes| bytes == out.bytes) {
+            fresh += 1;
+        } else {
+            super::status(format_args!("stale {}", out.path.display()));
+            stale.push(out.path.clone());
+        }
+    }
+    if stale.is_empty() {
+        super::status(format_args!("{fresh} outputs up to date"));
+        Ok(())
+    } else {
+        Err(Stale(stale).into())
+    }
+}
+
+pub(crate) fn check(args: &CheckArgs) -> anyhow::Result<()> {
+    let path = args.config.path()?;
+    let config = Config::from_path(&path).map_err(BuildError::from)?;
+    let (reads, writes) = pipeline::files_of(&path, &config.datasets);
     pipeline::check_outputs(&reads, &writes)?;
     for d in &config.datasets {
         let files = pipeline::read_inputs(d)?;
@@ -78,12 +131,10 @@ pub(crate) fn check(args: &BuildArgs) -> anyhow::Result<()> {
         for line in pipeline::warnings(&files, &dataset) {
             super::warn(line);
         }
-        if !args.cold {
-            if let Some(line) = pipeline::stored_layout(d).warning {
-                super::warn(line);
-            }
+        if let Some(line) = pipeline::stored_layout(d).warning {
+            super::warn(line);
         }
-        super::say(format_args!(
+        super::status(format_args!(
             "ok {}: {} nodes, {} leaves, {} outputs",
             d.name,
             dataset.len(),

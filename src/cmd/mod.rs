@@ -5,12 +5,17 @@
 
 pub(crate) mod bench;
 pub(crate) mod build;
+mod config_file;
 pub(crate) mod eval;
+pub(crate) mod init;
 pub(crate) mod layout;
 mod progress;
+pub(crate) mod shell;
+#[cfg(feature = "watch")]
 pub(crate) mod watch;
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use clap::Args;
@@ -243,8 +248,7 @@ pub(crate) fn exit_code(err: &anyhow::Error) -> u8 {
         e.is::<UsageError>()
             || e.downcast_ref::<BuildError>()
                 .is_some_and(|b| b.fault() == Fault::Input)
-            || e.downcast_ref::<nptreemap::daemon::DaemonError>()
-                .is_some_and(|d| d.fault() == Fault::Input)
+            || daemon_fault(e) == Some(Fault::Input)
     });
     if user {
         2
@@ -253,11 +257,14 @@ pub(crate) fn exit_code(err: &anyhow::Error) -> u8 {
     }
 }
 
-/// Prints one line on stderr, for a fact the user should know but that is
-/// not an error (a previous layout that was not used).
-pub(crate) fn note(line: impl std::fmt::Display) {
-    use std::io::Write;
-    let _ = writeln!(std::io::stderr().lock(), "note: {line}");
+/// Whose fault a daemon error is (there is none without the `watch` feature).
+fn daemon_fault(e: &(dyn std::error::Error + 'static)) -> Option<Fault> {
+    #[cfg(feature = "watch")]
+    if let Some(d) = e.downcast_ref::<nptreemap::daemon::DaemonError>() {
+        return Some(d.fault());
+    }
+    let _ = e;
+    None
 }
 
 /// Prints one warning line on stderr: something in the input that was read
@@ -267,9 +274,49 @@ pub(crate) fn warn(line: impl std::fmt::Display) {
     let _ = writeln!(std::io::stderr().lock(), "warning: {line}");
 }
 
-/// Prints one line on stdout. A closed pipe (`nptreemap build | head`) is not
-/// an error worth a panic: the line is dropped.
+/// `-q`: status lines, notes and progress are left out.
+static QUIET: AtomicBool = AtomicBool::new(false);
+
+/// Sets `-q` for the whole run.
+pub(crate) fn set_quiet(quiet: bool) {
+    QUIET.store(quiet, Ordering::Relaxed);
+}
+
+/// True under `-q`.
+pub(crate) fn quiet() -> bool {
+    QUIET.load(Ordering::Relaxed)
+}
+
+/// Prints one line on stderr, for a fact the user should know but that is
+/// not an error (a previous layout that was not used). Silent under `-q`.
+pub(crate) fn note(line: impl std::fmt::Display) {
+    use std::io::Write;
+    if !quiet() {
+        let _ = writeln!(std::io::stderr().lock(), "note: {line}");
+    }
+}
+
+/// Prints one line of a command's result on stdout. A closed pipe
+/// (`nptreemap build | head`) is not an error worth a panic: the line is
+/// dropped.
 pub(crate) fn say(line: impl std::fmt::Display) {
     use std::io::Write;
     let _ = writeln!(std::io::stdout().lock(), "{line}");
+}
+
+/// Writes a generated document on stdout; a closed pipe ends it quietly.
+pub(crate) fn write_stdout(bytes: &[u8]) -> anyhow::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(bytes).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
+}
+
+/// Prints one status line on stdout (what a build wrote), unless `-q`.
+pub(crate) fn status(line: impl std::fmt::Display) {
+    if !quiet() {
+        say(line);
+    }
 }

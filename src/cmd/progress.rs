@@ -27,7 +27,7 @@ impl LayoutBar {
     /// `None` (and `request` untouched) otherwise. The bar only ever
     /// continues: it never stops a layout.
     pub(crate) fn attach(request: &mut Request, what: &str) -> Option<Self> {
-        if !std::io::stderr().is_terminal() {
+        if !std::io::stderr().is_terminal() || super::quiet() {
             return None;
         }
         let bar = ProgressBar::with_draw_target(Some(STEPS), ProgressDrawTarget::hidden());

@@ -13,7 +13,6 @@
 //! is lost is only the rebuild under way, which the next start redoes (warm,
 //! from the stored layout).
 
-use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
@@ -21,14 +20,15 @@ use std::time::Duration;
 use clap::Args;
 use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 
+use super::config_file::ConfigArg;
+
 use nptreemap::daemon::{self, watcher::Message, Options};
 
 /// Arguments of `nptreemap watch`.
 #[derive(Debug, Args)]
 pub(crate) struct WatchArgs {
-    /// The config file.
-    #[arg(default_value = "nptreemap.yaml")]
-    config: PathBuf,
+    #[command(flatten)]
+    config: ConfigArg,
     /// Lay every dataset out from scratch at start instead of warm from the
     /// layout stored beside its outputs.
     #[arg(long)]
@@ -71,7 +71,7 @@ pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
         stop: Some(stop),
         ..Options::default()
     };
-    daemon::run(&args.config, options, tx, &rx, &mut |status| {
+    daemon::run(&args.config.path()?, options, tx, &rx, &mut |status| {
         super::say(status);
     })?;
     Ok(())

@@ -129,7 +129,9 @@ pub fn diff(old: &Config, new: &Config) -> ChangeSet {
                 let inputs_changed = before.format != d.format
                     || before.files != d.files
                     || before.fields != d.fields
-                    || before.similarity != d.similarity;
+                    || before.similarity != d.similarity
+                    || before.command != d.command
+                    || before.timeout != d.timeout;
                 if layout_changed || inputs_changed {
                     set.relayout.insert(d.name.clone(), Reason::Layout);
                 } else if render_changed || before.title != d.title || before.outputs != d.outputs {

@@ -16,6 +16,7 @@ pub mod watcher;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::hash::{Hash, Hasher};
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender};
@@ -23,7 +24,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::config::{Config, ConfigFileError, DatasetConfig};
-use crate::layout::{Computed, Start};
+use crate::layout::{Computed, LayoutError, ProgressSink, Start};
 use crate::pipeline::{self, BuildError, Fault, Rendered};
 use change::{ChangeSet, Reason};
 use status::{LayoutKind, Status};
@@ -411,17 +412,32 @@ impl Daemon<'_> {
         let read_ms = ms_since(started);
         let stop = self.options.stop.clone();
         let stopping = || stop.as_ref().is_some_and(|s| s.load(Ordering::Relaxed));
+        // A SIGTERM ends a running layout at its next progress report
+        // (between ticks and diagrams), well inside the signal handler's
+        // grace period; the abandoned rebuild writes nothing.
+        if let Some(flag) = stop.clone() {
+            request.progress = Some(ProgressSink::new(move |_| {
+                if flag.load(Ordering::Relaxed) {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            }));
+        }
         let result = pipeline::parse_inputs(&d, &files).and_then(|dataset| {
             let parsed = Instant::now();
             warnings.extend(pipeline::warnings(&files, &dataset));
             if stopping() {
                 return Ok(None);
             }
-            // TODO(issue 11, item 12): once the layout takes a progress /
-            // cancel hook (`Request`, method-core), hand it `stopping` so a
-            // SIGTERM ends the layout itself; until then the signal handler's
-            // grace period ends a layout that runs on.
-            let computed = pipeline::lay_out(&d, &dataset, &request)?;
+            // A SIGTERM ends the layout itself (see `request.progress`).
+            let computed = match pipeline::lay_out(&d, &dataset, &request) {
+                Err(BuildError::Layout {
+                    source: LayoutError::Cancelled,
+                    ..
+                }) => return Ok(None),
+                other => other?,
+            };
             let laid_out = Instant::now();
             if stopping() {
                 return Ok(None);

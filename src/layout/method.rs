@@ -4,7 +4,8 @@
 
 /// A layout strategy. Named in configs (`layout.method`) and on the command
 /// line (`--method`) by [`Method::name`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// The classic Voronoi treemap of the engine; similarity is ignored.
@@ -76,7 +77,9 @@ mod tests {
             use serde::de::{value::Error, IntoDeserializer};
             let de = IntoDeserializer::<Error>::into_deserializer(m.name());
             assert_eq!(<Method as serde::Deserialize>::deserialize(de), Ok(m));
+            #[cfg(feature = "cli")]
             let cli = <Method as clap::ValueEnum>::from_str(m.name(), false).expect("cli name");
+            #[cfg(feature = "cli")]
             assert_eq!(cli, m);
         }
     }

@@ -10,7 +10,8 @@ use nptreemap_formats::{Dataset, SimilarityHint};
 ///
 /// Named in configs (`similarity:`) and on the command line (`--similarity`)
 /// as `cosine`, `jaccard`, `binary`, `neighbors` and `pearson`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum SimilarityKind {
     /// Cosine of the feature vectors, rescaled from [-1, 1] to [0, 1].
@@ -23,7 +24,7 @@ pub enum SimilarityKind {
     /// Directed, as the prototype's `useNeighborLeafs` flag (§1.4); the constraint
     /// pipeline symmetrises later (§3.6).
     #[serde(rename = "neighbors")]
-    #[value(name = "neighbors")]
+    #[cfg_attr(feature = "cli", value(name = "neighbors"))]
     NeighborList,
     /// Pearson correlation of the feature vectors (for example rows of a time
     /// series), rescaled from [-1, 1] to [0, 1].

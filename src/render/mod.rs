@@ -18,6 +18,7 @@ pub mod palette;
 /// The framed picture: map, overlay, title, legend, border; its [`Style`].
 pub mod picture;
 /// PNG from the SVG text through usvg and resvg, with a built-in font.
+#[cfg(feature = "png")]
 pub mod png;
 /// The SVG picture: filled cells, level-weighted outlines, fitted labels.
 pub mod svg;
@@ -31,5 +32,6 @@ pub use html::{html, html_page, HtmlData, HtmlFrame, HtmlNode};
 pub use labels::LabelStyle;
 pub use palette::{PaletteKind, Rgb};
 pub use picture::{picture, Border, LegendOrder, Style};
+#[cfg(feature = "png")]
 pub use png::{png, PngError};
 pub use svg::{svg, SvgStyle};

@@ -13,11 +13,14 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
+#[cfg(feature = "png")]
 use resvg::tiny_skia::{Path, PathBuilder};
 
 /// The built-in font.
 pub(crate) const FONT: &[u8] = include_bytes!("fonts/DejaVuSans.ttf");
 /// Its family name, used for every generic family too.
+// The SVG names the family; only the PNG needs the constant.
+#[cfg_attr(not(feature = "png"), allow(dead_code))]
 pub(crate) const FAMILY: &str = "DejaVu Sans";
 
 /// One glyph of shaped text, in font units from the start of the run.
@@ -43,11 +46,13 @@ pub(crate) struct Shaped {
 struct Font {
     shaper_font: harfrust::FontRef<'static>,
     shaper_data: harfrust::ShaperData,
+    #[cfg_attr(not(feature = "png"), allow(dead_code))]
     outline_font: skrifa::FontRef<'static>,
     units_per_em: f32,
     ascent: f32,
     descent: f32,
     shaped: Mutex<HashMap<String, Arc<Shaped>>>,
+    #[cfg(feature = "png")]
     outlines: Mutex<HashMap<u32, Option<Arc<Path>>>>,
 }
 
@@ -74,6 +79,7 @@ fn font() -> &'static Font {
             descent: metrics.descent,
             outline_font,
             shaped: Mutex::new(HashMap::new()),
+            #[cfg(feature = "png")]
             outlines: Mutex::new(HashMap::new()),
         }
     })
@@ -141,12 +147,14 @@ pub(crate) fn width_em(text: &str) -> f64 {
 }
 
 /// Whether every character of `text` has a glyph in the font.
+#[cfg_attr(not(feature = "png"), allow(dead_code))]
 pub(crate) fn covers(text: &str) -> bool {
     shape(text).glyphs.iter().all(|g| g.id != 0)
 }
 
 /// The outline of glyph `id` in font units, y up (`None` for blank glyphs
-/// such as the space).
+/// such as the space). Only the PNG draws outlines.
+#[cfg(feature = "png")]
 pub(crate) fn outline(id: u32) -> Option<Arc<Path>> {
     let f = font();
     if let Some(hit) = f.outlines.lock().ok().and_then(|c| c.get(&id).cloned()) {
@@ -174,8 +182,10 @@ pub(crate) fn outline(id: u32) -> Option<Arc<Path>> {
 }
 
 /// Collects skrifa's outline commands into a tiny-skia path, as usvg does.
+#[cfg(feature = "png")]
 struct Pen(PathBuilder);
 
+#[cfg(feature = "png")]
 impl skrifa::outline::OutlinePen for Pen {
     fn move_to(&mut self, x: f32, y: f32) {
         self.0.move_to(x, y);
@@ -219,7 +229,10 @@ mod tests {
         assert!(width_em("AV") < width_em("A") + width_em("V"));
         assert_eq!(shape("Flare"), shape("Flare"));
         assert!(covers("Ωmega ½ €") && !covers("日本"));
-        assert!(outline(shape("A").glyphs[0].id).is_some());
-        assert!(outline(shape(" ").glyphs[0].id).is_none());
+        #[cfg(feature = "png")]
+        {
+            assert!(outline(shape("A").glyphs[0].id).is_some());
+            assert!(outline(shape(" ").glyphs[0].id).is_none());
+        }
     }
 }

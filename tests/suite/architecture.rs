@@ -42,7 +42,7 @@ const CORE: &[&str] = &[
     "measure",
 ];
 /// The edges: files, config, the daemon and the orchestration.
-const EDGE: &[&str] = &["pipeline", "daemon", "config", "store", "workspace"];
+const EDGE: &[&str] = &["pipeline", "daemon", "config", "store", "workspace", "exec"];
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))

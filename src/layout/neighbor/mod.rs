@@ -179,6 +179,15 @@ struct Context<'a> {
 /// report and the sum of per-diagram errors.
 type Descent = (f64, Vec<Option<LayoutCell>>, Report, f64);
 
+/// One start of a level's optimisation: its score, the optimised diagrams,
+/// the matched-and-swapped diagrams it began from (the repair's fallback)
+/// and the recorded frames.
+struct Candidate {
+    score: f64,
+    diagrams: Vec<Diagram>,
+    initial: Vec<Diagram>,
+    frames: Vec<Frame>,
+}
 /// Lays out level `depth + 1` and everything below it, given the cells down to
 /// `depth`.
 fn descend(
@@ -248,7 +257,7 @@ fn descend(
         return Err(LayoutError::Cancelled);
     }
     let tick_done = |tick: usize| ctx.monitor.report(progress(tick));
-    let mut candidates: Vec<(f64, Vec<Diagram>, Vec<Diagram>, Vec<Frame>)> = Vec::new();
+    let mut candidates: Vec<Candidate> = Vec::new();
     for start in 0..starts {
         let mut recorder = Recorder::new(depth + 1, ctx.np.frames, ctx.np.ticks);
         let (score, diagrams, initial) = run_level(
@@ -263,10 +272,15 @@ fn descend(
             &tick_done,
         )?;
         let frames = recorder.map(Recorder::into_frames).unwrap_or_default();
-        candidates.push((score, diagrams, initial, frames));
+        candidates.push(Candidate {
+            score,
+            diagrams,
+            initial,
+            frames,
+        });
     }
     // Best first; the stable sort keeps earlier starts first among equals.
-    candidates.sort_by(|a, b| b.0.total_cmp(&a.0));
+    candidates.sort_by(|a, b| b.score.total_cmp(&a.score));
     let keep = if ctx.lookahead {
         LOOKAHEAD_CANDIDATES
     } else {
@@ -274,7 +288,13 @@ fn descend(
     };
     candidates.truncate(keep);
     let mut best: Option<Descent> = None;
-    for (_, mut diagrams, initial, frames) in candidates {
+    for Candidate {
+        mut diagrams,
+        initial,
+        frames,
+        ..
+    } in candidates
+    {
         if ctx.method == Method::Neighbor && !ctx.np.prototype {
             swap::exhaustive_polish(&mut diagrams, &lv);
         }

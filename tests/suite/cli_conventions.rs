@@ -1,0 +1,191 @@
+//! The conventions of a Rust CLI: `init` on the examples' tables with their
+//! configs deleted (the written config builds), `build --check` (exit 0 when
+//! every output is current, 1 naming the stale ones, nothing written),
+//! `completions`, the man page, `-q`, and the config found upward.
+
+use std::path::Path;
+use std::process::Output;
+
+use crate::support;
+
+fn run_in(dir: &Path, args: &[&str]) -> Output {
+    support::bin()
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run nptreemap")
+}
+
+fn ok(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// The example's tables in a fresh folder, its config deleted.
+fn tables(example: &str, tag: &str) -> std::path::PathBuf {
+    let config = support::example(example, tag);
+    std::fs::remove_file(&config).expect("delete the config");
+    config.parent().expect("dir").to_path_buf()
+}
+
+#[test]
+fn init_writes_a_config_that_builds_for_three_examples() {
+    for (example, files, format, fields) in [
+        (
+            "countries",
+            &["countries.csv", "borders.csv"][..],
+            "border-list",
+            &[
+                "id: iso",
+                "label: name",
+                "weight: population",
+                "groups: [continent]",
+            ][..],
+        ),
+        (
+            "foods",
+            &["foods.csv", "vectors.tsv"][..],
+            "embedding-matrix",
+            &["id: id", "label: label", "weight: kcal", "groups: [group]"][..],
+        ),
+        (
+            "stocks",
+            &["prices.csv", "stocks.csv"][..],
+            "time-series",
+            &[
+                "id: id",
+                "label: name",
+                "weight: market_cap",
+                "groups: [sector]",
+            ][..],
+        ),
+        (
+            "movies",
+            &["films.csv"][..],
+            "genre-table",
+            &[
+                "label: title",
+                "weight: runtime",
+                "groups: [director]",
+                "genres: genres",
+            ][..],
+        ),
+    ] {
+        let dir = tables(example, &format!("init_{example}"));
+        let mut args = vec!["init"];
+        args.extend_from_slice(files);
+        ok(&run_in(&dir, &args));
+        let yaml = std::fs::read_to_string(dir.join("nptreemap.yaml")).expect("written");
+        assert!(
+            yaml.contains(&format!("format: {format}")),
+            "{example}:\n{yaml}"
+        );
+        for field in fields {
+            assert!(yaml.contains(field), "{example}: no {field:?} in\n{yaml}");
+        }
+        // It builds at once, from the folder (the config found there).
+        let built = ok(&run_in(&dir, &["build"]));
+        assert!(built.contains("wrote"), "{built}");
+        let name = Path::new(
+            files
+                .iter()
+                .find(|f| {
+                    !f.starts_with("prices")
+                        && !f.starts_with("borders")
+                        && !f.starts_with("vectors")
+                })
+                .expect("nodes"),
+        )
+        .file_stem()
+        .expect("stem")
+        .to_string_lossy()
+        .into_owned();
+        assert!(dir.join(format!("out/{name}.svg")).is_file(), "{example}");
+        assert!(dir.join(format!("out/{name}.html")).is_file(), "{example}");
+        // A second init does not overwrite without --force.
+        let again = run_in(&dir, &args);
+        assert_eq!(again.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&again.stderr).contains("--force"));
+    }
+}
+
+#[test]
+fn init_without_any_similarity_says_what_to_add() {
+    let dir = support::temp_dir("init_plain");
+    std::fs::write(dir.join("t.csv"), "id,size\na,1\nb,2\n").expect("write");
+    let out = run_in(&dir, &["init", "t.csv"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("t.csv: found no similarity"), "{stderr}");
+    assert!(!dir.join("nptreemap.yaml").exists());
+}
+
+#[test]
+fn build_check_exits_1_naming_stale_outputs_and_writes_nothing() {
+    let config = support::example("countries", "check");
+    let dir = config.parent().expect("dir").to_path_buf();
+    // Nothing built yet: every output is stale, and none is written.
+    let out = run_in(&dir, &["build", "--check"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("out of date"), "{stderr}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains("stale "));
+    assert!(!dir.join("out").exists(), "--check wrote outputs");
+    ok(&run_in(&dir, &["build"]));
+    let fresh = ok(&run_in(&dir, &["build", "--check"]));
+    assert!(fresh.contains("outputs up to date"), "{fresh}");
+    // One output edited by hand: exactly it is named.
+    let svg = dir.join("out/countries.svg");
+    std::fs::write(&svg, "<svg/>").expect("edit");
+    let out = run_in(&dir, &["build", "--check"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(stdout.matches("stale ").count(), 1, "{stdout}");
+    assert!(stdout.contains("countries.svg"), "{stdout}");
+    assert_eq!(std::fs::read(&svg).expect("read"), b"<svg/>");
+}
+
+#[test]
+fn quiet_drops_status_lines_and_the_config_is_found_upward() {
+    let config = support::example("countries", "quiet");
+    let sub = config.parent().expect("dir").join("docs/deep");
+    std::fs::create_dir_all(&sub).expect("dirs");
+    let out = run_in(&sub, &["build", "-q"]);
+    assert_eq!(ok(&out), "");
+    assert!(config
+        .parent()
+        .expect("dir")
+        .join("out/countries.svg")
+        .is_file());
+    let none = run_in(Path::new("/"), &["check"]);
+    assert_eq!(none.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&none.stderr).contains("no nptreemap.yaml in /"));
+}
+
+#[test]
+fn completions_and_man_page_describe_the_commands() {
+    let dir = support::temp_dir("completions");
+    for shell in ["bash", "zsh", "fish", "powershell", "elvish"] {
+        let script = ok(&run_in(&dir, &["completions", shell]));
+        for sub in ["build", "watch", "init", "layout"] {
+            assert!(script.contains(sub), "{shell}: no {sub}");
+        }
+    }
+    let bash = ok(&run_in(&dir, &["completions", "bash"]));
+    assert!(bash.contains("complete -F _nptreemap"), "{bash}");
+    let man = ok(&run_in(&dir, &["man"]));
+    assert!(
+        man.starts_with(".ie") || man.contains(".TH nptreemap"),
+        "{man}"
+    );
+    assert!(
+        man.contains(".SH NAME") && man.contains(".SH SUBCOMMANDS"),
+        "{man}"
+    );
+    let bad = run_in(&dir, &["completions", "tcsh"]);
+    assert_eq!(bad.status.code(), Some(2));
+}
