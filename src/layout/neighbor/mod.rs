@@ -188,6 +188,7 @@ struct Candidate {
     initial: Vec<Diagram>,
     frames: Vec<Frame>,
 }
+
 /// Lays out level `depth + 1` and everything below it, given the cells down to
 /// `depth`.
 fn descend(
