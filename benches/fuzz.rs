@@ -7,7 +7,12 @@
 //! cargo bench --bench fuzz                          # everything
 //! cargo bench --bench fuzz -- csv --cases 1000000   # one target
 //! cargo bench --bench fuzz -- --seed 7              # another stream
+//! cargo bench --bench fuzz -- --jobs 1               # one thread
+//! cargo bench --bench fuzz -- csv --seed 1000 --replay 4711   # print a hung case
 //! ```
+//!
+//! Each target runs in `--jobs` shards (default: every core), shard j with
+//! seed `seed·1000 + j`; a hang report names its shard's seed and the case.
 //!
 //! One line per target (cases, accepted, slowest case, largest allocation,
 //! time); exit code 1 on the first failure, with the shrunk input.
@@ -19,7 +24,7 @@ mod targets;
 use std::sync::Arc;
 use std::time::Duration;
 
-use targets::{Bounds, Summary};
+use targets::{Bounds, Run, Summary};
 
 #[global_allocator]
 static ALLOCATOR: targets::Counting = targets::Counting;
@@ -38,79 +43,124 @@ const LAYOUT: Bounds = Bounds {
 
 const TARGETS: [&str; 5] = ["csv", "json", "yaml", "state", "layout"];
 
-fn main() {
-    let mut wanted = Vec::new();
-    let mut cases: Option<u32> = None;
-    let mut seed = 1u64;
-    let mut args = std::env::args().skip(1);
-    while let Some(arg) = args.next() {
+/// The command line.
+struct Args {
+    wanted: Vec<String>,
+    cases: Option<u32>,
+    seed: u64,
+    jobs: u64,
+    replay: Option<u64>,
+}
+
+fn args() -> Args {
+    let mut a = Args {
+        wanted: Vec::new(),
+        cases: None,
+        seed: 1,
+        jobs: std::thread::available_parallelism().map_or(1, |n| n.get() as u64),
+        replay: None,
+    };
+    let mut it = std::env::args().skip(1);
+    let number = |v: Option<String>| v.and_then(|v| v.replace('_', "").parse::<u64>().ok());
+    while let Some(arg) = it.next() {
         match arg.as_str() {
-            "--cases" => cases = args.next().and_then(|v| v.replace('_', "").parse().ok()),
-            "--seed" => seed = args.next().and_then(|v| v.parse().ok()).unwrap_or(seed),
+            "--cases" => a.cases = number(it.next()).map(|v| v.min(u64::from(u32::MAX)) as u32),
+            "--seed" => a.seed = number(it.next()).unwrap_or(a.seed),
+            "--jobs" => a.jobs = number(it.next()).unwrap_or(1).max(1),
+            "--replay" => a.replay = number(it.next()),
             // Passed by `cargo bench`.
             "--bench" => {}
-            t if TARGETS.contains(&t) => wanted.push(t.to_string()),
+            t if TARGETS.contains(&t) => a.wanted.push(t.to_string()),
             other => {
                 eprintln!(
-                    "fuzz: unknown argument {other:?}; targets: {TARGETS:?}, --cases N, --seed S"
+                    "fuzz: unknown argument {other:?}; targets: {TARGETS:?}, --cases N, \
+                     --seed S, --jobs J, --replay K"
                 );
                 std::process::exit(2);
             }
         }
     }
-    if wanted.is_empty() {
-        wanted = TARGETS.iter().map(|t| t.to_string()).collect();
+    if a.wanted.is_empty() {
+        a.wanted = TARGETS.iter().map(|t| t.to_string()).collect();
     }
-    let parser_cases = cases.unwrap_or(10_000_000);
-    let layout_cases = cases.unwrap_or(10_000);
+    a
+}
+
+/// Runs one target's shard.
+fn shard(target: &str, run: Run) -> Summary {
+    match target {
+        "csv" => targets::drive("csv", targets::csv_cases(), targets::check_csv, run),
+        "json" => targets::drive("json", targets::json_cases(), targets::check_json, run),
+        "yaml" => targets::drive("yaml", targets::yaml_cases(), targets::check_yaml, run),
+        "state" => {
+            let seeds = Arc::new(targets::state_seeds());
+            targets::drive(
+                "state",
+                targets::state_cases(seeds),
+                targets::check_state,
+                run,
+            )
+        }
+        _ => targets::drive(
+            "layout",
+            targets::layout_cases(),
+            targets::check_layout,
+            run,
+        ),
+    }
+}
+
+fn main() {
+    let a = args();
     let mut failed = false;
-    for target in &wanted {
-        let s = match target.as_str() {
-            "csv" => targets::drive(
-                "csv",
-                targets::csv_cases(),
-                targets::check_csv,
-                parser_cases,
-                seed,
-                PARSER,
-            ),
-            "json" => targets::drive(
-                "json",
-                targets::json_cases(),
-                targets::check_json,
-                parser_cases,
-                seed,
-                PARSER,
-            ),
-            "yaml" => targets::drive(
-                "yaml",
-                targets::yaml_cases(),
-                targets::check_yaml,
-                parser_cases,
-                seed,
-                PARSER,
-            ),
-            "state" => {
-                let seeds = Arc::new(targets::state_seeds());
-                targets::drive(
-                    "state",
-                    targets::state_cases(seeds),
-                    targets::check_state,
-                    parser_cases,
-                    seed,
-                    PARSER,
-                )
+    for target in &a.wanted {
+        let layout = target == "layout";
+        let cases = a.cases.unwrap_or(if layout { 10_000 } else { 10_000_000 });
+        let bounds = if layout { LAYOUT } else { PARSER };
+        if let Some(k) = a.replay {
+            // A hang report names the shard's own seed: replay exactly that.
+            let run = Run {
+                cases,
+                seed: a.seed,
+                bounds,
+                replay: Some(k),
+            };
+            failed |= report(&shard(target, run), 1);
+            continue;
+        }
+        // Shards run side by side, each its own stream of cases: shard j of
+        // seed s draws from seed s·1000 + j, so shards never repeat each
+        // other and a run is reproducible from (seed, jobs).
+        let jobs = a.jobs.min(u64::from(cases.max(1)));
+        let per = cases / jobs as u32;
+        let summary = std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..jobs)
+                .map(|j| {
+                    let n = if j + 1 == jobs {
+                        cases - per * (jobs as u32 - 1)
+                    } else {
+                        per
+                    };
+                    let run = Run {
+                        cases: n,
+                        seed: a.seed * 1000 + j,
+                        bounds,
+                        replay: None,
+                    };
+                    scope.spawn(move || shard(target, run))
+                })
+                .collect();
+            let mut total: Option<Summary> = None;
+            for h in handles {
+                let s = h.join().expect("a shard's thread ends without panicking");
+                match &mut total {
+                    Some(t) => t.merge(s),
+                    None => total = Some(s),
+                }
             }
-            _ => targets::drive(
-                "layout",
-                targets::layout_cases(),
-                targets::check_layout,
-                layout_cases,
-                seed,
-                LAYOUT,
-            ),
-        };
-        failed |= report(&s);
+            total.unwrap_or_default()
+        });
+        failed |= report(&summary, jobs);
     }
     if failed {
         std::process::exit(1);
@@ -118,15 +168,16 @@ fn main() {
 }
 
 /// Prints one target's line; true when it failed.
-fn report(s: &Summary) -> bool {
+fn report(s: &Summary, jobs: u64) -> bool {
     println!(
-        "fuzz {:<6} {:>10} cases  {:>10} accepted  0 hangs  slowest {:>8.2} ms  largest {:>10} B  {:>8.1} s  {}",
+        "fuzz {:<6} {:>10} cases  {:>10} accepted  0 hangs  slowest {:>8.2} ms  largest {:>10} B  {:>8.1} s  {} jobs  {}",
         s.target,
         s.cases,
         s.accepted,
         s.max_case_ms,
         s.max_case_bytes,
         s.seconds,
+        jobs,
         if s.failure.is_some() { "FAILED" } else { "0 panics" }
     );
     if let Some(failure) = &s.failure {

@@ -11,7 +11,7 @@ mod targets;
 use std::sync::Arc;
 use std::time::Duration;
 
-use targets::{Bounds, Summary};
+use targets::{Bounds, Run, Summary};
 
 /// Counts allocations per thread, for the allocation bound (it forwards to
 /// the system allocator, so the rest of the suite is unaffected).
@@ -52,9 +52,12 @@ fn csv_tables_never_panic() {
         "csv",
         targets::csv_cases(),
         targets::check_csv,
-        3_000,
-        11,
-        PARSER,
+        Run {
+            cases: 3_000,
+            seed: 11,
+            bounds: PARSER,
+            replay: None,
+        },
     );
     assert_clean(&s, 3_000);
     assert!(s.accepted > 0 && s.accepted < s.cases, "both paths: {s:?}");
@@ -66,9 +69,12 @@ fn hierarchy_json_never_panics() {
         "json",
         targets::json_cases(),
         targets::check_json,
-        3_000,
-        12,
-        PARSER,
+        Run {
+            cases: 3_000,
+            seed: 12,
+            bounds: PARSER,
+            replay: None,
+        },
     );
     assert_clean(&s, 3_000);
     assert!(s.accepted > 0 && s.accepted < s.cases, "both paths: {s:?}");
@@ -80,9 +86,12 @@ fn yaml_config_never_panics() {
         "yaml",
         targets::yaml_cases(),
         targets::check_yaml,
-        3_000,
-        13,
-        PARSER,
+        Run {
+            cases: 3_000,
+            seed: 13,
+            bounds: PARSER,
+            replay: None,
+        },
     );
     assert_clean(&s, 3_000);
     assert!(s.accepted > 0 && s.accepted < s.cases, "both paths: {s:?}");
@@ -96,9 +105,12 @@ fn state_files_never_panic() {
         "state",
         targets::state_cases(seeds),
         targets::check_state,
-        3_000,
-        14,
-        PARSER,
+        Run {
+            cases: 3_000,
+            seed: 14,
+            bounds: PARSER,
+            replay: None,
+        },
     );
     assert_clean(&s, 3_000);
     assert!(s.accepted > 0 && s.accepted < s.cases, "both paths: {s:?}");
@@ -110,9 +122,12 @@ fn small_layouts_never_panic() {
         "layout",
         targets::layout_cases(),
         targets::check_layout,
-        60,
-        15,
-        LAYOUT,
+        Run {
+            cases: 60,
+            seed: 15,
+            bounds: LAYOUT,
+            replay: None,
+        },
     );
     assert_clean(&s, 60);
     assert!(s.accepted > 0, "no layout succeeded: {s:?}");
@@ -124,4 +139,45 @@ fn the_allocation_bound_is_measured() {
     let (v, peak) = targets::peak_during(|| vec![1u8; 1 << 20]);
     assert_eq!(v.len(), 1 << 20);
     assert!(peak >= 1 << 20, "peak {peak}");
+}
+
+/// A replay checks exactly the case it names, after generating the ones
+/// before it (so the case is the one a hang report numbered).
+#[test]
+fn a_replay_checks_only_the_named_case() {
+    let checked = std::sync::Mutex::new(Vec::new());
+    let s = targets::drive(
+        "replay",
+        0u32..1_000_000,
+        |v| {
+            checked.lock().unwrap().push(*v);
+            Ok(true)
+        },
+        Run {
+            cases: 50,
+            seed: 3,
+            bounds: PARSER,
+            replay: Some(7),
+        },
+    );
+    assert!(s.failure.is_none(), "{s:?}");
+    let checked = checked.into_inner().unwrap();
+    assert_eq!(checked.len(), 1, "checked {checked:?}");
+    // The same value is the seventh of a plain run of the same seed.
+    let all = std::sync::Mutex::new(Vec::new());
+    targets::drive(
+        "replay",
+        0u32..1_000_000,
+        |v| {
+            all.lock().unwrap().push(*v);
+            Ok(true)
+        },
+        Run {
+            cases: 7,
+            seed: 3,
+            bounds: PARSER,
+            replay: None,
+        },
+    );
+    assert_eq!(all.into_inner().unwrap()[6], checked[0]);
 }

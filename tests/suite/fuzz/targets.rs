@@ -123,38 +123,61 @@ pub struct Summary {
 #[derive(Clone, Copy, Debug)]
 pub struct Bounds {
     /// A case running longer than this is a hang: the watchdog reports the
-    /// input and aborts the process (a hung case cannot be interrupted).
+    /// case's number and aborts the process (a hung case cannot be
+    /// interrupted); [`Run::replay`] with that number prints its input.
     pub time: Duration,
     /// A case allocating more than this (on its own thread) fails.
     pub bytes: usize,
+}
+
+/// One run of a target.
+#[derive(Clone, Copy, Debug)]
+pub struct Run {
+    /// Cases to run.
+    pub cases: u32,
+    /// The seed of proptest's generator: the same seed gives the same cases.
+    pub seed: u64,
+    /// Per-case bounds.
+    pub bounds: Bounds,
+    /// Replay one case (1-based, as a hang report numbers it): the cases
+    /// before it are generated but not checked, it is printed, then checked.
+    pub replay: Option<u64>,
 }
 
 /// State the watchdog watches.
 struct Watch {
     /// Start of the running case (ms since the run began), 0 when idle.
     started_ms: AtomicU64,
-    /// The running case's input, for the report.
-    input: Mutex<String>,
+    /// The running case's number (1-based).
+    case: AtomicU64,
     done: AtomicBool,
 }
 
-/// Runs `cases` cases of `strategy` through `check` (which returns whether
-/// the input was accepted), under `bounds`, from `seed`.
+/// Runs `run.cases` cases of `strategy` through `check` (which returns
+/// whether the input was accepted), under `run.bounds`, from `run.seed`.
+///
+/// A case's input is not formatted unless it fails: formatting every input
+/// for a possible hang report cost a third of the run, so a hang reports the
+/// case's number, and [`Run::replay`] regenerates and prints it.
 pub fn drive<S: Strategy>(
     target: &'static str,
     strategy: S,
     check: impl Fn(&S::Value) -> Result<bool, String>,
-    cases: u32,
-    seed: u64,
-    bounds: Bounds,
+    run: Run,
 ) -> Summary
 where
     S::Value: std::fmt::Debug,
 {
+    let Run {
+        cases,
+        seed,
+        bounds,
+        replay,
+    } = run;
     let begun = Instant::now();
     let watch = Arc::new(Watch {
         started_ms: AtomicU64::new(0),
-        input: Mutex::new(String::new()),
+        case: AtomicU64::new(0),
         done: AtomicBool::new(false),
     });
     let dog = {
@@ -168,9 +191,10 @@ where
                 }
                 let now = begun.elapsed().as_millis() as u64;
                 if now.saturating_sub(started) > bounds.time.as_millis() as u64 {
-                    let input = watch.input.lock().map(|s| s.clone()).unwrap_or_default();
+                    let case = watch.case.load(Ordering::Relaxed);
                     eprintln!(
-                        "fuzz {target}: HANG: a case ran over {:?}; input:\n{input}",
+                        "fuzz {target}: HANG: case {case} of seed {seed} ran over {:?}; \
+                         replay it with `--seed {seed} --replay {case}` to print its input",
                         bounds.time
                     );
                     std::process::abort();
@@ -179,7 +203,7 @@ where
         })
     };
     let config = RunnerConfig {
-        cases,
+        cases: replay.map_or(cases, |k| k.min(u64::from(u32::MAX)) as u32),
         failure_persistence: None,
         rng_seed: RngSeed::Fixed(seed),
         max_shrink_iters: 2_000,
@@ -187,16 +211,17 @@ where
     };
     let mut runner = TestRunner::new(config);
     let accepted = AtomicUsize::new(0);
-    let ran = AtomicUsize::new(0);
+    let ran = AtomicU64::new(0);
     let max_ms = Mutex::new(0.0f64);
     let max_bytes = AtomicUsize::new(0);
     let result = runner.run(&strategy, |value| {
-        ran.fetch_add(1, Ordering::Relaxed);
-        if let Ok(mut slot) = watch.input.lock() {
-            slot.clear();
-            use std::fmt::Write;
-            let _ = write!(slot, "{value:?}");
+        let case = ran.fetch_add(1, Ordering::Relaxed) + 1;
+        match replay {
+            Some(k) if case < k => return Ok(()),
+            Some(_) => eprintln!("fuzz {target}: case {case} of seed {seed}:\n{value:#?}"),
+            None => {}
         }
+        watch.case.store(case, Ordering::Relaxed);
         let t0 = Instant::now();
         watch
             .started_ms
@@ -225,12 +250,24 @@ where
     let failure = result.err().map(|e| e.to_string());
     Summary {
         target,
-        cases: ran.load(Ordering::Relaxed) as u64,
+        cases: ran.load(Ordering::Relaxed),
         accepted: accepted.load(Ordering::Relaxed) as u64,
         failure,
         max_case_ms: max_ms.lock().map(|m| *m).unwrap_or(0.0),
         max_case_bytes: max_bytes.load(Ordering::Relaxed),
         seconds: begun.elapsed().as_secs_f64(),
+    }
+}
+
+impl Summary {
+    /// Adds another shard's figures to these.
+    pub fn merge(&mut self, other: Summary) {
+        self.cases += other.cases;
+        self.accepted += other.accepted;
+        self.failure = self.failure.take().or(other.failure);
+        self.max_case_ms = self.max_case_ms.max(other.max_case_ms);
+        self.max_case_bytes = self.max_case_bytes.max(other.max_case_bytes);
+        self.seconds = self.seconds.max(other.seconds);
     }
 }
 
@@ -366,6 +403,8 @@ pub struct CsvCase {
     pub other: Vec<u8>,
     /// The field mapping and limits.
     pub options: FormatOptions,
+    /// Whether optional roles (the `ids` of a .npy matrix) get `other` too.
+    pub optional: bool,
 }
 
 fn column_name() -> impl Strategy<Value = String> {
@@ -512,13 +551,183 @@ fn options() -> impl Strategy<Value = FormatOptions> {
         )
 }
 
-/// The CSV target's inputs.
+/// What a shaped case's second table is.
+#[derive(Clone, Copy, Debug)]
+enum Other {
+    Pairs,
+    Vectors,
+    Series,
+    Genres,
+}
+
+/// How a shaped node table gives its hierarchy.
+#[derive(Clone, Copy, Debug)]
+enum Shape {
+    Flat,
+    Parent,
+    Path,
+    Groups,
+}
+
+/// A weight cell: mostly a plain positive number, now and then one at the
+/// edges of f64 (so the shaped tables reach the weight checks too).
+fn weight_cell() -> impl Strategy<Value = String> {
+    prop_oneof![
+        12 => (1u32..100_000).prop_map(|v| v.to_string()),
+        3 => (0.001f64..1e6).prop_map(|v| format!("{v}")),
+        1 => number_text(),
+    ]
+}
+
+/// A node table whose header and rows agree, with its options and a second
+/// table (pairs, vectors, series) over the same ids: most of these parse, so
+/// the deeper paths (hierarchy building, weights, similarity, warnings) run,
+/// and the mutations then break them one edit at a time.
+fn shaped_case() -> impl Strategy<Value = CsvCase> {
+    (
+        1usize..14,
+        prop::sample::select(vec![Shape::Flat, Shape::Parent, Shape::Path, Shape::Groups]),
+        prop::sample::select(vec![
+            Other::Pairs,
+            Other::Vectors,
+            Other::Series,
+            Other::Genres,
+        ]),
+        prop::collection::vec(weight_cell(), 14),
+        prop::collection::vec((0usize..14, 0usize..14, 0.0f64..1.0), 0..20),
+        prop::collection::vec(-5.0f64..5.0, 14 * 3),
+        (
+            any::<(bool, bool, bool)>(),
+            prop::sample::select(vec![b',', b',', b'\t', b';']),
+        ),
+        (mutations(), mutations()),
+        prop::option::weighted(0.05, id_text()),
+    )
+        .prop_map(
+            |(
+                n,
+                shape,
+                other,
+                weights,
+                pairs,
+                coords,
+                ((crlf, bom, label), delimiter),
+                edits,
+                odd,
+            )| {
+                let groups = ["Asia", "Europe", "Asia/East"];
+                let ids: Vec<String> = (0..n)
+                    .map(|i| match (&odd, i) {
+                        (Some(id), 0) => id.clone(),
+                        _ => format!("n{i}"),
+                    })
+                    .collect();
+                let mut header = vec!["id".to_string()];
+                if label {
+                    header.push("label".to_string());
+                }
+                header.push("weight".to_string());
+                match shape {
+                    Shape::Flat => {}
+                    Shape::Parent => header.push("parent".to_string()),
+                    Shape::Path => header.push("path".to_string()),
+                    Shape::Groups => header.extend(["group".to_string(), "region".to_string()]),
+                }
+                if matches!(other, Other::Genres) {
+                    header.push("genres".to_string());
+                }
+                let mut rows = vec![header];
+                for (i, id) in ids.iter().enumerate() {
+                    let mut row = vec![id.clone()];
+                    if label {
+                        row.push(format!("Node {i}"));
+                    }
+                    row.push(weights[i].clone());
+                    match shape {
+                        Shape::Flat => {}
+                        // A tree: each node's parent is an earlier node (or none).
+                        Shape::Parent => row.push(if i == 0 {
+                            String::new()
+                        } else {
+                            ids[(i * 7) % i].clone()
+                        }),
+                        Shape::Path => row.push(format!("{}/{id}", groups[i % 3])),
+                        Shape::Groups => {
+                            row.push(groups[i % 3].to_string());
+                            row.push(format!("r{}", i % 2));
+                        }
+                    }
+                    if matches!(other, Other::Genres) {
+                        row.push(["Drama|Crime", "Crime", "Drama|Comedy", ""][i % 4].to_string());
+                    }
+                    rows.push(row);
+                }
+                let second: Vec<Vec<String>> = match other {
+                    Other::Pairs => {
+                        std::iter::once(vec!["a".into(), "b".into(), "strength".into()])
+                            .chain(pairs.iter().map(|&(a, b, w)| {
+                                vec![ids[a % n].clone(), ids[b % n].clone(), format!("{w:.3}")]
+                            }))
+                            .collect()
+                    }
+                    Other::Vectors => {
+                        std::iter::once(vec!["id".into(), "v1".into(), "v2".into(), "v3".into()])
+                            .chain(ids.iter().enumerate().map(|(i, id)| {
+                                let mut row = vec![id.clone()];
+                                row.extend((0..3).map(|k| format!("{:.4}", coords[i * 3 + k])));
+                                row
+                            }))
+                            .collect()
+                    }
+                    Other::Series => {
+                        let mut head = vec!["date".to_string()];
+                        head.extend(ids.iter().cloned());
+                        std::iter::once(head)
+                            .chain((0..4).map(|d| {
+                                let mut row = vec![format!("2024-01-0{}", d + 1)];
+                                row.extend((0..n).map(|i| {
+                                    format!("{:.3}", 100.0 + coords[(i * 3 + d) % coords.len()])
+                                }));
+                                row
+                            }))
+                            .collect()
+                    }
+                    Other::Genres => Vec::new(),
+                };
+                let options = FormatOptions {
+                    id: Some("id".to_string()),
+                    weight: Some("weight".to_string()),
+                    parent: matches!(shape, Shape::Parent).then(|| "parent".to_string()),
+                    path: matches!(shape, Shape::Path).then(|| "path".to_string()),
+                    groups: if matches!(shape, Shape::Groups) {
+                        vec!["group".to_string(), "region".to_string()]
+                    } else {
+                        Vec::new()
+                    },
+                    ..FormatOptions::default()
+                };
+                CsvCase {
+                    nodes: mutate(render_csv(&rows, delimiter, crlf, bom, true), &edits.0),
+                    other: mutate(render_csv(&second, delimiter, crlf, false, true), &edits.1),
+                    options,
+                    optional: false,
+                }
+            },
+        )
+}
+
+/// The CSV target's inputs: half free-form tables (mostly refused, for the
+/// error paths), half shaped ones (mostly accepted, for the rest).
 pub fn csv_cases() -> impl Strategy<Value = CsvCase> {
-    (table_bytes(), table_bytes(), options()).prop_map(|(nodes, other, options)| CsvCase {
-        nodes,
-        other,
-        options,
-    })
+    let free = (table_bytes(), table_bytes(), options(), any::<bool>()).prop_map(
+        |(nodes, other, options, optional)| CsvCase {
+            nodes,
+            other,
+            options,
+            optional,
+        },
+    );
+    prop_oneof![free, shaped_case()]
 }
 
 /// Checks that a parsed dataset honours the limits and the model's invariants.
@@ -563,6 +772,9 @@ pub fn check_csv(case: &CsvCase) -> Result<bool, String> {
         }
         let mut inputs = Inputs::new();
         for (k, role) in roles.iter().enumerate() {
+            if !role.required && !case.optional {
+                continue;
+            }
             inputs = inputs.with(role.name, if k == 0 { &case.nodes } else { &case.other });
         }
         match format.parse(&inputs, &case.options) {
