@@ -154,7 +154,7 @@ fn main() {
             for h in handles {
                 let s = h.join().expect("a shard's thread ends without panicking");
                 match &mut total {
-                    Some(t) => t.merge(s),
+                    Some(t) => merge(t, s),
                     None => total = Some(s),
                 }
             }
@@ -165,6 +165,16 @@ fn main() {
     if failed {
         std::process::exit(1);
     }
+}
+
+/// Adds another shard's figures to `total`.
+fn merge(total: &mut Summary, other: Summary) {
+    total.cases += other.cases;
+    total.accepted += other.accepted;
+    total.failure = total.failure.take().or(other.failure);
+    total.max_case_ms = total.max_case_ms.max(other.max_case_ms);
+    total.max_case_bytes = total.max_case_bytes.max(other.max_case_bytes);
+    total.seconds = total.seconds.max(other.seconds);
 }
 
 /// Prints one target's line; true when it failed.

@@ -21,7 +21,7 @@ const TEMP_SUFFIX: &str = ".tmp";
 /// PNG old.
 static WRITING: Mutex<()> = Mutex::new(());
 
-/// Takes the write lock (see [`WRITING`]): hold it while writing outputs that
+/// Takes the write lock (see `WRITING`): hold it while writing outputs that
 /// belong together, or before exiting the process while writes may be going on.
 pub fn writing() -> MutexGuard<'static, ()> {
     // A panic while writing leaves no invariant behind this lock to protect.

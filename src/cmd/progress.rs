@@ -1,5 +1,6 @@
-//! Progress bars for layouts (issue 12 item 4): an indicatif bar on stderr fed
-//! by the layout core's progress callback, shown only when stderr is a
+//! Progress bars for layouts: an indicatif bar on stderr fed by the layout
+//! core's progress callback (`layout`, `eval`, `build` and `watch`'s first
+//! build), shown only when stderr is a
 //! terminal and only once a layout has run for about a second; nothing
 //! otherwise, so logs, pipes and CI stay clean.
 
@@ -7,7 +8,7 @@ use std::io::IsTerminal;
 use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressFinish, ProgressStyle};
 use nptreemap::layout::{ProgressSink, Request};
 
 /// Steps of the bar: the layout's [`fraction`](nptreemap::layout::Progress::fraction)
@@ -27,28 +28,43 @@ impl LayoutBar {
     /// `None` (and `request` untouched) otherwise. The bar only ever
     /// continues: it never stops a layout.
     pub(crate) fn attach(request: &mut Request, what: &str) -> Option<Self> {
-        if !std::io::stderr().is_terminal() || super::quiet() {
-            return None;
-        }
-        let bar = ProgressBar::with_draw_target(Some(STEPS), ProgressDrawTarget::hidden());
-        if let Ok(style) =
-            ProgressStyle::with_template("{prefix} [{bar:30}] {percent:>3}% {msg} {elapsed}")
-        {
-            bar.set_style(style.progress_chars("#>-"));
-        }
-        bar.set_prefix(what.to_string());
-        let shown = bar.clone();
-        let started = Instant::now();
-        request.progress = Some(ProgressSink::new(move |p| {
-            if shown.is_hidden() && started.elapsed() >= QUIET_FOR {
-                shown.set_draw_target(ProgressDrawTarget::stderr());
-            }
-            shown.set_message(format!("level {}/{}", p.level, p.levels));
-            shown.set_position((p.fraction() * STEPS as f64) as u64);
-            ControlFlow::Continue(())
-        }));
+        let (bar, sink) = bar_and_sink(what)?;
+        request.progress = Some(sink);
         Some(Self { bar })
     }
+}
+
+/// A reporter for one layout labelled `what` that draws a terminal bar, or
+/// `None` when stderr is not a terminal (or `-q`): the bar clears itself
+/// when the last holder of the sink lets go of it (the daemon, once its
+/// layout is done).
+pub(crate) fn sink(what: &str) -> Option<ProgressSink> {
+    bar_and_sink(what).map(|(_, sink)| sink)
+}
+
+fn bar_and_sink(what: &str) -> Option<(ProgressBar, ProgressSink)> {
+    if !std::io::stderr().is_terminal() || super::quiet() {
+        return None;
+    }
+    let bar = ProgressBar::with_draw_target(Some(STEPS), ProgressDrawTarget::hidden())
+        .with_finish(ProgressFinish::AndClear);
+    if let Ok(style) =
+        ProgressStyle::with_template("{prefix} [{bar:30}] {percent:>3}% {msg} {elapsed}")
+    {
+        bar.set_style(style.progress_chars("#>-"));
+    }
+    bar.set_prefix(what.to_string());
+    let shown = bar.clone();
+    let started = Instant::now();
+    let sink = ProgressSink::new(move |p| {
+        if shown.is_hidden() && started.elapsed() >= QUIET_FOR {
+            shown.set_draw_target(ProgressDrawTarget::stderr());
+        }
+        shown.set_message(format!("level {}/{}", p.level, p.levels));
+        shown.set_position((p.fraction() * STEPS as f64) as u64);
+        ControlFlow::Continue(())
+    });
+    Some((bar, sink))
 }
 
 impl Drop for LayoutBar {

@@ -22,7 +22,7 @@ use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 
 use super::config_file::ConfigArg;
 
-use nptreemap::daemon::{self, watcher::Message, Options};
+use nptreemap::daemon::{self, watcher::Message, FirstBuildProgress, Options};
 
 /// Arguments of `nptreemap watch`.
 #[derive(Debug, Args)]
@@ -69,6 +69,8 @@ pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
     let options = Options {
         cold: args.cold,
         stop: Some(stop),
+        // The first build may be a long cold layout: show a bar on a terminal.
+        first_build_progress: Some(FirstBuildProgress(Arc::new(super::progress::sink))),
         ..Options::default()
     };
     daemon::run(&args.config.path()?, options, tx, &rx, &mut |status| {

@@ -44,6 +44,24 @@ pub struct Options {
     /// and the loop ends. The [`Message::Stop`] that goes with it wakes an
     /// idle loop.
     pub stop: Option<Arc<AtomicBool>>,
+    /// Gives each dataset's first build (the one at start, which may be a
+    /// long cold layout) a progress reporter, such as the binary's terminal
+    /// bar; `None` for none. Later rebuilds start warm and are short.
+    pub first_build_progress: Option<FirstBuildProgress>,
+}
+
+/// A maker of progress reporters by dataset name, for
+/// [`Options::first_build_progress`]; it returns `None` to report nothing.
+#[derive(Clone)]
+pub struct FirstBuildProgress(pub Arc<MakeProgress>);
+
+/// What [`FirstBuildProgress`] holds: a dataset's name to its reporter.
+pub type MakeProgress = dyn Fn(&str) -> Option<ProgressSink> + Send + Sync;
+
+impl std::fmt::Debug for FirstBuildProgress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("FirstBuildProgress")
+    }
 }
 
 /// Why the daemon could not start (or had to stop).
@@ -415,12 +433,20 @@ impl Daemon<'_> {
         // A SIGTERM ends a running layout at its next progress report
         // (between ticks and diagrams), well inside the signal handler's
         // grace period; the abandoned rebuild writes nothing.
-        if let Some(flag) = stop.clone() {
-            request.progress = Some(ProgressSink::new(move |_| {
-                if flag.load(Ordering::Relaxed) {
-                    ControlFlow::Break(())
-                } else {
-                    ControlFlow::Continue(())
+        // The first build also feeds the caller's reporter (a terminal bar).
+        let shown = match (&self.options.first_build_progress, &reason) {
+            (Some(make), Reason::Start) => (make.0)(name),
+            _ => None,
+        };
+        if stop.is_some() || shown.is_some() {
+            let flag = stop.clone();
+            request.progress = Some(ProgressSink::new(move |p| {
+                if flag.as_ref().is_some_and(|f| f.load(Ordering::Relaxed)) {
+                    return ControlFlow::Break(());
+                }
+                match &shown {
+                    Some(sink) => (sink.0)(p),
+                    None => ControlFlow::Continue(()),
                 }
             }));
         }
@@ -438,6 +464,9 @@ impl Daemon<'_> {
                 }) => return Ok(None),
                 other => other?,
             };
+            // Done with the reporter: a terminal bar clears before the
+            // status line prints.
+            request.progress = None;
             let laid_out = Instant::now();
             if stopping() {
                 return Ok(None);

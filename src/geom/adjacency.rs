@@ -1,8 +1,8 @@
 //! Level adjacency: which cells of one depth level (across all parents) share
 //! an edge, as an undirected graph on node indices, and hop distances on it
 //! (the paper's graph distance, §6). Built in about O(n) from a bucket grid
-//! over the cells' bounding boxes; "share an edge" is [`shared_length`] above
-//! the one threshold of [`super::shared_edge`]. Knows polygons and indices
+//! over the cells' bounding boxes; "share an edge" is `shared_length` above
+//! the one threshold of `super::shared_edge`. Knows polygons and indices
 //! only: the caller (a layout) says which polygon an index has.
 
 use super::shared_edge::{shared_length, MIN_SHARED, PERPENDICULAR_TOL};

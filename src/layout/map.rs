@@ -1,6 +1,6 @@
 //! `MapSimulation`: one level of a Voronoi treemap, i.e. sites inside one parent
 //! cell whose power-diagram cells must reach target areas. Driven step by step
-//! with [`MapSimulation::tick`] and inspected with [`MapSimulation::state`]
+//! with `MapSimulation::tick` and inspected with `MapSimulation::state`
 //! (the d3-voronoi-map shape: the caller owns the clock).
 //!
 //! One tick is a Lloyd step (sites to their cells' centroids) followed by a
@@ -287,7 +287,7 @@ impl MapSimulation {
             .count()
     }
 
-    /// Gives every site with an empty cell a new start ([`Self::restart_site`])
+    /// Gives every site with an empty cell a new start (`restart_site`)
     /// and recomputes the diagram, a few rounds at most; returns how many
     /// sites were restarted. For the end of an optimisation, where a cell left
     /// empty would make the layout fail.

@@ -1,8 +1,8 @@
 //! Progress of a layout run, and the way to stop one: the pure core reports
-//! where it is through a caller's callback ([`Request::progress`](super::Request::progress))
+//! where it is through a caller's callback (`Request::progress`)
 //! and never prints or reads a clock itself. Owns [`Progress`], the callback
-//! type and the run's [`Monitor`]; may not change a layout: the callback's
-//! answer can only stop a run ([`LayoutError::Cancelled`](super::LayoutError::Cancelled)),
+//! type and the run's `Monitor`; may not change a layout: the callback's
+//! answer can only stop a run (`LayoutError::Cancelled`),
 //! never alter what it computes, so a layout with a callback is byte for byte
 //! the layout without one.
 

@@ -1,5 +1,5 @@
 //! The top-down recursion: the root takes the outline, then every internal node's
-//! cell is divided among its children by one [`MapSimulation`], level by level.
+//! cell is divided among its children by one `MapSimulation`, level by level.
 //! Diagrams of one level are independent, so they run in parallel; each draws
 //! its randomness from the run seed and its own node id, so the result does not
 //! depend on scheduling.

@@ -1,7 +1,7 @@
 //! What a layout-JSON document carries beyond the dataset and the geometry:
 //! the constraints with their `realized` flags and the producer's own quality
 //! figures, taken from a finished computation. Owns that selection; the writer
-//! ([`super::write`]) owns how it is spelled.
+//! (`super::write`) owns how it is spelled.
 
 use serde::Serialize;
 

@@ -1,6 +1,6 @@
 //! Layout JSON, format `nptreemap-layout/1` (the layout-JSON contract): the
-//! one home of that format. [`write`] turns a finished layout into the
-//! document, [`read`] turns a document back into the [`Previous`] layout a warm
+//! one home of that format. [`write`](mod@write) turns a finished layout into the
+//! document, [`read()`] turns a document back into the [`Previous`] layout a warm
 //! start begins from, and [`extras`] chooses what beyond the geometry goes in.
 //! Pure: text in, text out; the caller reads and writes the files.
 

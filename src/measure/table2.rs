@@ -2,7 +2,7 @@
 //! realised at the deepest level, the area error of the leaf diagrams, the
 //! graph distance between constrained cells and the aspect ratios. Realised
 //! means adjacent in the deepest level's adjacency, which the caller computed
-//! once ([`Computed::adjacency`]).
+//! once (`Computed::adjacency`).
 
 use super::area::diagram_errors;
 use super::shape::{leaf_aspect_mean, proto_aspect_mean};

@@ -3,7 +3,7 @@
 //! (Stage A), propagation to parents (Stage B), one extra link per following bin
 //! (Stage C) and symmetrisation (Stage D), ending in the unordered pairs with
 //! score > 1 that the paper counts. Stage E (the optimiser's per-round reordering)
-//! is left to the optimiser; it can be derived from [`ConstraintLists`].
+//! is left to the optimiser; it can be derived from `ConstraintLists`.
 
 use std::collections::BTreeMap;
 
@@ -348,7 +348,7 @@ fn has(list: &[ListEntry], target: usize) -> bool {
 ///
 /// Similarities are computed level by level, rows in parallel (results independent
 /// of the thread count): neighbour lists, binary and Jaccard from sparse rows
-/// ([`SparseLevel`]: the relations, groups of equal vectors, an inverted index of
+/// (`SparseLevel`: the relations, groups of equal vectors, an inverted index of
 /// supports; O(n + pairs that share a coordinate) per level), cosine and Pearson over
 /// all pairs (`O(n²·d)` per level).
 pub fn constraint_lists(prepared: &Dataset, kind: SimilarityKind) -> ConstraintLists {

@@ -2,10 +2,10 @@
 //! initial layout: matching CVT sites to nodes' projected positions (method-reference
 //! §4.3). Pure and deterministic: fixed tie-breaking, no randomness, no I/O.
 //!
-//! Groups of up to [`EXACT_MAX`] are matched exactly. Larger ones (issue 12 item 3:
+//! Groups of up to `EXACT_MAX` are matched exactly. Larger ones (issue 12 item 3:
 //! Kuhn–Munkres is O(k³), 20 s at 3,000 siblings) use recursive bisection matching:
 //! sites and points are split at the same rank along the longer side of the sites'
-//! bounding box until a block holds at most [`BLOCK`] of each, and each block is
+//! bounding box until a block holds at most `BLOCK` of each, and each block is
 //! matched exactly: O(k log k + k·BLOCK²) time, O(BLOCK²) memory. Quality against exact
 //! KM on groups of 200 and 500 (total distance; measured by
 //! `cargo run --release --example matching_quality`, figures in BENCHMARKS.md,

@@ -1,11 +1,11 @@
 //! 2-D projections for the geometric initialisation (method-reference §4.1): Euclidean
 //! PCA of feature vectors, classical (Torgerson) MDS of a dissimilarity (landmark MDS
-//! above [`MDS_EXACT_MAX`] nodes), and the per-axis min–max rescale into a box. Pure and
+//! above `MDS_EXACT_MAX` nodes), and the per-axis min–max rescale into a box. Pure and
 //! deterministic: start vectors and landmarks come from fixed seeds, faer runs
 //! sequentially (`Par::Seq`, so the thread count cannot change a bit), no I/O.
 //!
 //! The eigen-decompositions are faer's (issue 12 item 5): its dense self-adjoint
-//! EVD for matrices up to [`DENSE_MAX`], and its restarted Lanczos partial SVD of the
+//! EVD for matrices up to `DENSE_MAX`, and its restarted Lanczos partial SVD of the
 //! centred data for PCA above. Measured against the hand-written solver this replaced
 //! (Householder, Sturm bisection, inverse iteration, Lanczos) in BENCHMARKS.md
 //! ("Projections"): as accurate or better everywhere, and faster on every size.

@@ -4,7 +4,7 @@
 //! of the top-level groups (and second-level ones where they fit) drawn large
 //! and light across their cells, so the hierarchy reads without the legend
 //! (issue 13, item 4). Boxes are measured with the built-in font
-//! ([`super::text`]), the metrics usvg lays the text out with. Owns text
+//! (`super::text`), the metrics usvg lays the text out with. Owns text
 //! choice and placement; may not draw overlays or decide colours.
 
 use std::collections::BTreeMap;
@@ -556,7 +556,7 @@ pub fn quads_overlap(a: &[Point; 4], b: &[Point; 4]) -> bool {
 }
 
 /// The group names drawn on the map: every top-level group with children of
-/// its own (virtual groups aside) whose name fits at [`GROUP_MIN`] or more,
+/// its own (virtual groups aside) whose name fits at `GROUP_MIN` or more,
 /// and the second-level groups whose names fit without overlapping another
 /// name or any leaf label (`leaves`). `u` is the canvas scale (1 at
 /// 1,000 × 1,000).

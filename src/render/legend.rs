@@ -3,7 +3,7 @@
 //! (colour swatch and name), wrapped to the width and cut after a few rows
 //! with a count of the groups left out (the names are on the map too). Owns
 //! the legend's entries and their row layout; may not decide what is listed
-//! (the [`picture`](super::picture) does) or touch the map.
+//! (the `picture` does) or touch the map.
 
 use super::palette::Rgb;
 use super::svg::{escape, num, SvgStyle};
@@ -61,7 +61,7 @@ impl LegendItem {
 /// The legend's SVG elements, placed below a canvas of `width` × `height`, and
 /// the band's height (0 and no text when there are no items). `u` is the
 /// canvas scale (1 on a 1,000-unit canvas). Entries flow left to right and
-/// wrap into rows; past [`MAX_ROWS`] rows the entries left are counted in a
+/// wrap into rows; past `MAX_ROWS` rows the entries left are counted in a
 /// last one.
 pub fn legend(
     items: &[LegendItem],

@@ -1,4 +1,4 @@
-//! The finished picture: the treemap ([`svg`](super::svg)) with its constraint
+//! The finished picture: the treemap (`svg`) with its constraint
 //! overlay, framed by an optional title band above and a legend band below, a
 //! background and a border around the root outline. Owns the picture's frame
 //! and the [`Style`] that configures it (issue 5: "title and legend from the

@@ -1,9 +1,9 @@
 //! PNG output: the SVG text rendered through usvg and resvg with a font built
-//! into the program (DejaVu Sans, [`super::text`]), so labels render the same
+//! into the program (DejaVu Sans, `super::text`), so labels render the same
 //! on machines without fonts. Sees only the SVG text: the SVG is the single
 //! source of truth for every picture. Groups of plain text (the labels, group
 //! names, counts, legend text, title) are drawn from the shared shaping and
-//! glyph caches of [`super::text`], exactly where usvg would draw them, and
+//! glyph caches of `super::text`, exactly where usvg would draw them, and
 //! everything else by resvg (issue 13, item 7: usvg's set-up per text element
 //! was most of a labelled picture's time).
 
@@ -15,7 +15,7 @@ use resvg::usvg::{self, roxmltree};
 
 use super::text::{self, FAMILY, FONT};
 
-/// Rendering an SVG to PNG failed; with SVG from [`super::svg`] this means a
+/// Rendering an SVG to PNG failed; with SVG from [`super::svg()`] this means a
 /// bug, not bad input.
 #[derive(Debug, thiserror::Error)]
 pub enum PngError {
@@ -58,7 +58,7 @@ fn options() -> &'static usvg::Options<'static> {
 /// Renders SVG text to PNG bytes at `scale` pixels per SVG unit.
 ///
 /// The document is split by its structure into layers, in paint order:
-/// runs of top-level elements parsed by usvg (up to [`LAYERS`] documents, in
+/// runs of top-level elements parsed by usvg (up to `LAYERS` documents, in
 /// parallel) and groups of plain text drawn from the glyph cache. The pixels
 /// are rendered in horizontal strips in parallel. Layers are drawn in
 /// document order onto the same pixels, exactly as one pass would draw the

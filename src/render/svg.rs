@@ -1,6 +1,6 @@
 //! The SVG picture of a finished layout: filled leaf cells coloured by top-level
 //! group (colours assigned from which groups touch), white outlines thicker for
-//! higher levels, and the SVG text of placed labels ([`super::labels`] decides
+//! higher levels, and the SVG text of placed labels (`super::labels` decides
 //! where). Owns the picture's structure and colours per node; may not compute or
 //! alter geometry, fail, or do I/O. Output is deterministic: fixed two-decimal
 //! coordinates, nodes in dataset order.

@@ -189,3 +189,108 @@ fn completions_and_man_page_describe_the_commands() {
     let bad = run_in(&dir, &["completions", "tcsh"]);
     assert_eq!(bad.status.code(), Some(2));
 }
+
+/// `script(1)` runs `command` on a pseudo-terminal (so stderr is a
+/// terminal); its stdout carries everything the command printed.
+fn on_a_terminal(command: &str) -> std::process::Command {
+    let mut c = std::process::Command::new("script");
+    c.args(["-qec", command, "/dev/null"]);
+    c
+}
+
+/// A neighbourhood layout that takes more than a second in the test
+/// profile (800 leaves with 16-d embeddings, one level).
+fn slow_input(dir: &Path) -> std::path::PathBuf {
+    let input = dir.join("flat800.json");
+    let gen = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/gen_similar.py");
+    let out = std::process::Command::new("python3")
+        .arg(gen)
+        .args([
+            "--n", "800", "--depth", "1", "--dim", "16", "--seed", "1", "--out",
+        ])
+        .arg(&input)
+        .output()
+        .expect("run gen_similar.py (needs python3)");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    input
+}
+
+#[test]
+fn a_progress_bar_shows_on_a_terminal_only() {
+    let dir = support::temp_dir("progress_bar");
+    let input = slow_input(&dir);
+    let bin = env!("CARGO_BIN_EXE_nptreemap");
+    // Not a terminal: no bar, whatever the layout's length.
+    let out = support::layout(&input, &[&dir.join("a.json")], &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !stderr.contains("level 1/1"),
+        "a bar without a terminal: {stderr}"
+    );
+    // A terminal: the bar names the level; with -q, no bar.
+    let on_tty = |flags: &str, out: &str| {
+        let cmd = format!(
+            "{bin} layout {flags} {} --out {}",
+            input.display(),
+            dir.join(out).display()
+        );
+        let run = on_a_terminal(&cmd).output().expect("run script(1)");
+        let text = String::from_utf8_lossy(&run.stdout).into_owned();
+        assert!(run.status.success(), "{cmd}: {text}");
+        text
+    };
+    let shown = on_tty("", "b.json");
+    assert!(
+        shown.contains("level 1/1"),
+        "no bar on a terminal: {shown:?}"
+    );
+    let quiet = on_tty("-q", "c.json");
+    assert!(!quiet.contains("level 1/1"), "a bar with -q: {quiet:?}");
+}
+
+#[test]
+fn the_first_build_of_watch_shows_a_progress_bar_on_a_terminal() {
+    use std::io::Read;
+    let dir = support::temp_dir("progress_watch");
+    let input = slow_input(&dir);
+    let config = dir.join("nptreemap.yaml");
+    std::fs::write(
+        &config,
+        format!(
+            "datasets:\n  - name: flat\n    format: hierarchy-json\n    files: {{hierarchy: {}}}\n    outputs:\n      - path: out/flat.json\n",
+            input.file_name().and_then(|n| n.to_str()).expect("name")
+        ),
+    )
+    .expect("write config");
+    let bin = env!("CARGO_BIN_EXE_nptreemap");
+    // `timeout` ends the daemon (SIGTERM: exit 0) once the first build is done.
+    let mut child = on_a_terminal(&format!(
+        "timeout -s TERM 60 {bin} watch --cold {}",
+        config.display()
+    ))
+    .stdout(std::process::Stdio::piped())
+    .spawn()
+    .expect("run script(1)");
+    let mut stdout = child.stdout.take().expect("stdout");
+    let mut seen = String::new();
+    let mut buf = [0u8; 4096];
+    // Read until the first build's status line, then stop the daemon.
+    while !seen.contains("flat: start") {
+        match stdout.read(&mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => seen.push_str(&String::from_utf8_lossy(&buf[..n])),
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(seen.contains("flat: start"), "no status line: {seen:?}");
+    let before = &seen[..seen.find("flat: start").expect("status line")];
+    assert!(
+        before.contains("level 1/1"),
+        "no bar before the first status line: {seen:?}"
+    );
+}

@@ -67,7 +67,13 @@ pub(crate) fn layout(input: &Path, outs: &[&Path], extra: &[&str]) -> Output {
 /// with `NPTREEMAP_SHARED_CHECKER=1`, also `../shared/tools/check-layout`, which
 /// must agree on validity and on the realised counts.
 pub(crate) fn check_layout(json: &Path) -> serde_json::Value {
-    let (passed, report) = run_checker(&tools().join("check_layout.py"), json);
+    check_layout_with(json, &[])
+}
+
+/// [`check_layout`] with extra flags for `check_layout.py` (such as
+/// `--min-weight-ratio`); the shared checker, which has none, runs plain.
+pub(crate) fn check_layout_with(json: &Path, flags: &[&str]) -> serde_json::Value {
+    let (passed, report) = run_checker(&tools().join("check_layout.py"), json, flags);
     assert!(
         passed && report["ok"] == true,
         "check_layout.py failed on {}: {report}",
@@ -76,7 +82,7 @@ pub(crate) fn check_layout(json: &Path) -> serde_json::Value {
     if std::env::var_os("NPTREEMAP_SHARED_CHECKER").is_some_and(|v| v == "1") {
         let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/tools/check-layout");
         if shared.is_file() {
-            let (_, theirs) = run_checker(&shared, json);
+            let (_, theirs) = run_checker(&shared, json, &[]);
             for key in [
                 "ok",
                 "constraints_lowest",
@@ -102,10 +108,11 @@ pub(crate) fn check_layout(json: &Path) -> serde_json::Value {
 
 /// Runs one checker script on a layout file: whether it exited 0, and the JSON
 /// it printed.
-fn run_checker(script: &Path, json: &Path) -> (bool, serde_json::Value) {
+fn run_checker(script: &Path, json: &Path, flags: &[&str]) -> (bool, serde_json::Value) {
     let out = Command::new("python3")
         .arg(script)
         .arg(json)
+        .args(flags)
         .output()
         .expect("run the layout checker (needs python3)");
     let report = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {

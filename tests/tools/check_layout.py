@@ -41,7 +41,8 @@ Figures reported:
   constraints_lowest / realized_lowest / realized_lowest_pct at the deepest
   level, constraints_by_depth {depth: {constraints, realized}};
   area_error_share_mean / _max: |cell area / parent area - weight / sibling
-  weight sum| over nodes below the root;
+  weight sum| over nodes below the root (with --min-weight-ratio R, each
+  weight first raised to R times its heaviest sibling's, as the layout does);
   area_error_diagram_mean / _max: per parent, the sum of those errors over its
   children (d3-voronoi-map's convergence ratio), mean and max over parents;
   aspect_ratio_mean: mean bounding-box aspect ratio (long / short side) of leaves;
@@ -270,7 +271,7 @@ def mean(values):
     return sum(values) / len(values) if values else None
 
 
-def check(doc, min_shared):
+def check(doc, min_shared, min_weight_ratio=0.0):
     rep = Report()
     if not isinstance(doc, dict) or not isinstance(doc.get("nodes"), list):
         raise BadInput("no `nodes` list")
@@ -389,11 +390,16 @@ def check(doc, min_shared):
         inside = [c for c in children if c in poly_of]
         if parent not in poly_of or not inside:
             continue
-        total_weight = sum(weight_of(node_of[c]) for c in inside)
+        # The layout floors a child lighter than min_weight_ratio of its
+        # heaviest sibling to that share (README, "Zero weights"); 0 (the
+        # default here) judges the areas against the raw weights.
+        heaviest = max(weight_of(node_of[c]) for c in inside)
+        target = {c: max(weight_of(node_of[c]), heaviest * min_weight_ratio) for c in inside}
+        total_weight = sum(target.values())
         parent_area = area_of[parent]
         if total_weight <= 0.0 or parent_area <= 0.0:
             continue
-        errs = [abs(area_of[c] / parent_area - weight_of(node_of[c]) / total_weight) for c in inside]
+        errs = [abs(area_of[c] / parent_area - target[c] / total_weight) for c in inside]
         share_errors.extend(errs)
         diagram_errors.append(sum(errs))
     leaves = [n.get("id") for n in nodes if n.get("id") not in kids and n.get("id") in poly_of]
@@ -555,12 +561,16 @@ def main(argv=None):
     parser.add_argument("--min-shared", type=float, default=1e-6, metavar="FRACTION",
                         help="shortest common boundary that counts as a shared edge, "
                              "as a fraction of the extent diagonal (default 1e-6)")
+    parser.add_argument("--min-weight-ratio", type=float, default=0.0, metavar="R",
+                        help="judge areas against weights floored to R times the heaviest "
+                             "sibling's, as the layout's min_weight_ratio does (default 0: "
+                             "the raw weights, as the shared checker does)")
     parser.add_argument("--quiet", action="store_true", help="print only the headline figures")
     args = parser.parse_args(argv)
     try:
         with open(args.layout, encoding="utf-8") as f:
             doc = json.load(f)
-        report = check(doc, args.min_shared)
+        report = check(doc, args.min_shared, args.min_weight_ratio)
     except (OSError, ValueError, BadInput) as e:
         print(json.dumps({"ok": False, "error": f"cannot read layout: {e}"}))
         return 2

@@ -4,18 +4,18 @@
 //! the joint per-level optimisation of Algorithms 1 and 2 (§5). This file is the
 //! level loop; each stage has its own file:
 //! - [`params`]: the settings and the distance rules;
-//! - [`links`]: a level's constraints and what an arrangement scores;
-//! - [`level`]: a level's diagrams and the snapshot every step reads;
-//! - [`start`]: CVT, matching and the baselines' starts;
-//! - [`swap`]: greedy swap rounds and the small levels' exhaustive polish;
-//! - [`attract`]: the attraction moves;
-//! - [`optimize`]: our schedule (progress-driven tick budget, relaxation, polish);
-//! - [`prototype`]: the paper prototype's schedule;
-//! - [`secure`]: repairs and fallbacks, so that a level never fails.
+//! - `links`: a level's constraints and what an arrangement scores;
+//! - `level`: a level's diagrams and the snapshot every step reads;
+//! - `start`: CVT, matching and the baselines' starts;
+//! - `swap`: greedy swap rounds and the small levels' exhaustive polish;
+//! - `attract`: the attraction moves;
+//! - `optimize`: our schedule (progress-driven tick budget, relaxation, polish);
+//! - `prototype`: the paper prototype's schedule;
+//! - `secure`: repairs and fallbacks, so that a level never fails.
 //!
 //! Where this departs from the prototype, and why:
 //! - Cells track their target areas during the whole optimisation (a Newton
-//!   weight step every tick, see [`super::map`]) instead of growing in the last
+//!   weight step every tick, see `super::map`) instead of growing in the last
 //!   30% of ticks: growth at the end undoes neighbourhoods the attraction has
 //!   just built. The final weight-only settling keeps the arrangement.
 //! - Distance constants are relative to the level's typical cell size instead of
@@ -63,7 +63,7 @@ const LOOKAHEAD_CANDIDATES: usize = 3;
 
 /// 2-D positions for every node of `dataset`, in any scale: PCA of the
 /// feature vectors when every node has one of the same length (after
-/// [`crate::neighborhood::prepare`] internal nodes have the mean of their
+/// [`crate::neighborhood::prepare()`] internal nodes have the mean of their
 /// children), else classical MDS of `1 − similarity`.
 pub fn projection_of(dataset: &Dataset, similarity: impl Fn(usize, usize) -> f64) -> Vec<Point> {
     let nodes = dataset.nodes();

@@ -259,18 +259,6 @@ where
     }
 }
 
-impl Summary {
-    /// Adds another shard's figures to these.
-    pub fn merge(&mut self, other: Summary) {
-        self.cases += other.cases;
-        self.accepted += other.accepted;
-        self.failure = self.failure.take().or(other.failure);
-        self.max_case_ms = self.max_case_ms.max(other.max_case_ms);
-        self.max_case_bytes = self.max_case_bytes.max(other.max_case_bytes);
-        self.seconds = self.seconds.max(other.seconds);
-    }
-}
-
 // ---------------------------------------------------------------------------
 // Mutations, applied to a rendered input.
 
