@@ -555,10 +555,10 @@ pub fn quads_overlap(a: &[Point; 4], b: &[Point; 4]) -> bool {
     true
 }
 
-/// The group names drawn on the map: every top-level group with children of
-/// its own (virtual groups aside) whose name fits at `GROUP_MIN` or more,
-/// and the second-level groups whose names fit without overlapping another
-/// name or any leaf label (`leaves`). `u` is the canvas scale (1 at
+/// The group names drawn on the map: the top-level groups with children of
+/// their own (virtual groups aside), then the second-level groups, each
+/// whose name fits at `GROUP_MIN` or more without overlapping another name
+/// or any leaf label (`leaves`). `u` is the canvas scale (1 at
 /// 1,000 × 1,000).
 pub fn place_groups(
     dataset: &Dataset,
@@ -573,30 +573,41 @@ pub fn place_groups(
         let n = dataset.node(i);
         !n.is_virtual && !n.children.is_empty() && i < layout.cells.len()
     };
-    let place = |i: usize, max: f64, clear_of_leaves: bool, out: &mut Vec<Placed>| {
+    let leaf_quads: Vec<[Point; 4]> = leaves.iter().map(|l| l.rect.corners()).collect();
+    // A name over a leaf's label makes both hard to read (a faint "South
+    // America" across "Brazil"): the best fit is kept when it is clear of
+    // every label and every name placed before it, else the largest clear
+    // level spot in the cell, else the name is left to the legend.
+    let place = |i: usize, max: f64, out: &mut Vec<Placed>| {
         let text = display_name(dataset, i, names);
         if text.is_empty() {
             return;
         }
-        let Some((at, size, angle)) = fit_group(&layout.cells[i].polygon, &text, max) else {
+        let polygon = &layout.cells[i].polygon;
+        let Some((at, size, angle)) = fit_group(polygon, &text, max) else {
             return;
         };
-        if size < GROUP_MIN * u {
+        let min = GROUP_MIN * u;
+        if size < min {
             return;
         }
-        let block = Block::new(vec![(text, 1.0)]);
+        let block = Block::new(vec![(text.clone(), 1.0)]);
+        let avoid: Vec<[Point; 4]> = leaf_quads
+            .iter()
+            .copied()
+            .chain(out.iter().map(outline))
+            .collect();
+        let clear = |p: &Placed| {
+            let quad = outline(p);
+            !avoid.iter().any(|a| quads_overlap(a, &quad))
+        };
         let mut placed = lay_out(i, &block, at, size);
         placed.angle = angle;
-        let quad = outline(&placed);
-        if out.iter().any(|o| quads_overlap(&outline(o), &quad)) {
-            return;
-        }
-        if clear_of_leaves
-            && leaves
-                .iter()
-                .any(|l| quads_overlap(&l.rect.corners(), &quad))
-        {
-            return;
+        if !clear(&placed) {
+            let Some((at, size)) = clear_spot(polygon, &block, i, max, min, &clear) else {
+                return;
+            };
+            placed = lay_out(i, &block, at, size);
         }
         out.push(placed);
     };
@@ -611,16 +622,69 @@ pub fn place_groups(
         return out;
     }
     for &g in &top {
-        place(g, GROUP_MAX * u, false, &mut out);
+        place(g, GROUP_MAX * u, &mut out);
     }
     for &g in &top {
         for &c in &dataset.node(g).children {
             if named(c) {
-                place(c, SUBGROUP_SHARE * GROUP_MAX * u, true, &mut out);
+                place(c, SUBGROUP_SHARE * GROUP_MAX * u, &mut out);
             }
         }
     }
     out
+}
+
+/// Anchors tried per side of a cell's bounding box when a group name's best
+/// fit covers a label.
+const CLEAR_GRID: usize = 16;
+
+/// The largest level placement of `block` (node `node`) in `polygon`, from
+/// `min` to `max`, that `clear` accepts: anchors on a grid over the cell,
+/// each at the size the cell allows there, shrunk (by bisection: a box
+/// centred on its anchor only grows with its size, so clear sizes form an
+/// interval from `min`) until clear. `None` when no anchor is clear at `min`.
+fn clear_spot(
+    polygon: &ConvexPolygon,
+    block: &Block,
+    node: usize,
+    max: f64,
+    min: f64,
+    clear: &dyn Fn(&Placed) -> bool,
+) -> Option<(Point, f64)> {
+    let half = Point::new(0.5 * block.width + 0.1, 0.5 * block.height);
+    let (lo, hi) = polygon.bbox();
+    let mut best: Option<(Point, f64)> = None;
+    for i in 0..CLEAR_GRID {
+        for j in 0..CLEAR_GRID {
+            let f = |k: usize| (k as f64 + 0.5) / CLEAR_GRID as f64;
+            let p = Point::new(lo.x + f(i) * (hi.x - lo.x), lo.y + f(j) * (hi.y - lo.y));
+            let room = (fit_scale(polygon, p, half) * GROUP_FILL).min(max);
+            if room < min || best.is_some_and(|(_, s)| room <= s) {
+                continue;
+            }
+            let fits = |s: f64| clear(&lay_out(node, block, p, s));
+            let size = if fits(room) {
+                room
+            } else if fits(min) {
+                let (mut ok, mut over) = (min, room);
+                for _ in 0..16 {
+                    let mid = 0.5 * (ok + over);
+                    if fits(mid) {
+                        ok = mid;
+                    } else {
+                        over = mid;
+                    }
+                }
+                ok
+            } else {
+                continue;
+            };
+            if best.is_none_or(|(_, s)| size > s) {
+                best = Some((p, size));
+            }
+        }
+    }
+    best
 }
 
 #[cfg(test)]
