@@ -27,6 +27,9 @@ pub struct Config {
     /// How large an input may be (nodes, depth, dimensions, file size), for
     /// every dataset; each dataset's readers get them as `fields.limits`.
     pub limits: Limits,
+    /// Where the stored layouts live (`state_dir:`, resolved), or `None` for
+    /// the default, a `.nptreemap/` folder beside each dataset's first output.
+    pub state_dir: Option<PathBuf>,
     /// The datasets, in file order.
     pub datasets: Vec<DatasetConfig>,
 }
@@ -365,6 +368,10 @@ pub struct DatasetConfig {
     /// an exec command runs.
     #[serde(skip)]
     pub base: PathBuf,
+    /// The config's `state_dir:` (resolved): where this dataset's stored
+    /// layout lives instead of beside its first output. Not a dataset key.
+    #[serde(skip)]
+    pub state_dir: Option<PathBuf>,
 }
 
 /// The format name of the runtime plugin: an external command produces the
@@ -374,22 +381,65 @@ pub const EXEC_FORMAT: &str = "exec";
 /// How long an exec command may run when the config does not say.
 pub const DEFAULT_EXEC_TIMEOUT: f64 = 60.0;
 
-/// One output file.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// One output file. In a config, either a map (`{path: out/a.png, scale:
+/// 2}`) or just the path (`out/a.svg`): `outputs: [out/a.svg, out/a.png]`.
+#[derive(Clone, Debug, PartialEq)]
 pub struct OutputConfig {
     /// Where to write, relative to the config file.
     pub path: PathBuf,
     /// `svg`, `png`, `json` or `html`; default: the path's extension.
-    #[serde(default)]
     pub kind: Option<OutputKind>,
     /// Pixel scale for PNG. Default: 1.
-    #[serde(default = "one")]
     pub scale: f64,
 }
 
 fn one() -> f64 {
     1.0
+}
+
+/// The full form of an `outputs:` entry.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FullOutput {
+    path: PathBuf,
+    #[serde(default)]
+    kind: Option<OutputKind>,
+    #[serde(default = "one")]
+    scale: f64,
+}
+
+/// Reads either form by hand rather than with `#[serde(untagged)]`, which
+/// would replace the map form's own errors ("unknown field `scael`") with a
+/// generic one.
+impl<'de> Deserialize<'de> for OutputConfig {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Entry;
+        impl<'de> serde::de::Visitor<'de> for Entry {
+            type Value = OutputConfig;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a path such as out/a.svg, or a map with `path` (and `kind`, `scale`)")
+            }
+            fn visit_str<E: serde::de::Error>(self, path: &str) -> Result<OutputConfig, E> {
+                Ok(OutputConfig {
+                    path: PathBuf::from(path),
+                    kind: None,
+                    scale: 1.0,
+                })
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<OutputConfig, A::Error> {
+                let f = FullOutput::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(OutputConfig {
+                    path: f.path,
+                    kind: f.kind,
+                    scale: f.scale,
+                })
+            }
+        }
+        deserializer.deserialize_any(Entry)
+    }
 }
 
 /// Kinds of output.
@@ -416,6 +466,8 @@ struct RawConfig {
     render: RenderConfig,
     #[serde(default)]
     limits: Limits,
+    #[serde(default)]
+    state_dir: Option<PathBuf>,
     #[serde(default)]
     datasets: Vec<DatasetConfig>,
 }
@@ -453,6 +505,29 @@ pub struct ConfigFileError {
     pub message: String,
 }
 
+/// serde's "unknown field `weigth`, expected one of `id`, `weight`, ..."
+/// (or "unknown variant ...") with "; did you mean `weight`?" added when one
+/// of the expected names is a likely fix.
+fn with_hint(message: &str) -> String {
+    let unknown = ["unknown field `", "unknown variant `"]
+        .iter()
+        .find_map(|p| message.find(p).map(|at| at + p.len()));
+    let Some(start) = unknown else {
+        return message.to_string();
+    };
+    let Some(word) = message[start..].split('`').next() else {
+        return message.to_string();
+    };
+    let expected: Vec<&str> = message
+        .split_once("expected ")
+        .map(|(_, rest)| rest.split('`').skip(1).step_by(2).collect())
+        .unwrap_or_default();
+    match nptreemap_formats::suggest::closest(word, expected) {
+        Some(best) => format!("{message}; did you mean `{best}`?"),
+        None => message.to_string(),
+    }
+}
+
 fn position(line: Option<usize>, column: Option<usize>) -> String {
     match (line, column) {
         (Some(l), Some(c)) => format!("line {l}, column {c}: "),
@@ -469,6 +544,7 @@ impl Config {
                 layout: LayoutConfig::default(),
                 render: RenderConfig::default(),
                 limits: Limits::default(),
+                state_dir: None,
                 datasets: Vec::new(),
             }
         } else {
@@ -477,7 +553,7 @@ impl Config {
                 ConfigError::Yaml {
                     line: loc.as_ref().map(|l| l.line()),
                     column: loc.as_ref().map(|l| l.column()),
-                    message: strip_location(&e.to_string()),
+                    message: with_hint(&strip_location(&e.to_string())),
                 }
             })?
         };
@@ -487,10 +563,12 @@ impl Config {
                 message: "must be at least 1".to_string(),
             });
         }
+        let state_dir = raw.state_dir.as_ref().map(|dir| base.join(dir));
         let mut datasets = raw.datasets;
         let mut seen = std::collections::BTreeSet::new();
         for (i, d) in datasets.iter_mut().enumerate() {
             d.fields.limits = raw.limits;
+            d.state_dir = state_dir.clone();
             if !seen.insert(d.name.clone()) {
                 return Err(ConfigError::Value {
                     field: format!("datasets[{i}].name"),
@@ -529,6 +607,7 @@ impl Config {
             layout: raw.layout,
             render: raw.render,
             limits: raw.limits,
+            state_dir,
             datasets,
         };
         config.params().validate().map_err(|e| ConfigError::Value {
@@ -636,6 +715,7 @@ impl DatasetConfig {
             command: Vec::new(),
             timeout: None,
             base: PathBuf::new(),
+            state_dir: None,
         }
     }
 }
@@ -707,6 +787,7 @@ mod tests {
         assert_eq!(c.layout, LayoutConfig::default());
         assert_eq!(c.render, RenderConfig::default());
         assert_eq!(c.limits, Limits::default());
+        assert_eq!(c.state_dir, None);
         let d = DatasetConfig {
             name: "d".to_string(),
             format: "f".to_string(),
@@ -718,6 +799,7 @@ mod tests {
             command: Vec::new(),
             timeout: None,
             base: PathBuf::new(),
+            state_dir: None,
         };
         assert_eq!(c.style(&d), Style::default());
         assert_eq!(c.params(), Params::default());
@@ -837,10 +919,38 @@ mod tests {
                 "datasets:\n  - {name: a, format: x, files: {}, fields: {weigth: w}}\n",
                 "unknown field `weigth`",
             ),
+            (
+                "datasets:\n  - {name: a, format: x, files: {}, fields: {weigth: w}}\n",
+                "; did you mean `weight`?",
+            ),
+            ("layot: {seed: 2}\n", "; did you mean `layout`?"),
+            (
+                "layout: {method: neighbour}\n",
+                "; did you mean `neighbor`?",
+            ),
         ] {
             let err = parse(text).expect_err(text).to_string();
             assert!(err.contains(wanted), "{text}: {err}");
         }
+    }
+
+    #[test]
+    fn outputs_may_be_bare_paths() {
+        let c = parse(
+            "datasets:\n  - name: a\n    format: x\n    files: {}\n    outputs: [out/a.svg, out/a.png, {path: out/b.png, scale: 2}]\n",
+        )
+        .expect("short outputs parse");
+        let outs = &c.datasets[0].outputs;
+        assert_eq!(outs.len(), 3);
+        assert_eq!(outs[0].path, Path::new("/base/out/a.svg"));
+        assert_eq!(outs[0].kind, Some(OutputKind::Svg));
+        assert_eq!(outs[1].kind, Some(OutputKind::Png));
+        assert_eq!((outs[1].scale, outs[2].scale), (1.0, 2.0));
+        // The map form keeps its own errors.
+        let err = parse("datasets:\n  - name: a\n    format: x\n    files: {}\n    outputs: [{path: out/a.png, scael: 2}]\n")
+            .expect_err("unknown key");
+        assert!(err.to_string().contains("unknown field `scael`"), "{err}");
+        assert!(err.to_string().contains("did you mean `scale`?"), "{err}");
     }
 
     #[test]

@@ -20,7 +20,7 @@ use crate::render::{html_page, picture, Style};
 use crate::render::{png, PngError};
 use crate::workspace::FileError;
 use crate::{layout_json, store, workspace};
-use nptreemap_formats::{registry, Dataset, Inputs};
+use nptreemap_formats::{registry, suggest, Dataset, Inputs};
 
 /// Why a build could not be made. [`BuildError::fault`] says whose fault it is.
 #[derive(Debug, thiserror::Error)]
@@ -29,12 +29,14 @@ pub enum BuildError {
     #[error(transparent)]
     Config(#[from] ConfigFileError),
     /// The config names a format that is not registered.
-    #[error("dataset {dataset:?}: unknown format {format:?} (known: {known})")]
+    #[error("dataset {dataset:?}: unknown format {format:?}{hint} (known: {known})")]
     UnknownFormat {
         /// The dataset's name.
         dataset: String,
         /// The format named.
         format: String,
+        /// "; did you mean ...?" for a likely misspelling, else empty.
+        hint: String,
         /// The registered names.
         known: String,
     },
@@ -50,7 +52,7 @@ pub enum BuildError {
     },
     /// The config gives an input the format does not read.
     #[error(
-        "dataset {dataset:?}: format {format:?} reads no file called {role:?} (it reads: {roles})"
+        "dataset {dataset:?}: format {format:?} reads no file called {role:?}{hint} (it reads: {roles})"
     )]
     UnknownRole {
         /// The dataset's name.
@@ -59,6 +61,8 @@ pub enum BuildError {
         format: String,
         /// The extra role.
         role: String,
+        /// "; did you mean ...?" for a likely misspelling, else empty.
+        hint: String,
         /// The roles it reads.
         roles: String,
     },
@@ -262,6 +266,7 @@ pub fn read_inputs(d: &DatasetConfig) -> Result<Vec<InputFile>, BuildError> {
                 dataset: d.name.clone(),
                 format: d.format.clone(),
                 role: role.clone(),
+                hint: suggest::did_you_mean(role, roles.iter().map(|r| r.name)),
                 roles: roles.iter().map(|r| r.name).collect::<Vec<_>>().join(", "),
             });
         }
@@ -326,6 +331,10 @@ fn format_of(d: &DatasetConfig) -> Result<&'static dyn nptreemap_formats::Format
     registry::find(name).ok_or_else(|| BuildError::UnknownFormat {
         dataset: d.name.clone(),
         format: d.format.clone(),
+        hint: suggest::did_you_mean(
+            &d.format,
+            registry::names().into_iter().chain([EXEC_FORMAT]),
+        ),
         known: format!("{}, {EXEC_FORMAT}", registry::names().join(", ")),
     })
 }
@@ -528,15 +537,23 @@ pub fn stored_layout(d: &DatasetConfig) -> StoredLayout {
     }
 }
 
-/// Where a dataset's last layout is kept between runs: a hidden folder beside
-/// its first output (`out/.nptreemap/<name>.layout.json`), so it travels
-/// with the outputs and a restarted daemon or `build` starts warm. `None` for
-/// a dataset without outputs. Distinct names give distinct files (see
+/// Where a dataset's last layout is kept between runs: the config's
+/// `state_dir:` when it has one, else a hidden folder beside its first
+/// output (`out/.nptreemap/<name>.layout.json`), so it travels with the
+/// outputs and a restarted daemon or `build` starts warm. `None` for a
+/// dataset without outputs. Distinct names give distinct files (see
 /// [`state_file_name`]).
 pub fn state_path(d: &DatasetConfig) -> Option<PathBuf> {
     let first = d.outputs.first()?;
-    let dir = first.path.parent().unwrap_or(Path::new("."));
-    Some(dir.join(".nptreemap").join(state_file_name(&d.name)))
+    let dir = match &d.state_dir {
+        Some(dir) => dir.clone(),
+        None => first
+            .path
+            .parent()
+            .unwrap_or(Path::new("."))
+            .join(".nptreemap"),
+    };
+    Some(dir.join(state_file_name(&d.name)))
 }
 
 /// The state file's name for a dataset name: letters and digits of any script,

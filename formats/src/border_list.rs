@@ -19,7 +19,7 @@ use std::collections::HashMap;
 
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
-use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
+use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 use crate::table::{node_tree, read_table, Table, TableTree, NODES_ROLE};
 use crate::warning::Warning;
 
@@ -88,17 +88,33 @@ fn add_pairs(
     // repeat that says something else (the model keeps no strengths).
     let mut seen: HashMap<(usize, usize), (usize, Option<f64>)> = HashMap::new();
     for row in &pairs.rows {
-        let node = |column: usize| -> Result<usize, FormatError> {
+        let unknown = [a, b]
+            .into_iter()
+            .find(|&column| tree.find(&row.fields[column]).is_none());
+        if let Some(column) = unknown {
             let id = &row.fields[column];
-            tree.find(id).ok_or_else(|| FormatError::Field {
-                line: Some(row.line),
-                column: Some(column + 1),
-                node: None,
-                field: pairs.header[column].clone(),
-                message: format!("unknown id {id:?}: no node of the node table has it"),
-            })
-        };
-        let (first, second) = (node(a)?, node(b)?);
+            if options.on_unknown_id == OnUnknownId::Error {
+                return Err(FormatError::Field {
+                    line: Some(row.line),
+                    column: Some(column + 1),
+                    node: None,
+                    field: pairs.header[column].clone(),
+                    message: format!("unknown id {id:?}: no node of the node table has it"),
+                });
+            }
+            tree.warnings.push(Warning::new(
+                "pairs",
+                Some(row.line),
+                format!(
+                    "unknown id {id:?} in field {:?}: no node of the node table has it; \
+                     the pair is skipped (fields.on_unknown_id: error makes this an error)",
+                    pairs.header[column]
+                ),
+            ));
+            continue;
+        }
+        let node = |column: usize| tree.find(&row.fields[column]).unwrap_or_default();
+        let (first, second) = (node(a), node(b));
         let mut given = None;
         if let Some(column) = strength {
             let text = &row.fields[column];

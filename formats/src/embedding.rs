@@ -26,10 +26,11 @@
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::dataset::{ModelError, FEATURE_BOUND};
 use crate::error::FormatError;
-use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
+use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 use crate::limits::{Limit, Limits};
 use crate::npy::{is_npy, read_npy, Matrix};
 use crate::table::{node_tree, read_rows, read_rows_capped, Row, RowCap, TableTree, NODES_ROLE};
+use crate::warning::Warning;
 
 /// The embedding-matrix [`Format`] (name `embedding-matrix`, inputs `nodes` and
 /// `vectors`).
@@ -88,7 +89,8 @@ impl Format for EmbeddingMatrix {
             let cap = RowCap::new(options.limits, Limit::Nodes, 1, "vector rows");
             let rows =
                 read_rows_capped(vectors, options.delimiter, Some(cap)).map_err(in_vectors)?;
-            add_vectors(&mut tree, &rows, &options.limits).map_err(in_vectors)?;
+            add_vectors(&mut tree, &rows, &options.limits, options.on_unknown_id)
+                .map_err(in_vectors)?;
         }
         check_leaves(&tree).map_err(in_vectors)?;
         tree.build(Some(SimilarityHint::Cosine)).map_err(in_nodes)
@@ -101,7 +103,14 @@ fn all_numbers(row: &Row) -> bool {
 }
 
 /// Reads the vector rows and sets them as features on the tree's nodes.
-fn add_vectors(tree: &mut TableTree, rows: &[Row], limits: &Limits) -> Result<(), FormatError> {
+/// Gives each leaf its vector from the rows; a row naming no node is skipped
+/// with a warning or is an error, as `on_unknown` says.
+fn add_vectors(
+    tree: &mut TableTree,
+    rows: &[Row],
+    limits: &Limits,
+    on_unknown: OnUnknownId,
+) -> Result<(), FormatError> {
     // A first row that is not all numbers is a header, unless its first field is a
     // node id: then it is a data row with a bad value, reported as such below.
     let header = rows
@@ -153,6 +162,17 @@ fn add_vectors(tree: &mut TableTree, rows: &[Row], limits: &Limits) -> Result<()
         }
         let id = &row.fields[0];
         let Some(index) = tree.find(id) else {
+            if on_unknown == OnUnknownId::Warn {
+                tree.warnings.push(Warning::new(
+                    "vectors",
+                    Some(row.line),
+                    format!(
+                        "unknown id {id:?}: no node of the node table has it; the row is \
+                         skipped (fields.on_unknown_id: error makes this an error)"
+                    ),
+                ));
+                continue;
+            }
             return Err(FormatError::Field {
                 line: Some(row.line),
                 column: Some(1),

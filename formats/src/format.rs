@@ -62,6 +62,21 @@ impl<'a> Inputs<'a> {
     }
 }
 
+/// What a format does with a reference to an id that no node has
+/// (`fields.on_unknown_id`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OnUnknownId {
+    /// Skip it with a warning. The default, for the daemon's sake: a row
+    /// removed from the node table while `watch` runs leaves its pairs
+    /// behind until the pairs file is edited too, and the picture should
+    /// follow the node table meanwhile, not stop at an error.
+    #[default]
+    Warn,
+    /// Fail, naming the file, line and id.
+    Error,
+}
+
 /// Column names and reading choices shared by the table formats. Every field is
 /// optional; each format documents its defaults. Formats ignore fields that do not
 /// apply to them. Deserialises from a config's `fields:` mapping (unknown keys
@@ -108,6 +123,9 @@ pub struct FormatOptions {
     /// Time series: fill a missing value with the previous date's value (and leading
     /// missing values with the first value given) instead of failing.
     pub fill_missing: bool,
+    /// What to do with a pair, vector row or series column whose id is in no
+    /// row of the node table. Default [`OnUnknownId::Warn`].
+    pub on_unknown_id: OnUnknownId,
     /// How large an input may be. Not a `fields:` key: a config sets it for
     /// every dataset in its `limits:` section.
     #[serde(skip)]

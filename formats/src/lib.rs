@@ -46,6 +46,8 @@ pub mod limits;
 pub mod npy;
 /// The list of formats, looked up by name.
 pub mod registry;
+/// "Did you mean" hints for misspelt names.
+pub mod suggest;
 /// CSV/TSV rows with positions, and node tables → hierarchies.
 pub mod table;
 /// Time series: a node table plus values by date, compared by Pearson correlation.
@@ -58,7 +60,7 @@ pub use color::{ColorError, Rgb};
 pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, SimilarityHint};
 pub use embedding::EmbeddingMatrix;
 pub use error::FormatError;
-pub use format::{Format, FormatOptions, InputError, Inputs, Role};
+pub use format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 pub use genre_table::GenreTable;
 pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};
 pub use limits::{Limit, LimitError, Limits};

@@ -104,7 +104,8 @@ impl Table {
             line: Some(self.header_line),
             column: None,
             message: format!(
-                "no column {name:?} ({option}); the header has: {}",
+                "no column {name:?} ({option}){}; the header has: {}",
+                crate::suggest::did_you_mean(name, self.header.iter().map(String::as_str)),
                 self.header.join(", ")
             ),
         })
@@ -601,6 +602,14 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
             NODES_ROLE.name,
             Some(table.header_line),
             "the table has a header but no rows: the picture is empty",
+        ));
+    } else if weight_column.is_none() {
+        // Equal cells are rarely what a table of sizes meant, so say so.
+        tree.warnings.push(Warning::new(
+            NODES_ROLE.name,
+            Some(table.header_line),
+            "no weight column (set fields.weight, or name a column weight, value or size): \
+             every row weighs 1",
         ));
     }
     let root_label = options

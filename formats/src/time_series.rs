@@ -25,9 +25,10 @@
 use crate::dataset::FEATURE_BOUND;
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
-use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
+use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 use crate::limits::Limit;
 use crate::table::{node_tree, read_table_capped, RowCap, Table, TableTree, NODES_ROLE};
+use crate::warning::Warning;
 
 /// The time-series [`Format`] (name `time-series`, inputs `nodes` and `series`).
 #[derive(Clone, Copy, Debug, Default)]
@@ -64,13 +65,26 @@ impl Format for TimeSeries {
         let cap = RowCap::new(options.limits, Limit::Dimensions, 0, "dates");
         let series = read_table_capped(series, options.delimiter, Some(cap)).map_err(in_series)?;
         tree.warnings.extend(series.warnings_in("series"));
-        add_series(&mut tree, &series, options.fill_missing).map_err(in_series)?;
+        add_series(
+            &mut tree,
+            &series,
+            options.fill_missing,
+            options.on_unknown_id,
+        )
+        .map_err(in_series)?;
         tree.build(Some(SimilarityHint::Pearson)).map_err(in_nodes)
     }
 }
 
-/// Reads each id's column of `series` and sets it as the features of its node.
-fn add_series(tree: &mut TableTree, series: &Table, fill: bool) -> Result<(), FormatError> {
+/// Reads each id's column of `series` and sets it as the features of its
+/// node; a column naming no node is skipped with a warning or is an error,
+/// as `on_unknown` says.
+fn add_series(
+    tree: &mut TableTree,
+    series: &Table,
+    fill: bool,
+    on_unknown: OnUnknownId,
+) -> Result<(), FormatError> {
     if series.header.len() < 2 {
         return Err(FormatError::Structure {
             line: Some(series.header_line),
@@ -105,6 +119,18 @@ fn add_series(tree: &mut TableTree, series: &Table, fill: bool) -> Result<(), Fo
             message,
         };
         let Some(index) = tree.find(id) else {
+            if on_unknown == OnUnknownId::Warn {
+                tree.warnings.push(Warning::new(
+                    "series",
+                    Some(series.header_line),
+                    format!(
+                        "column {}: unknown id {id:?}: no node of the node table has it; the \
+                         column is skipped (fields.on_unknown_id: error makes this an error)",
+                        column + 1
+                    ),
+                ));
+                continue;
+            }
             return Err(header_error(format!(
                 "unknown id {id:?}: no node of the node table has it"
             )));

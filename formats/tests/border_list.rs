@@ -7,14 +7,18 @@
 
 use nptreemap_formats::registry;
 use nptreemap_formats::{
-    BorderList, Dataset, Format, FormatError, FormatOptions, InputError, Inputs, SimilarityHint,
+    BorderList, Dataset, Format, FormatError, FormatOptions, InputError, Inputs, OnUnknownId,
+    SimilarityHint,
 };
 
 const COUNTRIES: &[u8] = include_bytes!("data/countries.csv");
 const BORDERS: &[u8] = include_bytes!("data/borders.csv");
 
+/// The fixtures' mapping; unknown ids are errors, so the tests of those
+/// errors see them (the default skips them with a warning, tested apart).
 fn options() -> FormatOptions {
     FormatOptions {
+        on_unknown_id: OnUnknownId::Error,
         weight: Some("population".into()),
         groups: vec!["continent".into()],
         ..FormatOptions::default()
@@ -196,4 +200,22 @@ fn binary_pairs_are_an_error() {
     let error = parse(COUNTRIES, &blob).expect_err("binary");
     assert_eq!(error.role, "pairs");
     assert!(error.error.line().is_some(), "{error}");
+}
+
+/// By default a pair naming no node is skipped with a warning naming the
+/// line and id (a node removed while `watch` runs), and the rest is read.
+#[test]
+fn unknown_ids_are_skipped_with_a_warning_by_default() {
+    let nodes = b"id\nx\ny\nz\n";
+    let pairs = b"a,b\nx,y\ny,gone\n";
+    let dataset = parse_plain(nodes, pairs).expect("the known pairs are read");
+    assert_eq!(neighbors(&dataset, "x"), ["y"]);
+    assert_eq!(neighbors(&dataset, "y"), ["x"]);
+    let warned: Vec<String> = dataset.warnings().iter().map(|w| w.to_string()).collect();
+    assert!(
+        warned
+            .iter()
+            .any(|w| w.starts_with("line 3: unknown id \"gone\"") && w.contains("skipped")),
+        "{warned:?}"
+    );
 }

@@ -8,15 +8,18 @@
 
 use nptreemap_formats::registry;
 use nptreemap_formats::{
-    Dataset, EmbeddingMatrix, Format, FormatError, FormatOptions, InputError, Inputs,
+    Dataset, EmbeddingMatrix, Format, FormatError, FormatOptions, InputError, Inputs, OnUnknownId,
     SimilarityHint,
 };
 
 const FOODS: &[u8] = include_bytes!("data/foods.csv");
 const VECTORS: &[u8] = include_bytes!("data/foods_vectors.tsv");
 
+/// The fixtures' mapping; unknown ids are errors, so the tests of those
+/// errors see them (the default skips them with a warning, tested apart).
 fn options() -> FormatOptions {
     FormatOptions {
+        on_unknown_id: OnUnknownId::Error,
         weight: Some("kcal".into()),
         groups: vec!["group".into()],
         ..FormatOptions::default()

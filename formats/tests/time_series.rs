@@ -10,14 +10,18 @@
 
 use nptreemap_formats::registry;
 use nptreemap_formats::{
-    Dataset, Format, FormatError, FormatOptions, InputError, Inputs, SimilarityHint, TimeSeries,
+    Dataset, Format, FormatError, FormatOptions, InputError, Inputs, OnUnknownId, SimilarityHint,
+    TimeSeries,
 };
 
 const STOCKS: &[u8] = include_bytes!("data/stocks.csv");
 const PRICES: &[u8] = include_bytes!("data/stock_prices.csv");
 
+/// The fixtures' mapping; unknown ids are errors, so the tests of those
+/// errors see them (the default skips them with a warning, tested apart).
 fn options() -> FormatOptions {
     FormatOptions {
+        on_unknown_id: OnUnknownId::Error,
         weight: Some("market_cap".into()),
         groups: vec!["sector".into()],
         ..FormatOptions::default()

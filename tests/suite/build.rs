@@ -179,3 +179,88 @@ fn readme_main_job_builds_every_example() {
     }
     assert!(snapshot == again, "a second build changed an output");
 }
+
+/// The config keys of the second round: outputs as bare paths, `state_dir:`
+/// (the stored layout moves there and the next build starts from it), and
+/// `fields.on_unknown_id` (default: a pair naming a removed node is skipped
+/// with a warning; `error` refuses it, naming the file, line and id).
+#[test]
+fn short_outputs_state_dir_and_unknown_ids() {
+    let config = support::example("countries", "config_keys");
+    let dir = config.parent().expect("dir").to_path_buf();
+    std::fs::write(
+        &config,
+        "state_dir: state\n\
+         datasets:\n  - name: countries\n    format: border-list\n    \
+         files: {nodes: countries.csv, pairs: borders.csv}\n    \
+         fields: {id: iso, label: name, weight: population, groups: [continent]}\n    \
+         outputs: [out/c.svg, out/c.json]\n",
+    )
+    .expect("write config");
+    let cfg = config.to_str().expect("utf8");
+    let first = run(&["build", cfg]);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    assert!(dir.join("out/c.svg").is_file() && dir.join("out/c.json").is_file());
+    let state = dir.join("state/countries.layout.json");
+    assert!(state.is_file(), "no stored layout in state/");
+    assert!(
+        !dir.join("out/.nptreemap").exists(),
+        "state also beside the outputs"
+    );
+    // The next build starts from it: nothing changes.
+    let second = run(&["build", cfg]);
+    assert!(String::from_utf8_lossy(&second.stdout).contains("unchanged"));
+
+    // Drop a country from the node table; its pairs stay in borders.csv.
+    let nodes = dir.join("countries.csv");
+    let table = std::fs::read_to_string(&nodes).expect("nodes");
+    // The first country of the first pair.
+    let pairs = std::fs::read_to_string(dir.join("borders.csv")).expect("pairs");
+    let gone = pairs
+        .lines()
+        .nth(1)
+        .and_then(|l| l.split(',').next())
+        .expect("a first pair")
+        .to_string();
+    assert!(
+        table.contains(&format!("\n{gone},")),
+        "{gone} is not a node"
+    );
+    let kept: Vec<&str> = table
+        .lines()
+        .filter(|l| !l.starts_with(&format!("{gone},")))
+        .collect();
+    std::fs::write(&nodes, kept.join("\n") + "\n").expect("write nodes");
+    let warned = run(&["build", cfg]);
+    let stderr = String::from_utf8_lossy(&warned.stderr);
+    assert!(warned.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!("unknown id {gone:?}")) && stderr.contains("skipped"),
+        "no warning: {stderr}"
+    );
+    let svg = std::fs::read(dir.join("out/c.svg")).expect("svg");
+    std::fs::write(
+        &config,
+        std::fs::read_to_string(&config).expect("config").replace(
+            "groups: [continent]}",
+            "groups: [continent], on_unknown_id: error}",
+        ),
+    )
+    .expect("write config");
+    let refused = run(&["build", cfg]);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("borders.csv: line") && stderr.contains(&format!("unknown id {gone:?}")),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read(dir.join("out/c.svg")).expect("svg"),
+        svg,
+        "an output changed"
+    );
+}

@@ -87,3 +87,41 @@ fn unknown_output_kind_is_a_usage_error() {
         "picture.bmp",
     );
 }
+
+/// Misspelt names get a "did you mean" naming the likely fix: a column, a
+/// format, an input role and a config key, each with exit code 2.
+#[test]
+fn misspelt_names_get_a_did_you_mean() {
+    let dir = support::temp_dir("cli_did_you_mean");
+    std::fs::write(
+        dir.join("c.csv"),
+        "iso,name,population\nDE,Germany,84\nFR,France,68\n",
+    )
+    .expect("write table");
+    for (dataset, wanted) in [
+        (
+            "format: border-list\n    files: {nodes: c.csv, pairs: c.csv}\n    fields: {id: iso, weight: populaton}",
+            "did you mean \"population\"?",
+        ),
+        (
+            "format: border_list\n    files: {nodes: c.csv, pairs: c.csv}",
+            "did you mean \"border-list\"?",
+        ),
+        (
+            "format: border-list\n    files: {nodes: c.csv, pair: c.csv}",
+            "did you mean \"pairs\"?",
+        ),
+        (
+            "format: border-list\n    files: {nodes: c.csv, pairs: c.csv}\n    feilds: {id: iso}",
+            "did you mean `fields`?",
+        ),
+    ] {
+        let config = dir.join("nptreemap.yaml");
+        std::fs::write(
+            &config,
+            format!("datasets:\n  - name: c\n    {dataset}\n    outputs: [{{path: out/c.svg}}]\n"),
+        )
+        .expect("write config");
+        fails_with(&["check", config.to_str().expect("utf8")], wanted);
+    }
+}
