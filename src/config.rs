@@ -474,6 +474,7 @@ struct RawConfig {
 
 /// A configuration that cannot be used.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ConfigError {
     /// The YAML is malformed or does not fit the schema (unknown key, wrong type).
     #[error("{}{message}", position(*.line, *.column))]

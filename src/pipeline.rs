@@ -24,6 +24,7 @@ use nptreemap_formats::{registry, suggest, Dataset, Inputs};
 
 /// Why a build could not be made. [`BuildError::fault`] says whose fault it is.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum BuildError {
     /// The config file cannot be read or used.
     #[error(transparent)]

@@ -16,6 +16,7 @@ use nptreemap_formats::FormatError;
 
 /// An input file could not be read, or its content is not valid.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum FileError {
     /// The file could not be read.
     #[error("{path}: cannot read: {source}")]

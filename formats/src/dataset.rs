@@ -75,6 +75,7 @@ pub enum SimilarityHint {
 
 /// Why a set of [`NodeSpec`]s does not form a valid [`Dataset`].
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ModelError {
     /// No node was added.
     #[error("the dataset has no nodes")]

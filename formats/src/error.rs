@@ -10,6 +10,7 @@ use crate::dataset::ModelError;
 ///
 /// Lines and columns are 1-based; columns count characters (not bytes), as editors do.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum FormatError {
     /// The bytes are not well-formed (for example JSON cut short or not UTF-8).
     #[error("line {line}, column {column}: {message}")]

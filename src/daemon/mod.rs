@@ -66,6 +66,7 @@ impl std::fmt::Debug for FirstBuildProgress {
 
 /// Why the daemon could not start (or had to stop).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum DaemonError {
     /// The config could not be read at start: there is nothing to watch.
     #[error(transparent)]

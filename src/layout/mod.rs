@@ -139,6 +139,7 @@ impl Layout {
 /// empty are repaired, see [`Report::repaired`]); these are about parameters,
 /// or a stop the caller asked for.
 #[derive(Debug, thiserror::Error, PartialEq)]
+#[non_exhaustive]
 pub enum LayoutError {
     /// A parameter is out of its range.
     #[error("invalid layout parameter `{name}`: {reason}")]

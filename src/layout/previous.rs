@@ -59,6 +59,7 @@ pub struct Previous {
 /// Why a previous layout was not used; the layout then starts cold. None of
 /// these is an error: a layout is always made.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum WarmRefusal {
     /// The previous layout has no root node.
     #[error("the previous layout has no root")]

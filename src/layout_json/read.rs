@@ -16,6 +16,7 @@ use crate::layout::{Canvas, Previous, PreviousNode};
 
 /// Why layout JSON could not be read as a previous layout.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReadError {
     /// The text is not JSON.
     #[error("not JSON: {0}")]

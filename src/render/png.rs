@@ -18,6 +18,7 @@ use super::text::{self, FAMILY, FONT};
 /// Rendering an SVG to PNG failed; with SVG from [`super::svg()`] this means a
 /// bug, not bad input.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PngError {
     /// usvg did not accept the SVG text.
     #[error("cannot read the SVG: {0}")]

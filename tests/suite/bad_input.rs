@@ -84,12 +84,21 @@ fn wrong_column_count() {
     border("columns", &nodes, PAIRS, &["nodes.csv", "line 3"]);
 }
 
+/// With `on_unknown_id: error` (the default skips such a pair with a
+/// warning; `build.rs` tests both).
 #[test]
 fn unknown_id_in_pair_list() {
-    border(
+    let config = border_config("").replace(
+        "groups: [continent]}",
+        "groups: [continent], on_unknown_id: error}",
+    );
+    case(
         "unknown_pair",
-        NODES,
-        "a,b\nCN,IN\nFR,XX\n",
+        &[
+            ("nptreemap.yaml", text(&config)),
+            ("nodes.csv", text(NODES)),
+            ("pairs.csv", text("a,b\nCN,IN\nFR,XX\n")),
+        ],
         &["pairs.csv", "line 3", "XX"],
     );
 }
