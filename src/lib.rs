@@ -26,7 +26,7 @@
 //!
 //! # Quick start
 //!
-//! Build a [`Dataset`] (here in code; the formats read files), [`compute`]
+//! Build a [`Dataset`] (here in code; the formats read files), [`compute()`]
 //! its layout with the method its data calls for (`neighbor` when it has a
 //! similarity, `plain` otherwise), and render the result:
 //!

@@ -357,7 +357,7 @@ fn group_lab(c: Rgb) -> [f64; 3] {
 }
 
 /// The distance [`assign`] keeps between touching groups: OKLab with
-/// lightness discounted (see [`GROUP_LIGHTNESS_WEIGHT`]).
+/// lightness discounted (see `GROUP_LIGHTNESS_WEIGHT`).
 pub fn group_distance(a: Rgb, b: Rgb) -> f64 {
     distance_lab(group_lab(a), group_lab(b))
 }
