@@ -597,8 +597,18 @@ pub fn place_groups(
             .copied()
             .chain(out.iter().map(outline))
             .collect();
+        // A margin around the name (a share of its line height), so a name
+        // just above a label does not read as that label's first line.
         let clear = |p: &Placed| {
-            let quad = outline(p);
+            let pad = NAME_MARGIN * (p.rect.y1 - p.rect.y0);
+            let mut padded = p.clone();
+            padded.rect = Rect {
+                x0: p.rect.x0 - pad,
+                y0: p.rect.y0 - pad,
+                x1: p.rect.x1 + pad,
+                y1: p.rect.y1 + pad,
+            };
+            let quad = outline(&padded);
             !avoid.iter().any(|a| quads_overlap(a, &quad))
         };
         let mut placed = lay_out(i, &block, at, size);
@@ -633,6 +643,9 @@ pub fn place_groups(
     }
     out
 }
+
+/// Free space kept around a group name, as a share of its line height.
+const NAME_MARGIN: f64 = 0.35;
 
 /// Anchors tried per side of a cell's bounding box when a group name's best
 /// fit covers a label.
