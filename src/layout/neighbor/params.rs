@@ -72,8 +72,10 @@ impl Default for NeighborParams {
     }
 }
 
-/// Default [`NeighborParams::shape_weight`]. Chosen from the trade-off table in
-/// BENCHMARKS.md (issue 12): constraints realised against leaf aspect.
+/// Default [`NeighborParams::shape_weight`]: a quarter of a constraint per
+/// unit of aspect above 1 (issue 12: long cells cannot hold a label). What
+/// other values trade, constraints realised against leaf aspect, is the
+/// table of `examples/pareto.rs` in BENCHMARKS.md.
 pub const SHAPE_WEIGHT: f64 = 0.25;
 
 /// Default [`NeighborParams::centroid_pull`]; see [`SHAPE_WEIGHT`].
