@@ -191,8 +191,17 @@ pub fn target_areas(values: &[f64], area: f64, min_weight_ratio: f64) -> Vec<f64
     }
     // A floor of 1e-9 of the heaviest keeps every cell positive even with
     // min_weight_ratio = 0 (areas below that are invisible at any size).
-    let floor = max * min_weight_ratio.max(1e-9);
-    let eff: Vec<f64> = values.iter().map(|v| v.max(floor)).collect();
+    let ratio = min_weight_ratio.max(1e-9);
+    let floor = max * ratio;
+    let eff: Vec<f64> = if floor >= f64::MIN_POSITIVE {
+        values.iter().map(|v| v.max(floor)).collect()
+    } else {
+        // A subnormal heaviest weight (5e-324) makes the floor underflow to
+        // 0 and a zero sibling's target 0, an empty cell (found by the fuzz
+        // run): take the weights relative to the heaviest instead. Normal
+        // weights keep the branch above, and their exact rounding.
+        values.iter().map(|v| (v / max).max(ratio)).collect()
+    };
     let total: f64 = eff.iter().sum();
     eff.iter()
         .map(|v| {
@@ -293,4 +302,15 @@ pub(super) fn sliver(parent: &ConvexPolygon, at: Point) -> ConvexPolygon {
     let e = 1e-6 * parent.diameter_bound();
     ConvexPolygon::from_convex(vec![a, a + Point::new(e, 0.0), a + Point::new(0.0, e)])
         .unwrap_or_else(|| parent.clone())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_subnormal_heaviest_weight_still_floors_its_siblings() {
+        let t = super::target_areas(&[0.0, 5e-324], 1.0, 0.001);
+        assert!(t.iter().all(|a| *a > 0.0 && a.is_finite()), "{t:?}");
+        assert!((t[0] / t[1] - 0.001).abs() < 1e-12, "{t:?}");
+        assert!((t.iter().sum::<f64>() - 1.0).abs() < 1e-12, "{t:?}");
+    }
 }
