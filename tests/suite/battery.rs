@@ -47,6 +47,12 @@ fn run(name: &str, root: Value) {
     run_checked(name, root, &[]);
 }
 
+/// [`run`], judging areas against the weights as floored by the default
+/// `min_weight_ratio`.
+fn run_floored(name: &str, root: Value) {
+    run_checked(name, root, &["--min-weight-ratio", MIN_WEIGHT_RATIO]);
+}
+
 /// [`run`] with flags for the checker.
 fn run_checked(name: &str, root: Value, checker: &[&str]) {
     let dir = support::temp_dir(&format!("battery_{name}"));
@@ -123,11 +129,7 @@ fn weights_spanning_a_million() {
     // Leaves under a thousandth of the heaviest are drawn at that share, so
     // the areas are judged against the floored weights (against the raw ones
     // the error is the floor's by design: 0.011 here).
-    run_checked(
-        "weights_1e6",
-        Value::Object(root),
-        &["--min-weight-ratio", MIN_WEIGHT_RATIO],
-    );
+    run_floored("weights_1e6", Value::Object(root));
 }
 
 #[test]
@@ -243,11 +245,7 @@ fn one_huge_leaf_among_hundreds_of_tiny_ones() {
     // The 300 tiny leaves are floored to a thousandth of the huge one each
     // (their raw share, 1e-6, is under a pixel on a 1000 × 1000 canvas), so
     // the areas are judged against the floored weights.
-    run_checked(
-        "huge_leaf",
-        Value::Object(root),
-        &["--min-weight-ratio", MIN_WEIGHT_RATIO],
-    );
+    run_floored("huge_leaf", Value::Object(root));
 }
 
 #[test]
