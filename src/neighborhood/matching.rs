@@ -19,9 +19,13 @@ use crate::geom::Point;
 /// Marks a row that has no column (only when there are more rows than columns).
 const UNASSIGNED: usize = usize::MAX;
 
-/// Groups with at most this many sites and points are matched exactly (Kuhn–Munkres,
-/// about 0.1 s at 500); every paper dataset's groups are far below it.
-const EXACT_MAX: usize = 500;
+/// Groups with at most this many sites and points are matched exactly (Kuhn–Munkres:
+/// 12 ms at 200, but 190–280 ms at 500, most of a cold 500-leaf layout's 300 ms
+/// budget). Bisection into blocks of 128 matches 500 in 22 ms at a total 0.8% above
+/// the optimum (BENCHMARKS.md, "Matching"), and the finished layouts realise as many
+/// constraints (flat 500, seeds 1–3: median 420 against 380 with exact matching).
+/// Every paper dataset's groups are far below it.
+const EXACT_MAX: usize = 256;
 
 /// Largest block the bisection matches exactly: 128³ operations per block keeps 100,000
 /// siblings near a second, and blocks this size lose little against the optimum.
@@ -71,7 +75,7 @@ pub fn min_cost_assignment(cost: &[f64], rows: usize, cols: usize) -> Vec<usize>
 /// Assigns each of `points` (nodes' projected positions) to a distinct site of `sites`
 /// (CVT sites), minimising the total Euclidean distance (method-reference §4.3; call it
 /// once per parent, or pass the prototype's level-wide 10⁶ penalty in your own cost
-/// matrix to [`min_cost_assignment`]). Exact up to 500 sites and points; above, recursive
+/// matrix to [`min_cost_assignment`]). Exact up to 256 sites and points; above, recursive
 /// bisection into exactly matched blocks of at most 128 (see the module header).
 ///
 /// Returns, for each point, the index of its site: a permutation when the counts are
@@ -95,7 +99,7 @@ fn match_exact(sites: &[Point], points: &[Point]) -> Vec<usize> {
 
 /// Recursive bisection matching with exact blocks of at most `block` sites and points
 /// (see the module header). Same contract as [`match_points`], which calls it with
-/// `block` = 128 above 500; public for the quality benchmark (`examples/matching_quality.rs`).
+/// `block` = 128 above 256; public for the quality benchmark (`examples/matching_quality.rs`).
 pub fn bisection_match(sites: &[Point], points: &[Point], block: usize) -> Vec<usize> {
     let mut out = vec![UNASSIGNED; points.len()];
     let mut site_ids: Vec<usize> = (0..sites.len()).collect();
