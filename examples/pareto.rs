@@ -16,7 +16,7 @@
 use std::path::{Path, PathBuf};
 
 use nptreemap::config::{Config, DatasetConfig};
-use nptreemap::layout::{compute, Method, NeighborParams, Request};
+use nptreemap::layout::{compute, Method, Request};
 use nptreemap::measure::table2;
 use nptreemap::{pipeline, Dataset};
 
@@ -125,11 +125,8 @@ fn main() {
                 let mut r = request.clone();
                 r.method = Some(Method::Neighbor);
                 r.params.seed = seed;
-                r.neighbor = NeighborParams {
-                    shape_weight,
-                    centroid_pull,
-                    ..request.neighbor.clone()
-                };
+                r.neighbor.shape_weight = shape_weight;
+                r.neighbor.centroid_pull = centroid_pull;
                 let m = table2(&compute(dataset, &r).expect("neighbor lays out"));
                 realized.push(m.realized as f64);
                 ratio.push(m.aspect_ratio / plain[seed as usize - 1]);

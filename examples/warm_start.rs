@@ -46,13 +46,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let previous = Arc::new(before.previous());
 
     let edited = dataset(6.6)?; // l5 grows by 10%
-    let warm = compute(
-        &edited,
-        &Request {
-            previous: Some(Arc::clone(&previous)),
-            ..Request::default()
-        },
-    )?;
+    let warm = compute(&edited, &{
+        let mut warm = Request::default();
+        warm.previous = Some(Arc::clone(&previous));
+        warm
+    })?;
     let cold = compute(&edited, &Request::default())?;
 
     for (name, run) in [("warm", &warm), ("cold", &cold)] {

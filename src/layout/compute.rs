@@ -20,6 +20,7 @@ use nptreemap_formats::Dataset;
 
 /// A finished layout with everything needed to render or evaluate it.
 #[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct Computed {
     /// The dataset the layout is indexed by: the prepared one (with virtual
     /// nodes) when a similarity was used, else the input.
@@ -85,6 +86,7 @@ pub enum Start {
 
 /// What to compute.
 #[derive(Clone, Debug, Default)]
+#[non_exhaustive]
 pub struct Request {
     /// Layout parameters.
     pub params: Params,

@@ -69,6 +69,7 @@ pub struct Layout {
 
 /// Figures about how a layout run went. Not converging is reported here, not an error.
 #[derive(Clone, Debug, Default, PartialEq)]
+#[non_exhaustive]
 pub struct Report {
     /// Diagrams optimised (internal nodes with two or more children).
     pub diagrams: usize,

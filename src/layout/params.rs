@@ -103,6 +103,7 @@ pub const CANVAS_MAX: f64 = 1_000_000.0;
 
 /// Parameters of a layout run.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct Params {
     /// Drawing surface. Default: 1000 × 1000.
     pub canvas: Canvas,

@@ -21,6 +21,7 @@ use crate::layout::{Computed, Layout};
 
 /// How the picture looks, beyond the geometry of its layout.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct Style {
     /// Cells, outlines, labels, background and display size.
     pub cells: SvgStyle,

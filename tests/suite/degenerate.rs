@@ -91,10 +91,8 @@ fn ten_thousand_children_in_one_parent() {
 #[test]
 fn weight_ratio_of_a_million() {
     let ds = flat(&[1.0, 1e6, 3.0, 2e5, 7.0, 1e6]);
-    let params = Params {
-        min_weight_ratio: 0.0,
-        ..Params::default()
-    };
+    let mut params = Params::default();
+    params.min_weight_ratio = 0.0;
     let (l, _) = layout(&ds, &params).expect("layout");
     l.sanity_check(&ds).expect("sane");
     assert!(share(&ds, &l, "n0") > 0.0);
@@ -139,10 +137,8 @@ fn coincident_initial_sites_separate() {
 fn outlines_hold_their_children() {
     let ds = flat(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
     for outline in [Outline::Circle, Outline::Regular(5), Outline::Regular(32)] {
-        let params = Params {
-            outline: outline.clone(),
-            ..Params::default()
-        };
+        let mut params = Params::default();
+        params.outline = outline.clone();
         let (l, _) = layout(&ds, &params).expect("layout");
         l.sanity_check(&ds).expect("sane");
         assert!(measure::quality(&ds, &l).area_error_diagram_mean <= 0.01);
@@ -152,22 +148,20 @@ fn outlines_hold_their_children() {
 #[test]
 fn bad_parameters_are_errors_not_panics() {
     let ds = flat(&[1.0, 2.0]);
+    let with = |change: fn(&mut Params)| {
+        let mut p = Params::default();
+        change(&mut p);
+        p
+    };
     for params in [
-        Params {
-            canvas: nptreemap::Canvas {
+        with(|p| {
+            p.canvas = nptreemap::Canvas {
                 width: 0.0,
                 height: 10.0,
-            },
-            ..Params::default()
-        },
-        Params {
-            convergence_ratio: f64::NAN,
-            ..Params::default()
-        },
-        Params {
-            max_iterations: 0,
-            ..Params::default()
-        },
+            }
+        }),
+        with(|p| p.convergence_ratio = f64::NAN),
+        with(|p| p.max_iterations = 0),
     ] {
         assert!(layout(&ds, &params).is_err());
     }

@@ -29,10 +29,8 @@ fn ring() -> nptreemap_formats::Dataset {
 #[test]
 fn relations_without_vectors_use_mds_and_realize_constraints() {
     let ds = ring();
-    let request = Request {
-        similarity: Some(SimilarityKind::NeighborList),
-        ..Request::default()
-    };
+    let mut request = Request::default();
+    request.similarity = Some(SimilarityKind::NeighborList);
     let c = compute(&ds, &request).expect("layout");
     assert_eq!(c.method, Method::Neighbor);
     c.layout.sanity_check(&c.dataset).expect("sane");
@@ -55,11 +53,9 @@ fn relations_without_vectors_use_mds_and_realize_constraints() {
 fn every_method_gives_a_sound_layout() {
     let ds = ring();
     for method in Method::ALL {
-        let request = Request {
-            method: Some(method),
-            similarity: Some(SimilarityKind::NeighborList),
-            ..Request::default()
-        };
+        let mut request = Request::default();
+        request.method = Some(method);
+        request.similarity = Some(SimilarityKind::NeighborList);
         let c = compute(&ds, &request).expect("layout");
         assert_eq!(c.method, method);
         c.layout.sanity_check(&c.dataset).expect("sane");

@@ -4,6 +4,7 @@
 
 /// Settings of the similarity-driven methods.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct NeighborParams {
     /// Lloyd ticks of the equal-area CVT every diagram starts from. Default: 40.
     pub cvt_iterations: usize,

@@ -27,7 +27,7 @@ use proptest::strategy::ValueTree;
 use proptest::test_runner::{Config as RunnerConfig, RngSeed, TestCaseError, TestRunner};
 
 use nptreemap::config::Config;
-use nptreemap::layout::{compute, Canvas, Method, Outline, Params, Request};
+use nptreemap::layout::{compute, Canvas, Method, Outline, Request};
 use nptreemap::neighborhood::SimilarityKind;
 use nptreemap_formats::{
     registry, Dataset, DatasetBuilder, FormatOptions, Inputs, Limits, NodeSpec,
@@ -1243,20 +1243,16 @@ fn request_of(case: &LayoutCase, has_features: bool) -> Request {
         Method::MatchSwap,
         Method::Neighbor,
     ][case.method as usize % 5];
-    Request {
-        params: Params {
-            canvas: Canvas {
-                width: case.canvas.0,
-                height: case.canvas.1,
-            },
-            outline,
-            seed: case.seed,
-            ..Params::default()
-        },
-        method: Some(if has_features { method } else { Method::Plain }),
-        similarity: has_features.then_some(SimilarityKind::Cosine),
-        ..Request::default()
-    }
+    let mut request = Request::default();
+    request.params.canvas = Canvas {
+        width: case.canvas.0,
+        height: case.canvas.1,
+    };
+    request.params.outline = outline;
+    request.params.seed = case.seed;
+    request.method = Some(if has_features { method } else { Method::Plain });
+    request.similarity = has_features.then_some(SimilarityKind::Cosine);
+    request
 }
 
 /// Lays one case out: it must succeed (or refuse with an error) and pass the
