@@ -169,7 +169,8 @@ impl Transposed {
     /// one row alone would, with a multiply and an add (never a fused
     /// multiply-add), so tiling and the vector width change no bit. Tiles keep
     /// their sums in registers: the one-row loop stored every partial sum to
-    /// memory and ran scalar (6 s of a 20,000-node level's 7 s).
+    /// memory and ran scalar (a 20,000-leaf level's constraints: 14.6 s before,
+    /// 3.8 s after; BENCHMARKS.md, "Scale after tiled constraints").
     fn dot_block_tile(&self, rows: &[&[f64]], block: usize, acc: &mut [[f64; LANES]]) {
         let columns = &self.blocks[block * self.d * LANES..(block + 1) * self.d * LANES];
         let mut r = 0;
@@ -373,21 +374,11 @@ fn bin_row(
     }
     let bin_of = bin_table(lo, hi);
     let mut bins = vec![Bin::default(); usize::from(bin_of[usize::from(lo)]) + 1];
-    // Per bin, the similarity a candidate must exceed to enter its full head
-    // (what `push_head` checks first), kept here so that the pass over the row,
-    // one step per pair of the level, rarely touches a head.
-    let mut floor = vec![f64::NEG_INFINITY; bins.len()];
     for (j, &s) in scores.iter().enumerate() {
         if j != i {
-            let b = usize::from(bin_of[usize::from(s)]);
-            bins[b].len += 1;
-            if row[j] > floor[b] {
-                let head = &mut bins[b].head;
-                push_head(head, candidate(j));
-                if head.len() == BIN_HEAD {
-                    floor[b] = head[BIN_HEAD - 1].similarity;
-                }
-            }
+            let bin = &mut bins[usize::from(bin_of[usize::from(s)])];
+            bin.len += 1;
+            push_head(&mut bin.head, candidate(j));
         }
     }
     Bins { bins }
