@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 use nptreemap_formats::Dataset;
 use rayon::prelude::*;
 
+use super::filtered_rows::{Filter, RowState};
 use super::similarity::{
     clamp_unit, cosine_from_parts, norm_of, pair_similarity, score, NodeFeatures, SimilarityKind,
 };
@@ -24,7 +25,7 @@ const BIN_COUNT: usize = 5;
 /// How many of each bin's best entries are kept. Stage A reads at most
 /// [`TOP_BIN_CAP`]; Stage C enters a bin only while the node holds at most
 /// [`STAGE_C_STOP_ABOVE`] links, so among a bin's first 4 entries one is new.
-const BIN_HEAD: usize = super::sparse_rows::HEAD;
+pub(super) const BIN_HEAD: usize = super::sparse_rows::HEAD;
 /// A pair is a constraint when its score exceeds this (§3.6: `s > 1`).
 const MIN_PAIR_SCORE: u8 = 1;
 
@@ -72,25 +73,25 @@ pub struct ConstraintLists {
 }
 
 /// The similarity bins of one node, top bin first, each with its best entries.
-#[derive(Clone, Debug, Default)]
-struct Bins {
-    bins: Vec<Bin>,
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct Bins {
+    pub(super) bins: Vec<Bin>,
 }
 
 /// One bin: how many entries it has and the first [`BIN_HEAD`] of them in list
 /// order (similarity descending, ties in breadth-first order).
-#[derive(Clone, Debug, Default)]
-struct Bin {
-    len: usize,
-    head: Vec<Candidate>,
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct Bin {
+    pub(super) len: usize,
+    pub(super) head: Vec<Candidate>,
 }
 
 /// A node of the level with its raw similarity and score.
-#[derive(Clone, Copy, Debug)]
-struct Candidate {
-    similarity: f64,
-    node: usize,
-    score: u8,
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Candidate {
+    pub(super) similarity: f64,
+    pub(super) node: usize,
+    pub(super) score: u8,
 }
 
 /// The d3.bin thresholds of §3.2 for scores in `lo..=hi`: the candidates
@@ -384,6 +385,46 @@ fn bin_row(
     Bins { bins }
 }
 
+/// The bins of `level[i]` from its exact similarity row (the reference the
+/// filter is tested against).
+#[cfg(test)]
+pub(super) fn exact_bins(
+    kind: SimilarityKind,
+    features: &[NodeFeatures<'_>],
+    level: &[usize],
+    i: usize,
+) -> Bins {
+    let mut row = Vec::new();
+    similarity_row(kind, features, None, level, i, &mut row);
+    bin_row(kind, level, i, &row, &mut Vec::new())
+}
+
+/// The bins of the rows `span` of a level through the f32 [`Filter`]; its exact
+/// nodes get the full exact row (`row` and `scores` are scratch space).
+fn filtered_tile(
+    kind: SimilarityKind,
+    filter: &Filter,
+    features: &[NodeFeatures<'_>],
+    level: &[usize],
+    span: std::ops::Range<usize>,
+    (row, scores, state): (&mut Vec<f64>, &mut Vec<u8>, &mut Vec<RowState>),
+) -> Vec<Bins> {
+    let filtered: Vec<usize> = span.clone().filter(|&i| !filter.is_exact(i)).collect();
+    let mut fast = filter
+        .bin_rows(kind, features, level, &filtered, state)
+        .into_iter();
+    span.map(|i| {
+        if filter.is_exact(i) {
+            similarity_row(kind, features, None, level, i, row);
+            bin_row(kind, level, i, row, scores)
+        } else {
+            fast.next()
+                .expect("invariant: one bin set per filtered row")
+        }
+    })
+    .collect()
+}
+
 /// The bins of a node from its sparse row (the measures of [`SparseLevel`]): the same
 /// bins as [`bin_row`] gives from the full row, bit for bit. Entries go in level order,
 /// shown ones before the zeros; they never tie (shown similarities are non-zero), so
@@ -438,7 +479,7 @@ fn bin_sparse(kind: SimilarityKind, row: &SparseRow, level: &[usize]) -> Bins {
 
 /// The bin (from the top) of every possible score for a row with scores in `lo..=hi`,
 /// so the per-pair work is a table lookup.
-fn bin_table(lo: u8, hi: u8) -> [u8; 101] {
+pub(super) fn bin_table(lo: u8, hi: u8) -> [u8; 101] {
     let thresholds = thresholds(lo, hi);
     let mut bin_of = [0u8; 101];
     for (s, slot) in bin_of.iter_mut().enumerate() {
@@ -471,7 +512,8 @@ fn has(list: &[ListEntry], target: usize) -> bool {
 /// of the thread count): neighbour lists, binary and Jaccard from sparse rows
 /// (`SparseLevel`: the relations, groups of equal vectors, an inverted index of
 /// supports; O(n + pairs that share a coordinate) per level), cosine and Pearson over
-/// all pairs (`O(n²·d)` per level).
+/// all pairs (`O(n²·d)` per level), through the f32 filter of `filtered_rows` where
+/// the level allows it (same bins, bit for bit).
 pub fn constraint_lists(prepared: &Dataset, kind: SimilarityKind) -> ConstraintLists {
     constraint_lists_with(prepared, kind, true)
 }
@@ -500,9 +542,13 @@ fn constraint_lists_with(
             .map(|&n| NodeFeatures::new(kind, prepared, n))
             .collect();
         let sparse_level = SparseLevel::new(kind, &level_features).filter(|_| sparse);
-        let transposed = match sparse_level {
+        let filter = match sparse_level {
             Some(_) => None,
-            None => Transposed::new(kind, &level_features),
+            None => Filter::new(kind, &level_features),
+        };
+        let transposed = match (&sparse_level, &filter) {
+            (None, None) => Transposed::new(kind, &level_features),
+            _ => None,
         };
         let level_bins: Vec<Bins> = match &sparse_level {
             Some(index) => (0..level.len())
@@ -516,9 +562,19 @@ fn constraint_lists_with(
                 let tiles: Vec<Vec<Bins>> = (0..level.len().div_ceil(TILE_ROWS))
                     .into_par_iter()
                     .map_init(
-                        || (vec![Vec::new(); TILE_ROWS], Vec::new()),
-                        |(rows, scores), tile| {
+                        || (vec![Vec::new(); TILE_ROWS], Vec::new(), Vec::new()),
+                        |(rows, scores, filter_state), tile| {
                             let span = tile * TILE_ROWS..((tile + 1) * TILE_ROWS).min(level.len());
+                            if let Some(filter) = &filter {
+                                return filtered_tile(
+                                    kind,
+                                    filter,
+                                    &level_features,
+                                    level,
+                                    span,
+                                    (&mut rows[0], scores, filter_state),
+                                );
+                            }
                             similarity_rows(
                                 kind,
                                 &level_features,

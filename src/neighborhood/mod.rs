@@ -6,6 +6,8 @@
 //! Pure: no I/O.
 /// Binning and filtering of similarities into constraints (stages A to E).
 pub mod constraints;
+/// Exact bins of dense cosine and Pearson rows through an f32 filter.
+mod filtered_rows;
 /// Assignment: Kuhn–Munkres, and recursive bisection for large groups.
 pub mod matching;
 /// Virtual nodes for uniform depth and bottom-up aggregation (paper §4).

@@ -1,0 +1,559 @@
+//! The bins of dense cosine and Pearson rows through a single-precision filter:
+//! every pair's similarity is first computed in f32 from unit vectors, and the
+//! exact f64 similarity ([`pair_similarity`]) is computed only where the f32 value
+//! could change a decision (a score near an integer step, a candidate that might
+//! enter a bin's head). The bins come out bit for bit as the all-pairs f64 scan
+//! gives them (`bin_row` of `constraints`); the unit test checks it.
+//!
+//! Why: the all-pairs scan is the one `O(n²·d)` step of the method. On a
+//! 100,000-leaf level it took 44.8 s of the whole method's 75 s, most of it not in
+//! the dot products but in storing each f64 row (0.8 MB per row) and reading it
+//! back to bin it. Here a row is binned as it is computed, from a histogram of its
+//! scores and a small head per score, and the kernel does twice the pairs per
+//! instruction in f32 (BENCHMARKS.md, "Constraints through an f32 filter").
+//! Written by hand: no crate does filtered exact binning.
+
+use super::constraints::{bin_table, Bin, Bins, Candidate, BIN_HEAD};
+use super::similarity::{pair_similarity, score, NodeFeatures, SimilarityKind};
+
+/// Lanes per column block: two AVX registers of f32.
+const LANES: usize = 16;
+/// Rows one kernel call sums at once (4 rows × 2 registers = 8 accumulators).
+const KERNEL_ROWS: usize = 4;
+/// Possible scores, 0..=100 (§3.2).
+const SCORES: usize = 101;
+/// Norms outside this range could overflow or underflow the exact path's
+/// `dot / (|a|·|b|)` in f64, where the unit vectors of the filter would not; such
+/// nodes are always computed exactly.
+const NORM_RANGE: std::ops::RangeInclusive<f64> = 1e-100..=1e100;
+
+/// A level's unit vectors in f32, rows and transposed column blocks.
+pub(super) struct Filter {
+    d: usize,
+    /// `rows[i·d + k]`: coordinate `k` of node `i`'s unit vector.
+    rows: Vec<f32>,
+    /// `blocks[(block·d + k)·LANES + lane]`: coordinate `k` of node
+    /// `block·LANES + lane`; padding lanes are zero.
+    blocks: Vec<f32>,
+    /// Nodes computed exactly, never through the filter (zero or extreme norms).
+    exact: Vec<bool>,
+    /// Per column block: true when one of its nodes is in `exact`.
+    exact_in_block: Vec<bool>,
+    /// Bound on |rescaled f32 cosine − exact rescaled cosine|.
+    eps: f64,
+}
+
+impl Filter {
+    /// The filter for a level, or `None` when the measure is not a dot product,
+    /// a vector is missing or of another length, or more than an eighth of the
+    /// nodes need the exact path anyway.
+    pub(super) fn new(kind: SimilarityKind, features: &[NodeFeatures<'_>]) -> Option<Self> {
+        if !matches!(kind, SimilarityKind::Cosine | SimilarityKind::Pearson) {
+            return None;
+        }
+        let n = features.len();
+        let d = features.first()?.values()?.len();
+        let mut rows = vec![0.0f32; n * d];
+        let mut blocks = vec![0.0f32; n.div_ceil(LANES) * d * LANES];
+        let mut exact = vec![false; n];
+        for (j, f) in features.iter().enumerate() {
+            let v = f.values().filter(|v| v.len() == d)?;
+            let norm = super::similarity::norm_of(f);
+            if !NORM_RANGE.contains(&norm) || v.iter().any(|x| !x.is_finite()) {
+                exact[j] = true;
+                continue;
+            }
+            let (block, lane) = (j / LANES, j % LANES);
+            for (k, &x) in v.iter().enumerate() {
+                let u = (x / norm) as f32;
+                rows[j * d + k] = u;
+                blocks[(block * d + k) * LANES + lane] = u;
+            }
+        }
+        if exact.iter().filter(|&&e| e).count() * 8 > n {
+            return None;
+        }
+        // Unit vectors rounded to f32 (each coordinate within u = 2⁻²⁴ relative)
+        // and summed left to right in f32: |Σ ûᵢûⱼ − cos| ≤ (d + 2)·u·(1 + O(u))
+        // (the standard bound for recursive summation, with Σ|uᵢ||uⱼ| ≤ 1); the
+        // exact path's own f64 error is ~d·2⁻⁵³. Rescaling halves it; (d + 8)·u
+        // leaves more than a factor of two.
+        let eps = (d as f64 + 8.0) * f64::from(f32::EPSILON) / 2.0;
+        let exact_in_block = exact.chunks(LANES).map(|c| c.contains(&true)).collect();
+        Some(Filter {
+            d,
+            rows,
+            blocks,
+            exact,
+            exact_in_block,
+            eps,
+        })
+    }
+
+    /// True when node `i` of the level is always computed exactly.
+    pub(super) fn is_exact(&self, i: usize) -> bool {
+        self.exact[i]
+    }
+
+    /// The bins of rows `rows` (none of them [`Filter::is_exact`]), as `bin_row`
+    /// gives them from the exact similarity rows.
+    pub(super) fn bin_rows(
+        &self,
+        kind: SimilarityKind,
+        features: &[NodeFeatures<'_>],
+        level: &[usize],
+        rows: &[usize],
+        state: &mut Vec<RowState>,
+    ) -> Vec<Bins> {
+        let n = level.len();
+        state.resize_with(rows.len(), RowState::default);
+        for s in state.iter_mut() {
+            s.reset(self.eps);
+        }
+        let exact =
+            |i: usize, j: usize| pair_similarity(kind, &features[i], &features[j], level[j]);
+        // Scores are steps of 1/100 of the similarity: a value farther than this
+        // from a step has the same score in f32 as in f64.
+        let margin = 100.0 * self.eps;
+        let simd = avx2();
+        for block in 0..n.div_ceil(LANES) {
+            let columns = &self.blocks[block * self.d * LANES..(block + 1) * self.d * LANES];
+            let first = block * LANES;
+            let last = (first + LANES).min(n);
+            for (group, states) in rows.chunks(KERNEL_ROWS).zip(state.chunks_mut(KERNEL_ROWS)) {
+                let vectors: [&[f32]; KERNEL_ROWS] = std::array::from_fn(|r| {
+                    let i = group[r.min(group.len() - 1)];
+                    &self.rows[i * self.d..(i + 1) * self.d]
+                });
+                let dots = kernel_dispatch(&vectors, columns);
+                for ((&i, row), dots) in group.iter().zip(states.iter_mut()).zip(&dots) {
+                    let clean = last - first == LANES
+                        && !self.exact_in_block[block]
+                        && !(first..last).contains(&i);
+                    if clean && simd {
+                        #[cfg(target_arch = "x86_64")]
+                        {
+                            let mut scores = [0i32; LANES];
+                            // SAFETY: `simd` is true only when the CPU has AVX2.
+                            let mut attention = unsafe {
+                                classify_avx2(dots, &row.floor32, margin as f32, &mut scores)
+                            };
+                            for &sc in &scores {
+                                row.counts[sc as usize] += 1;
+                            }
+                            while attention != 0 {
+                                let lane = attention.trailing_zeros() as usize;
+                                attention &= attention - 1;
+                                row.counts[scores[lane] as usize] -= 1;
+                                self.pair(row, i, first + lane, dots[lane], margin, &exact);
+                            }
+                        }
+                        continue;
+                    }
+                    for (j, &dot) in (first..last).zip(dots) {
+                        if j != i {
+                            self.pair(row, i, j, dot, margin, &exact);
+                        }
+                    }
+                }
+            }
+        }
+        state[..rows.len()]
+            .iter()
+            .zip(rows)
+            .map(|(row, &i)| row.bins(n, level, |j| exact(i, j)))
+            .collect()
+    }
+
+    /// One pair `(i, j)` from its f32 dot product: counted with its exact score,
+    /// kept while it may be among that score's best.
+    #[inline]
+    fn pair(
+        &self,
+        row: &mut RowState,
+        i: usize,
+        j: usize,
+        dot: f32,
+        margin: f64,
+        exact: &impl Fn(usize, usize) -> f64,
+    ) {
+        let approx = (f64::from(dot) + 1.0) / 2.0;
+        let scaled = 100.0 * approx;
+        // The nearest step by truncation (scaled > −1 for unit vectors, so the
+        // shifted value is positive): no libm call.
+        let nearest = ((scaled + 1.5) as i64 - 1) as f64;
+        if self.exact[j] || (scaled - nearest).abs() < margin {
+            let s = exact(i, j);
+            row.take(score(s), s, j);
+        } else {
+            // Not near a step: the f32 value has the exact score.
+            row.take(score(approx), approx, j);
+        }
+    }
+}
+
+/// One row's histogram of scores and, per score, the candidates that may still be
+/// among its best: every one whose similarity may reach the eighth best's.
+#[derive(Default)]
+pub(super) struct RowState {
+    counts: Vec<u32>,
+    /// Per score: (similarity within `eps` of the exact one, level position).
+    kept: Vec<Vec<(f64, usize)>>,
+    /// Per score: a candidate below this is surely beaten by eight kept ones.
+    floor: Vec<f64>,
+    /// `floor` rounded to f32, for [`classify_avx2`].
+    floor32: Vec<f32>,
+    /// Per score: the length at which `kept` is pruned next.
+    prune_at: Vec<usize>,
+    eps: f64,
+}
+
+/// Kept candidates of one score before the first pruning.
+const PRUNE_FROM: usize = 2 * BIN_HEAD;
+
+impl RowState {
+    fn reset(&mut self, eps: f64) {
+        self.eps = eps;
+        self.counts.clear();
+        self.counts.resize(SCORES, 0);
+        self.floor.clear();
+        self.floor.resize(SCORES, f64::NEG_INFINITY);
+        self.floor32.clear();
+        self.floor32.resize(SCORES, f32::NEG_INFINITY);
+        self.prune_at.clear();
+        self.prune_at.resize(SCORES, PRUNE_FROM);
+        self.kept.resize_with(SCORES, Vec::new);
+        for kept in &mut self.kept {
+            kept.clear();
+        }
+    }
+
+    /// Counts a pair with its (exact) score and keeps it while it may be among
+    /// that score's best. `similarity` is exact or within `eps` of it.
+    #[inline]
+    fn take(&mut self, score: u8, similarity: f64, j: usize) {
+        let s = usize::from(score);
+        self.counts[s] += 1;
+        if similarity < self.floor[s] {
+            return;
+        }
+        let kept = &mut self.kept[s];
+        kept.push((similarity, j));
+        if kept.len() >= self.prune_at[s] {
+            // The eighth best kept value T: eight candidates have exact values
+            // ≥ T − eps, so one below T − 2·eps is exactly below eight others
+            // (strictly: no tie can bring it back).
+            let (_, &mut (eighth, _), _) =
+                kept.select_nth_unstable_by(BIN_HEAD - 1, |a, b| b.0.total_cmp(&a.0));
+            self.floor[s] = eighth - 2.0 * self.eps;
+            let floor = self.floor[s];
+            self.floor32[s] = floor as f32;
+            kept.retain(|&(v, _)| v >= floor);
+            // Doubling keeps the work linear when many values tie.
+            self.prune_at[s] = (2 * kept.len()).max(PRUNE_FROM);
+        }
+    }
+
+    /// The bins of the row: thresholds from the lowest and highest score, each
+    /// bin's count from the histogram, and its head from its highest scores: a
+    /// bin's best entries come from the fewest top scores holding eight entries,
+    /// whose kept candidates get their exact similarity here (`exact(j)`).
+    fn bins(&self, level_len: usize, level: &[usize], exact: impl Fn(usize) -> f64) -> Bins {
+        if level_len < 2 {
+            return Bins::default();
+        }
+        let counts = &self.counts;
+        let present = || (0..SCORES).filter(|&s| counts[s] > 0);
+        let (Some(lo), Some(hi)) = (present().next(), present().next_back()) else {
+            return Bins::default();
+        };
+        let bin_of = bin_table(lo as u8, hi as u8);
+        let mut bins = vec![Bin::default(); usize::from(bin_of[lo]) + 1];
+        for s in present().rev() {
+            let bin = &mut bins[usize::from(bin_of[s])];
+            let needed = bin.len < BIN_HEAD;
+            bin.len += counts[s] as usize;
+            if needed {
+                bin.head
+                    .extend(self.kept[s].iter().map(|&(_, j)| Candidate {
+                        similarity: exact(j),
+                        node: level[j],
+                        score: s as u8,
+                    }));
+            }
+        }
+        for bin in &mut bins {
+            // Similarity descending, then level order: `push_head`'s stable order
+            // (its `>=` treats −0 and 0 as equal, as `partial_cmp` does).
+            bin.head.sort_by(|a, b| {
+                b.similarity
+                    .partial_cmp(&a.similarity)
+                    .unwrap_or(std::cmp::Ordering::Equal)
+                    .then(a.node.cmp(&b.node))
+            });
+            bin.head.truncate(BIN_HEAD);
+        }
+        Bins { bins }
+    }
+}
+
+/// True when [`classify_avx2`] can run on this CPU.
+fn avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// The scores of one block's 16 pairs of a row, computed in f32, and a mask of
+/// the pairs that need [`Filter::pair`]: those within `margin` (plus f32 slack)
+/// of a score step, and those that may reach their score's `floor` (minus
+/// slack). For every other pair the f32 score is the exact one and the pair
+/// cannot be among its score's best, so counting it is all there is to do.
+/// The slacks cover this function's own f32 rounding of (dot + 1)/2·100 (a few
+/// units of 2⁻²⁴·100) and of the floors (2⁻²⁴).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn classify_avx2(
+    dots: &[f32; LANES],
+    floors: &[f32],
+    margin: f32,
+    scores: &mut [i32; LANES],
+) -> u32 {
+    use std::arch::x86_64::{
+        __m256i, _mm256_add_ps, _mm256_andnot_ps, _mm256_cmp_ps, _mm256_cvttps_epi32,
+        _mm256_i32gather_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps,
+        _mm256_mul_ps, _mm256_or_ps, _mm256_round_ps, _mm256_set1_ps, _mm256_setzero_ps,
+        _mm256_storeu_si256, _mm256_sub_ps, _CMP_GE_OQ, _CMP_LT_OQ, _MM_FROUND_NO_EXC,
+        _MM_FROUND_TO_NEAREST_INT,
+    };
+    assert!(floors.len() >= SCORES, "invariant: a floor per score");
+    let half = _mm256_set1_ps(0.5);
+    let hundred = _mm256_set1_ps(100.0);
+    let near_margin = _mm256_set1_ps(margin + 1e-4);
+    let floor_slack = _mm256_set1_ps(1e-6);
+    let sign = _mm256_set1_ps(-0.0);
+    let mut mask = 0u32;
+    for part in 0..2 {
+        // SAFETY: `dots` and `scores` hold 16 values, two halves of eight.
+        let dot = unsafe { _mm256_loadu_ps(dots.as_ptr().add(8 * part)) };
+        let approx = _mm256_add_ps(_mm256_mul_ps(dot, half), half);
+        let scaled = _mm256_mul_ps(approx, hundred);
+        let nearest = _mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(scaled);
+        let distance = _mm256_andnot_ps(sign, _mm256_sub_ps(scaled, nearest));
+        let near = _mm256_cmp_ps::<_CMP_LT_OQ>(distance, near_margin);
+        let clamped = _mm256_min_ps(_mm256_max_ps(scaled, _mm256_setzero_ps()), hundred);
+        let score = _mm256_cvttps_epi32(clamped);
+        // SAFETY: every score lane is in 0..=100 and `floors` has 101 values.
+        let floor = unsafe { _mm256_i32gather_ps::<4>(floors.as_ptr(), score) };
+        let may_enter = _mm256_cmp_ps::<_CMP_GE_OQ>(approx, _mm256_sub_ps(floor, floor_slack));
+        mask |= (_mm256_movemask_ps(_mm256_or_ps(near, may_enter)) as u32) << (8 * part);
+        // SAFETY: see above.
+        unsafe {
+            _mm256_storeu_si256(scores.as_mut_ptr().add(8 * part).cast::<__m256i>(), score);
+        }
+    }
+    mask
+}
+
+/// `R` rows' dot products with one block's `columns` (`d` chunks of [`LANES`]),
+/// each lane summed left to right from 0.
+#[inline(always)]
+fn kernel<const R: usize>(rows: &[&[f32]; R], columns: &[f32]) -> [[f32; LANES]; R] {
+    let mut acc = [[0.0f32; LANES]; R];
+    let d = columns.len() / LANES;
+    let rows: [&[f32]; R] = rows.map(|row| &row[..d]);
+    for (k, column) in columns.chunks_exact(LANES).enumerate() {
+        let column: &[f32; LANES] = column.try_into().expect("invariant: chunks of LANES");
+        for r in 0..R {
+            let x = rows[r][k];
+            for lane in 0..LANES {
+                acc[r][lane] += x * column[lane];
+            }
+        }
+    }
+    acc
+}
+
+/// [`kernel`] in AVX where the CPU has it. The choice changes no output: the
+/// filter's bound holds for either, and every decision near it is exact.
+fn kernel_dispatch(rows: &[&[f32]; KERNEL_ROWS], columns: &[f32]) -> [[f32; LANES]; KERNEL_ROWS] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU supports AVX, checked just above.
+            return unsafe { kernel_avx(rows, columns) };
+        }
+    }
+    kernel::<KERNEL_ROWS>(rows, columns)
+}
+
+/// [`kernel`] in AVX intrinsics, the eight sums in eight registers.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn kernel_avx(rows: &[&[f32]; KERNEL_ROWS], columns: &[f32]) -> [[f32; LANES]; KERNEL_ROWS] {
+    use std::arch::x86_64::{
+        _mm256_add_ps, _mm256_loadu_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps,
+        _mm256_storeu_ps,
+    };
+    let d = columns.len() / LANES;
+    let rows: [&[f32]; KERNEL_ROWS] = rows.map(|row| &row[..d]);
+    let mut acc = [[_mm256_setzero_ps(); 2]; KERNEL_ROWS];
+    for k in 0..d {
+        let column = &columns[k * LANES..(k + 1) * LANES];
+        // SAFETY: `column` holds LANES = 16 values, two loads of eight.
+        let (lo, hi) = unsafe {
+            (
+                _mm256_loadu_ps(column.as_ptr()),
+                _mm256_loadu_ps(column.as_ptr().add(8)),
+            )
+        };
+        for r in 0..KERNEL_ROWS {
+            let x = _mm256_set1_ps(rows[r][k]);
+            acc[r][0] = _mm256_add_ps(acc[r][0], _mm256_mul_ps(x, lo));
+            acc[r][1] = _mm256_add_ps(acc[r][1], _mm256_mul_ps(x, hi));
+        }
+    }
+    let mut out = [[0.0f32; LANES]; KERNEL_ROWS];
+    for (o, a) in out.iter_mut().zip(&acc) {
+        // SAFETY: `o` holds 16 values, two stores of eight.
+        unsafe {
+            _mm256_storeu_ps(o.as_mut_ptr(), a[0]);
+            _mm256_storeu_ps(o.as_mut_ptr().add(8), a[1]);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::constraints::exact_bins;
+    use super::*;
+    use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
+
+    /// A root with one child per vector.
+    fn level_of(vectors: &[Vec<f64>]) -> Dataset {
+        let mut builder = DatasetBuilder::new();
+        builder.add(NodeSpec::new("r"));
+        for (i, v) in vectors.iter().enumerate() {
+            builder.add(
+                NodeSpec::new(format!("n{i}"))
+                    .parent("r")
+                    .weight(1.0)
+                    .features(v.clone()),
+            );
+        }
+        builder.build().expect("valid")
+    }
+
+    /// Vectors that stress every decision of the filter: 2-d unit vectors whose
+    /// cosines with the first one fall exactly on score steps and on either side
+    /// of them, exact duplicates (ties broken by level order) and scaled copies,
+    /// a crowd of 40 identical vectors (pruning among ties), a zero vector and
+    /// one of norm 1e-150 (both exact-only), then pseudo-random vectors so that
+    /// every score holds far more than a head.
+    fn hard_vectors(random: usize) -> Vec<Vec<f64>> {
+        let mut vectors = vec![vec![1.0, 0.0]];
+        // Random vectors first, so the first row's heads are full (and pruned)
+        // when the vectors on the steps arrive.
+        let mut state = 99u64;
+        for _ in 0..random {
+            let mut next = || {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((state >> 33) as f64) / f64::from(u32::MAX) - 0.5
+            };
+            vectors.push(vec![next(), next()]);
+        }
+        for k in 0..=100 {
+            // cos θ = 2·(k/100) − 1: the rescaled similarity is k/100, and the
+            // shifts put it just below or above the step, closer than f32 sees.
+            let c = 2.0 * (f64::from(k) / 100.0) - 1.0;
+            for shift in [0.0, 1e-9, -1e-9, -3e-8, 1e-7, -1e-7, 1e-5] {
+                let c = (c + shift).clamp(-1.0, 1.0);
+                vectors.push(vec![c, (1.0 - c * c).sqrt()]);
+            }
+        }
+        for _ in 0..40 {
+            vectors.push(vec![0.6, 0.8]);
+        }
+        vectors.push(vec![3.0, 4.0]);
+        vectors.push(vec![0.0, 0.0]);
+        vectors.push(vec![1e-150, 2e-150]);
+        vectors
+    }
+
+    /// Every row's bins through the filter equal the exact scan's, bit for bit,
+    /// for both dot-product measures, on 2-d and 37-d vectors (2-d puts hundreds
+    /// of pairs on each score, so heads fill, prune and tie).
+    #[test]
+    fn filtered_bins_equal_the_exact_scan() {
+        let wide: Vec<Vec<f64>> = hard_vectors(300)
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                // Scaled by the vector's own size, so the zero and the tiny
+                // vector stay what they are.
+                let size = v[0].abs().max(v[1].abs());
+                let mut w = v.clone();
+                w.extend((0..35).map(|k| size * (((i * 7 + k * 13) % 17) as f64 / 17.0 - 0.4)));
+                w
+            })
+            .collect();
+        for vectors in [hard_vectors(3000), wide] {
+            let p = level_of(&vectors);
+            let level: Vec<usize> = (1..p.len()).collect();
+            for kind in [SimilarityKind::Cosine, SimilarityKind::Pearson] {
+                let features: Vec<NodeFeatures<'_>> = level
+                    .iter()
+                    .map(|&n| NodeFeatures::new(kind, &p, n))
+                    .collect();
+                let filter = Filter::new(kind, &features).expect("a filter for this level");
+                let rows: Vec<usize> = (0..level.len()).filter(|&i| !filter.is_exact(i)).collect();
+                assert!(
+                    rows.len() + 2 <= level.len(),
+                    "{kind:?}: the zero and tiny vectors are exact"
+                );
+                let mut state = Vec::new();
+                // Tiles of 5 rows (groups of the 4-row kernel and a remainder):
+                // the first rows, and every 41st row after them.
+                let sample: Vec<usize> = rows
+                    .iter()
+                    .copied()
+                    .filter(|&i| i < 10 || i % 41 == 0)
+                    .collect();
+                for tile in sample.chunks(5) {
+                    let fast = filter.bin_rows(kind, &features, &level, tile, &mut state);
+                    for (&i, bins) in tile.iter().zip(&fast) {
+                        let slow = exact_bins(kind, &features, &level, i);
+                        assert_eq!(bins, &slow, "{kind:?} row {i}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Only cosine and Pearson levels of equal-length vectors get a filter, and
+    /// not one where most nodes would need the exact path.
+    #[test]
+    fn filters_only_levels_it_can_serve() {
+        let p = level_of(&[vec![1.0, 0.0], vec![0.0, 1.0], vec![1.0, 1.0]]);
+        let features = |kind| {
+            (1..p.len())
+                .map(|n| NodeFeatures::new(kind, &p, n))
+                .collect::<Vec<_>>()
+        };
+        assert!(Filter::new(SimilarityKind::Cosine, &features(SimilarityKind::Cosine)).is_some());
+        assert!(Filter::new(SimilarityKind::Jaccard, &features(SimilarityKind::Jaccard)).is_none());
+        let zeros = level_of(&[vec![0.0, 0.0], vec![0.0, 0.0], vec![1.0, 1.0]]);
+        let features: Vec<_> = (1..zeros.len())
+            .map(|n| NodeFeatures::new(SimilarityKind::Cosine, &zeros, n))
+            .collect();
+        assert!(Filter::new(SimilarityKind::Cosine, &features).is_none());
+    }
+}
