@@ -1,5 +1,6 @@
 //! Legibility of the default pictures (issue 13): on Flare, a generated
-//! 1,000-leaf similarity hierarchy and every example, built by the real
+//! 1,000-leaf similarity hierarchy, every example and the committed real
+//! datasets (`tests/data/real/`), built by the real
 //! binary at 1,000 × 1,000, no leaf label is covered by a count marker or a
 //! tab, no label is below the minimum size, no overlay leaves the map's
 //! outline, count markers cover at most 2 % of the map, adjacent top-level
@@ -520,6 +521,23 @@ fn pictures() -> Vec<(String, PathBuf)> {
     support::layout(&generated, &[&svg, &json], &[]);
     std::fs::rename(&json, svg.with_extension("json")).expect("rename");
     out.push(("generated 1,000 leaves".to_owned(), svg));
+    // The committed real datasets (700 to 1,400 leaves; one flat, whose 1,061
+    // top-level leaves each take a group colour), each with its own config.
+    for name in ["debian-packages", "python-stdlib", "man-pages", "usr-bin"] {
+        let to = dir.join("real").join(name);
+        copy_dir(&root.join("tests/data/real").join(name), &to);
+        let run = support::bin()
+            .arg("build")
+            .arg(to.join("nptreemap.yaml"))
+            .output()
+            .expect("run nptreemap build");
+        assert!(
+            run.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        out.push((name.to_owned(), to.join(format!("out/{name}.svg"))));
+    }
     out
 }
 
