@@ -3,9 +3,8 @@
 //!
 //! Run with `cargo run --example minimal > minimal.svg`.
 
-use nptreemap::layout::{layout, Params};
-use nptreemap::render::{svg, SvgStyle};
-use nptreemap_formats::{DatasetBuilder, NodeSpec};
+use nptreemap::render::{picture, Style};
+use nptreemap::{DatasetBuilder, NodeSpec, Request};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut builder = DatasetBuilder::new();
@@ -27,11 +26,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let dataset = builder.build()?;
-    let (layout, report) = layout(&dataset, &Params::default())?;
+    let computed = nptreemap::layout(&dataset, &Request::default())?;
     eprintln!(
         "{} diagrams, mean area error {:.4}",
-        report.diagrams, report.area_error_mean
+        computed.report.diagrams, computed.report.area_error_mean
     );
-    println!("{}", svg(&dataset, &layout, &SvgStyle::default()));
+    println!("{}", picture(&computed, &Style::default()));
     Ok(())
 }

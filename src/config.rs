@@ -14,8 +14,10 @@ use crate::render::overlay::OverlayStyle;
 use crate::render::{Border, LabelStyle, LegendOrder, PaletteKind, Rgb, Style, SvgStyle};
 use nptreemap_formats::{FormatOptions, Limits};
 
-/// The built-in defaults, every key documented (`config/default.yaml`).
-pub const DEFAULT_YAML: &str = include_str!("../config/default.yaml");
+/// The built-in defaults, every key documented (`config/default.yaml`); the
+/// tests check that every key parses and matches [`Config`]'s defaults.
+#[cfg(test)]
+pub(crate) const DEFAULT_YAML: &str = include_str!("../config/default.yaml");
 
 /// A parsed, path-resolved configuration.
 #[derive(Clone, Debug, PartialEq)]

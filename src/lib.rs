@@ -1,26 +1,24 @@
 //! nptreemap: neighborhood-preserving Voronoi treemaps.
 //!
-//! The pipeline, in five steps:
-//! 1. **Parse** input bytes into a validated [`Dataset`] (crate `nptreemap-formats`).
-//! 2. **Geometry** ([`geom`]): convex polygons, the only shape a cell can have.
-//! 3. **Power diagrams** ([`power`]): weighted sites clipped to a convex polygon,
-//!    with each cell's neighbours and shared edges.
-//! 4. **Layout** ([`layout`]): a one-level optimiser (Lloyd steps plus weight
-//!    adaptation towards target areas) run top-down over the hierarchy.
-//! 5. **Render** ([`render`]): a finished [`Layout`] becomes layout JSON, SVG,
-//!    PNG or an interactive HTML page.
+//! The public API is a small facade:
+//! - [`Dataset`] (built with [`DatasetBuilder`], or read by the formats crate
+//!   `nptreemap-formats`): a validated tree whose leaves carry weights and,
+//!   optionally, a similarity ([`SimilarityKind`]) between nodes;
+//! - [`Request`] (with its [`Params`]) and [`compute()`], which runs the method
+//!   the data calls for: the neighbourhood-preserving method of the paper when
+//!   the data has a similarity, the plain Voronoi treemap otherwise;
+//! - [`Computed`] with its [`Layout`] (one convex cell per node, [`geom`]'s
+//!   polygons), its [`Constraint`]s and a [`Report`];
+//! - [`render`] (SVG, PNG, the interactive HTML page) and [`layout_json`] (the
+//!   `nptreemap-layout/1` format, written and read back for warm starts);
+//! - [`measure`]: area error, shape, the paper's Table 2, stability.
 //!
-//! Steps 2 to 5 are pure: no files, no clock, no printing, and so are
-//! [`neighborhood`] (similarity, constraints, projections, matching),
-//! [`measure`] (area error, shape, the paper's Table 2, stability) and
-//! [`layout_json`] (the `nptreemap-layout/1` format, written and read back).
-//! Around them: [`config`] (the YAML file), [`workspace`] (the one reader of
-//! files), [`store`] (the one writer), [`pipeline`] (the stages every command
-//! goes through: read → parse → lay out → render → write) and [`daemon`]
-//! (`nptreemap watch`: rebuild on change, warm-started).
+//! All of it is pure: no files, no clock, no printing. The configuration file,
+//! the file system, the build pipeline and `nptreemap watch` are the binary's
+//! and stay private to the crate.
 //!
-//! Cargo features: `png` (PNG output through resvg), `watch` ([`daemon`], on
-//! notify) and `cli` (the `nptreemap` binary) are on by default; without them
+//! Cargo features: `png` (PNG output through resvg), `watch` (`nptreemap watch`,
+//! on notify) and `cli` (the `nptreemap` binary) are on by default; without them
 //! (`default-features = false`) the library lays out and renders SVG, layout
 //! JSON and HTML, and a PNG output is an error naming the feature.
 //!
@@ -62,23 +60,81 @@
 //! so a small change of the data is a small change of the picture;
 //! [`measure::stability()`] measures how small.
 
-pub mod config;
-#[cfg(feature = "watch")]
-pub mod daemon;
-pub mod exec;
+// Items of the internal modules are `pub` for the `internals` build; without
+// it they are crate-private through their module, which is the point.
+#![cfg_attr(not(feature = "internals"), allow(unreachable_pub))]
+
+// Declares the internal modules: `pub(crate)`, except with the `internals`
+// feature, which the repository's own tests, examples and benchmarks turn on
+// (through their dev-dependency on this crate) to reach the pieces they
+// measure. There they are public but hidden from the docs and outside any
+// compatibility promise.
+macro_rules! internal {
+    ($($(#[$attr:meta])* mod $name:ident;)*) => {$(
+        #[cfg(feature = "internals")]
+        #[doc(hidden)]
+        $(#[$attr])*
+        pub mod $name;
+        #[cfg(not(feature = "internals"))]
+        $(#[$attr])*
+        pub(crate) mod $name;
+    )*};
+}
+
+// The edge of the tool (config, files, the build pipeline) serves the binary
+// and the daemon; the library alone is the pure core and its renderers.
+internal! {
+    #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
+    mod config;
+    #[cfg(feature = "watch")]
+    mod daemon;
+    #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
+    mod exec;
+    mod neighborhood;
+    #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
+    mod pipeline;
+    mod power;
+    mod rng;
+    #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
+    mod store;
+    #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
+    mod workspace;
+}
+
+/// The `nptreemap` binary's command line (not part of the API).
+#[cfg(feature = "cli")]
+#[doc(hidden)]
+pub mod cli;
 pub mod geom;
 pub mod layout;
 pub mod layout_json;
 pub mod measure;
-pub mod neighborhood;
-pub mod pipeline;
-pub mod power;
 pub mod render;
-pub mod rng;
-pub mod store;
-pub mod workspace;
+
+/// Lays out `dataset` with the method its data calls for (the paper's
+/// neighbourhood-preserving method when it has a similarity, the plain Voronoi
+/// treemap otherwise, unless `request` names one): the library's entry point,
+/// the same as [`compute()`]. `layout::layout` is the plain treemap alone.
+///
+/// ```
+/// use nptreemap::{DatasetBuilder, NodeSpec, Request};
+///
+/// let mut data = DatasetBuilder::new();
+/// data.add(NodeSpec::new("root"));
+/// for (name, weight) in [("a", 3.0), ("b", 1.0)] {
+///     data.add(NodeSpec::new(name).parent("root").weight(weight));
+/// }
+/// let computed = nptreemap::layout(&data.build()?, &Request::default())?;
+/// let json = nptreemap::render::json(&computed);
+/// assert!(json.contains("nptreemap-layout/1"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn layout(dataset: &Dataset, request: &Request) -> Result<Computed, layout::LayoutError> {
+    compute(dataset, request)
+}
 
 pub use layout::{
     compute, Canvas, Computed, Layout, LayoutCell, Method, Outline, Params, Report, Request,
 };
+pub use neighborhood::{Constraint, SimilarityKind};
 pub use nptreemap_formats::{Dataset, DatasetBuilder, Node, NodeSpec};

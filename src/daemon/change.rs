@@ -54,7 +54,8 @@ pub struct ChangeSet {
 
 impl ChangeSet {
     /// Whether there is nothing to do.
-    pub fn is_empty(&self) -> bool {
+    #[cfg(test)]
+    pub(crate) fn is_empty(&self) -> bool {
         self.relayout.is_empty() && self.rerender.is_empty() && self.removed.is_empty()
     }
 }

@@ -5,6 +5,7 @@ use super::{cross, Point};
 
 /// Why a point list is not a usable convex polygon.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum GeomError {
     /// Fewer than three distinct, non-collinear vertices.
     #[error("a polygon needs at least three distinct, non-collinear vertices")]

@@ -10,6 +10,7 @@ const REL_TOL: f64 = 1e-7;
 
 /// A broken layout invariant, naming the node.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SanityError {
     /// The layout has a different number of cells than the dataset has nodes.
     #[error("layout has {cells} cells for {nodes} nodes")]

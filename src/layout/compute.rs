@@ -70,6 +70,7 @@ impl Computed {
 
 /// How a layout started.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum Start {
     /// From scratch: no previous layout was given.
     Cold,

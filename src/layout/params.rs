@@ -27,6 +27,7 @@ impl Default for Canvas {
 /// command line (`--outline`) as `rect`, `circle` or `ngon`.
 #[derive(Clone, Debug, PartialEq, serde::Deserialize)]
 #[serde(try_from = "String")]
+#[non_exhaustive]
 pub enum Outline {
     /// The whole canvas (the default).
     Rectangle,

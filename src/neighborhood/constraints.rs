@@ -30,7 +30,7 @@ pub(super) const BIN_HEAD: usize = super::sparse_rows::HEAD;
 const MIN_PAIR_SCORE: u8 = 1;
 
 /// One undirected constraint between two nodes at the same depth of a prepared
-/// dataset (see [`super::prepare::prepare`]).
+/// dataset (one with virtual nodes for a uniform leaf depth).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Constraint {
     /// Index of the first node in the prepared dataset; `a < b`.

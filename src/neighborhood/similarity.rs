@@ -13,6 +13,7 @@ use nptreemap_formats::{Dataset, SimilarityHint};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
 pub enum SimilarityKind {
     /// Cosine of the feature vectors, rescaled from [-1, 1] to [0, 1].
     Cosine,

@@ -16,13 +16,14 @@ mod check;
 mod clip;
 mod fast;
 mod grid;
+#[cfg(test)]
 mod naive;
 #[cfg(test)]
 mod proptests;
 
-pub use check::DiagramError;
 pub use fast::power_diagram;
-pub use naive::power_diagram_naive;
+#[cfg(test)]
+pub(crate) use naive::power_diagram_naive;
 
 use crate::geom::ConvexPolygon;
 use crate::geom::Point;

@@ -11,7 +11,7 @@ use crate::geom::ConvexPolygon;
 /// cell with all other sites in index order. Quadratic: a reference for tests,
 /// not for production use. Same conventions for ignored (non-finite) sites,
 /// coincident sites and `dominated_by`.
-pub fn power_diagram_naive(sites: &[Site], clip: &ConvexPolygon) -> PowerDiagram {
+pub(crate) fn power_diagram_naive(sites: &[Site], clip: &ConvexPolygon) -> PowerDiagram {
     let input = Prepared::new(sites, clip);
     let mut builder = CellBuilder::new(LabeledPolygon::default());
     let mut cells: Vec<Cell> = (0..input.len())

@@ -11,6 +11,7 @@ use super::text::width_em;
 
 /// One legend entry.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum LegendItem {
     /// A top-level group: its fill colour and label.
     Swatch {

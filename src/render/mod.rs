@@ -1,6 +1,6 @@
 //! Rendering: a finished layout ([`Computed`](crate::layout::Computed)) and a
-//! style become pictures (SVG text, PNG, an interactive HTML page; the layout
-//! JSON is [`crate::layout_json`]'s). PURE: may not run or alter a layout, read
+//! style become pictures (SVG text, PNG, an interactive HTML page) and, through
+//! [`json`], the layout JSON of [`crate::layout_json`]. PURE: may not run or alter a layout, read
 //! or write files; every renderer is a function of finished data and gives
 //! identical bytes for identical input. Only PNG can fail, and then on a bug
 //! (its input is our own SVG) or an absurd pixel size.
@@ -35,3 +35,9 @@ pub use picture::{picture, Border, LegendOrder, Style};
 #[cfg(feature = "png")]
 pub use png::{png, PngError};
 pub use svg::{svg, SvgStyle};
+
+/// The layout JSON (`nptreemap-layout/1`) of a finished computation, beside the
+/// pictures: [`crate::layout_json::document`], which also reads it back.
+pub fn json(computed: &crate::layout::Computed) -> String {
+    crate::layout_json::document(computed)
+}

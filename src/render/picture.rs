@@ -44,6 +44,7 @@ pub struct Style {
 
 /// The order of the legend's groups.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum LegendOrder {
     /// Heaviest first.
     #[default]

@@ -200,7 +200,7 @@ fn crate_paths(code: &str) -> BTreeSet<String> {
 }
 
 /// The library's import graph: top-level module → the top-level modules its
-/// non-test code names (itself left out). The binary (`main.rs`, `cmd/`) and
+/// non-test code names (itself left out). The binary (`main.rs`, `cli/`) and
 /// test-only files are not part of it.
 fn import_graph() -> BTreeMap<String, BTreeSet<String>> {
     let src = root().join("src");
@@ -227,7 +227,7 @@ fn import_graph() -> BTreeMap<String, BTreeSet<String>> {
             .as_os_str()
             .to_string_lossy()
             .into_owned();
-        if first == "main.rs" || first == "cmd" || first == "lib.rs" || test_only.contains(&f) {
+        if first == "main.rs" || first == "cli" || first == "lib.rs" || test_only.contains(&f) {
             continue;
         }
         let module = first.trim_end_matches(".rs").to_string();

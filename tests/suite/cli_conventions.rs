@@ -198,8 +198,17 @@ fn on_a_terminal(command: &str) -> std::process::Command {
     c
 }
 
-/// A neighbourhood layout that takes more than a second in the test
-/// profile (800 leaves with 16-d embeddings, one level).
+/// [`on_a_terminal`], with the bar shown from the first tick rather than after
+/// a second (`NPTREEMAP_PROGRESS_AFTER_MS=0`): whether a layout lasts a second
+/// depends on the machine, and the bar's presence should not.
+fn on_a_terminal_now(command: &str) -> std::process::Command {
+    let mut c = on_a_terminal(command);
+    c.env("NPTREEMAP_PROGRESS_AFTER_MS", "0");
+    c
+}
+
+/// A neighbourhood layout of several hundred ticks (800 leaves with 16-d
+/// embeddings, one level): about a second in the test profile.
 fn slow_input(dir: &Path) -> std::path::PathBuf {
     let input = dir.join("flat800.json");
     let gen = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/gen_similar.py");
@@ -224,8 +233,16 @@ fn a_progress_bar_shows_on_a_terminal_only() {
     let dir = support::temp_dir("progress_bar");
     let input = slow_input(&dir);
     let bin = env!("CARGO_BIN_EXE_nptreemap");
-    // Not a terminal: no bar, whatever the layout's length.
-    let out = support::layout(&input, &[&dir.join("a.json")], &[]);
+    // Not a terminal: no bar, even when asked for one from the first tick.
+    let out = std::process::Command::new(bin)
+        .arg("layout")
+        .arg(&input)
+        .arg("--out")
+        .arg(dir.join("a.json"))
+        .env("NPTREEMAP_PROGRESS_AFTER_MS", "0")
+        .output()
+        .expect("run nptreemap layout");
+    assert!(out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         !stderr.contains("level 1/1"),
@@ -238,7 +255,7 @@ fn a_progress_bar_shows_on_a_terminal_only() {
             input.display(),
             dir.join(out).display()
         );
-        let run = on_a_terminal(&cmd).output().expect("run script(1)");
+        let run = on_a_terminal_now(&cmd).output().expect("run script(1)");
         let text = String::from_utf8_lossy(&run.stdout).into_owned();
         assert!(run.status.success(), "{cmd}: {text}");
         text
@@ -268,7 +285,7 @@ fn the_first_build_of_watch_shows_a_progress_bar_on_a_terminal() {
     .expect("write config");
     let bin = env!("CARGO_BIN_EXE_nptreemap");
     // `timeout` ends the daemon (SIGTERM: exit 0) once the first build is done.
-    let mut child = on_a_terminal(&format!(
+    let mut child = on_a_terminal_now(&format!(
         "timeout -s TERM 60 {bin} watch --cold {}",
         config.display()
     ))

@@ -63,7 +63,7 @@ const LOOKAHEAD_CANDIDATES: usize = 3;
 
 /// 2-D positions for every node of `dataset`, in any scale: PCA of the
 /// feature vectors when every node has one of the same length (after
-/// [`crate::neighborhood::prepare()`] internal nodes have the mean of their
+/// `neighborhood::prepare` internal nodes have the mean of their
 /// children), else classical MDS of `1 − similarity`.
 pub fn projection_of(dataset: &Dataset, similarity: impl Fn(usize, usize) -> f64) -> Vec<Point> {
     let nodes = dataset.nodes();
@@ -88,7 +88,7 @@ pub fn projection_of(dataset: &Dataset, similarity: impl Fn(usize, usize) -> f64
 }
 
 /// Lays out a prepared dataset (uniform depth) with a similarity-driven method.
-/// `constraints` are those of [`crate::neighborhood::build_constraints`];
+/// `constraints` are those of `neighborhood::build_constraints`;
 /// `projection` has one point per node (see [`projection_of`]).
 pub fn layout_similar(
     dataset: &Dataset,

@@ -8,15 +8,24 @@ use std::io::IsTerminal;
 use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
+use crate::layout::{ProgressSink, Request};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressFinish, ProgressStyle};
-use nptreemap::layout::{ProgressSink, Request};
 
-/// Steps of the bar: the layout's [`fraction`](nptreemap::layout::Progress::fraction)
+/// Steps of the bar: the layout's [`fraction`](crate::layout::Progress::fraction)
 /// in thousandths.
 const STEPS: u64 = 1000;
 
 /// A layout shorter than this shows no bar at all.
 const QUIET_FOR: Duration = Duration::from_secs(1);
+
+/// `NPTREEMAP_PROGRESS_AFTER_MS` overrides [`QUIET_FOR`] (0: a bar from the
+/// start), so that tests of the bar do not depend on how fast the machine is.
+fn quiet_for() -> Duration {
+    std::env::var("NPTREEMAP_PROGRESS_AFTER_MS")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .map_or(QUIET_FOR, Duration::from_millis)
+}
 
 /// A bar attached to one layout request; cleared when dropped.
 pub(crate) struct LayoutBar {
@@ -56,8 +65,9 @@ fn bar_and_sink(what: &str) -> Option<(ProgressBar, ProgressSink)> {
     bar.set_prefix(what.to_string());
     let shown = bar.clone();
     let started = Instant::now();
+    let quiet_for = quiet_for();
     let sink = ProgressSink::new(move |p| {
-        if shown.is_hidden() && started.elapsed() >= QUIET_FOR {
+        if shown.is_hidden() && started.elapsed() >= quiet_for {
             shown.set_draw_target(ProgressDrawTarget::stderr());
         }
         shown.set_message(format!("level {}/{}", p.level, p.levels));

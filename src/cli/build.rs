@@ -9,8 +9,8 @@ use clap::Args;
 
 use super::config_file::ConfigArg;
 use super::progress::LayoutBar;
-use nptreemap::config::Config;
-use nptreemap::pipeline::{self, BuildError};
+use crate::config::Config;
+use crate::pipeline::{self, BuildError};
 
 /// Arguments of `nptreemap build`.
 #[derive(Debug, Args)]
@@ -105,7 +105,7 @@ fn compare_outputs<'a>(built: impl Iterator<Item = &'a pipeline::Built>) -> anyh
     let mut fresh = 0;
     for out in built.flat_map(|b| &b.outputs) {
         // A file that cannot be read is as stale as a missing one.
-        if nptreemap::workspace::read_bytes(&out.path).is_ok_and(|bytes| bytes == out.bytes) {
+        if crate::workspace::read_bytes(&out.path).is_ok_and(|bytes| bytes == out.bytes) {
             fresh += 1;
         } else {
             super::status(format_args!("stale {}", out.path.display()));

@@ -8,9 +8,9 @@ use clap::Args;
 
 use super::progress::LayoutBar;
 use super::{LayoutOptions, UsageError};
-use nptreemap::config::{kind_of, OutputConfig};
-use nptreemap::layout::{Method, Start};
-use nptreemap::pipeline;
+use crate::config::{kind_of, OutputConfig};
+use crate::layout::{Method, Start};
+use crate::pipeline;
 
 /// Arguments of `nptreemap layout`.
 #[derive(Debug, Args)]

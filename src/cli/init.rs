@@ -48,7 +48,7 @@ struct Column {
 
 impl Sniffed {
     fn read(path: &Path) -> anyhow::Result<Sniffed> {
-        let bytes = nptreemap::workspace::read_bytes(path)?;
+        let bytes = crate::workspace::read_bytes(path)?;
         let table =
             read_table(&bytes, None).map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
         let columns = table
@@ -239,7 +239,7 @@ pub(crate) fn run(args: &InitArgs) -> anyhow::Result<()> {
     let yaml = config_text(&tables, &args.output)?;
     // Checked as the build will read it, before anything is written.
     let base = args.output.parent().unwrap_or(Path::new(""));
-    nptreemap::config::Config::from_str(&yaml, base).map_err(|e| {
+    crate::config::Config::from_str(&yaml, base).map_err(|e| {
         anyhow::anyhow!(
             "init wrote a config that does not parse ({e}); please report this:\n{yaml}"
         )

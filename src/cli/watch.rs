@@ -1,4 +1,4 @@
-//! `nptreemap watch [CONFIG]`: runs the daemon ([`nptreemap::daemon`]) until
+//! `nptreemap watch [CONFIG]`: runs the daemon ([`crate::daemon`]) until
 //! SIGINT or SIGTERM, printing one status line per rebuild on stdout. Owns
 //! the signals: SIGHUP reloads the config (as daemons do; the systemd unit's
 //! `ExecReload` sends it); SIGINT and SIGTERM stop the daemon with exit code
@@ -6,7 +6,7 @@
 //! grace period by exiting outright.
 //!
 //! Why exiting outright is safe: every output is written to a temp file and
-//! renamed into place ([`nptreemap::store`]), so a process that ends at any
+//! renamed into place ([`crate::store`]), so a process that ends at any
 //! instant leaves each output either old or new, never torn; the exit waits
 //! for the write lock, so it never falls between two outputs of one dataset;
 //! the temp file of an interrupted write is removed by the next start. What
@@ -22,7 +22,7 @@ use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 
 use super::config_file::ConfigArg;
 
-use nptreemap::daemon::{self, watcher::Message, FirstBuildProgress, Options};
+use crate::daemon::{self, watcher::Message, FirstBuildProgress, Options};
 
 /// Arguments of `nptreemap watch`.
 #[derive(Debug, Args)]
@@ -82,7 +82,7 @@ pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
 /// Ends the process with exit code 0 once no set of outputs is being written
 /// (see the module docs for why this is safe).
 fn exit_now() -> ! {
-    let _writing = nptreemap::store::writing();
+    let _writing = crate::store::writing();
     super::say("stopped (a rebuild under way was abandoned; it is redone at the next start)");
     std::process::exit(0);
 }

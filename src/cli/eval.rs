@@ -12,11 +12,11 @@ use clap::Args;
 
 use super::progress::LayoutBar;
 use super::{LayoutOptions, UsageError};
-use nptreemap::config::DatasetConfig;
-use nptreemap::layout::{Computed, Method, Previous, Request, Start};
-use nptreemap::measure::{stability, table2, EvalMetrics, Stability};
-use nptreemap::pipeline::{self, Rendered};
-use nptreemap::{layout_json, Dataset};
+use crate::config::DatasetConfig;
+use crate::layout::{Computed, Method, Previous, Request, Start};
+use crate::measure::{stability, table2, EvalMetrics, Stability};
+use crate::pipeline::{self, Rendered};
+use crate::{layout_json, Dataset};
 
 /// Arguments of `nptreemap eval`.
 #[derive(Debug, Args)]

@@ -10,9 +10,9 @@ use std::time::Instant;
 use clap::Args;
 
 use super::LayoutOptions;
-use nptreemap::layout::{Method, Start};
-use nptreemap::render::picture;
-use nptreemap::{measure, pipeline};
+use crate::layout::{Method, Start};
+use crate::render::picture;
+use crate::{measure, pipeline};
 
 /// Arguments of `nptreemap bench`.
 #[derive(Debug, Args)]
@@ -107,7 +107,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
             #[cfg(feature = "png")]
             {
                 let t = Instant::now();
-                let png = nptreemap::render::png(&svg, 1.0)?;
+                let png = crate::render::png(&svg, 1.0)?;
                 png_ms.push(t.elapsed().as_secs_f64() * 1000.0);
                 sizes.1 = png.len();
             }

@@ -1,7 +1,13 @@
-//! Subcommands of the binary, one file each, plus what the single-dataset
-//! commands (`layout`, `eval`, `bench`) share: where the data comes from (a
-//! hierarchy JSON file, or a dataset of a config) and the layout flags that
-//! override the config's settings.
+//! The `nptreemap` binary's code (feature `cli`): the argument parser and the
+//! exit codes in `app`, the subcommands one file each, plus what the
+//! single-dataset commands (`layout`, `eval`, `bench`) share: where the data
+//! comes from (a hierarchy JSON file, or a dataset of a config) and the layout
+//! flags that override the config's settings. It lives in the library so that
+//! everything it uses can stay `pub(crate)`; `src/main.rs` only calls
+//! `main`. Not part of the library's API.
+
+mod app;
+pub use app::main;
 
 pub(crate) mod bench;
 pub(crate) mod build;
@@ -18,13 +24,13 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
+use crate::config::{Config, DatasetConfig};
+use crate::layout::{Method, Outline, Previous, Request};
+use crate::neighborhood::SimilarityKind;
+use crate::pipeline::{self, BuildError, Fault, Named};
+use crate::render::Style;
+use crate::Dataset;
 use clap::Args;
-use nptreemap::config::{Config, DatasetConfig};
-use nptreemap::layout::{Method, Outline, Previous, Request};
-use nptreemap::neighborhood::SimilarityKind;
-use nptreemap::pipeline::{self, BuildError, Fault, Named};
-use nptreemap::render::Style;
-use nptreemap::Dataset;
 
 /// Where a single-dataset command's data comes from, and the layout flags.
 #[derive(Debug, Clone, Args)]
@@ -260,7 +266,7 @@ pub(crate) fn exit_code(err: &anyhow::Error) -> u8 {
 /// Whose fault a daemon error is (there is none without the `watch` feature).
 fn daemon_fault(e: &(dyn std::error::Error + 'static)) -> Option<Fault> {
     #[cfg(feature = "watch")]
-    if let Some(d) = e.downcast_ref::<nptreemap::daemon::DaemonError>() {
+    if let Some(d) = e.downcast_ref::<crate::daemon::DaemonError>() {
         return Some(d.fault());
     }
     let _ = e;

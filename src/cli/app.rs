@@ -1,0 +1,95 @@
+//! The `nptreemap` command line: parses arguments, runs one subcommand, and maps
+//! errors to exit codes (2 for bad input or usage, 1 for anything else).
+
+use std::process::ExitCode;
+
+use clap::{CommandFactory, Parser, Subcommand};
+
+/// Neighborhood-preserving Voronoi treemaps.
+#[derive(Debug, Parser)]
+#[command(name = "nptreemap", version, about, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+    /// Print errors only: no status lines of build and check, no notes, no
+    /// progress (watch's status lines and eval's and bench's results stay).
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
+    /// Log more on stderr: -v what each stage does, -vv details (RUST_LOG, when
+    /// set, decides instead).
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    verbose: u8,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Build every output of a YAML config (default: the nearest
+    /// nptreemap.yaml from the working directory upward).
+    Build(super::build::BuildArgs),
+    /// Keep a config's outputs current: rebuild what changes, warm-started,
+    /// until SIGINT or SIGTERM.
+    #[cfg(feature = "watch")]
+    Watch(super::watch::WatchArgs),
+    /// Write a commented nptreemap.yaml for your tables (CSV or TSV): the node
+    /// table and a pairs, vectors or series table, or a genres column.
+    Init(super::init::InitArgs),
+    /// Validate a YAML config and its data without writing anything.
+    Check(super::build::CheckArgs),
+    /// Lay out one hierarchy file and write JSON, SVG, PNG and/or HTML.
+    Layout(super::layout::LayoutArgs),
+    /// Print the paper's Table 2 row (constraints realised, area error, graph
+    /// distance, aspect ratio) for one file and one method or all of them.
+    Eval(super::eval::EvalArgs),
+    /// Time the layout of one file (parsing excluded) and print one JSON line.
+    Bench(super::bench::BenchArgs),
+    /// Print a shell completion script.
+    Completions(super::shell::CompletionsArgs),
+    /// Print the man page (roff).
+    Man,
+}
+
+/// Runs the command line on the process's arguments.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    super::set_quiet(cli.quiet);
+    let level = match (cli.quiet, cli.verbose) {
+        (true, _) => "error",
+        (false, 0) => "warn",
+        (false, 1) => "info",
+        (false, _) => "debug",
+    };
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .init();
+    let result = match cli.command {
+        Command::Build(args) => super::build::build(&args),
+        Command::Check(args) => super::build::check(&args),
+        Command::Init(args) => super::init::run(&args),
+        #[cfg(feature = "watch")]
+        Command::Watch(args) => super::watch::run(&args),
+        Command::Layout(args) => super::layout::run(&args),
+        Command::Eval(args) => super::eval::run(&args),
+        Command::Bench(args) => super::bench::run(&args),
+        Command::Completions(args) => super::shell::completions(&args, Cli::command()),
+        Command::Man => super::shell::man(Cli::command()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            // Our error types already quote their causes; add only what a
+            // context message (e.g. "cannot write") leaves out.
+            let mut message = err.to_string();
+            for cause in err.chain().skip(1) {
+                let text = cause.to_string();
+                if !message.contains(&text) {
+                    message = format!("{message}: {text}");
+                }
+            }
+            eprintln!("error: {message}");
+            ExitCode::from(super::exit_code(&err))
+        }
+    }
+}
