@@ -3,7 +3,7 @@
 //! dataset is first prepared (virtual nodes, aggregation; paper §4) and the
 //! constraints built (method-reference §3); without one, only `plain` runs.
 //! Given a previous layout that fits, the layout starts warm instead
-//! ([`crate::layout::warm`], issue 6), whatever the method.
+//! (`layout::warm`, issue 6), whatever the method.
 
 use std::sync::{Arc, OnceLock};
 

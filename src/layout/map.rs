@@ -33,6 +33,7 @@ pub struct MapSettings {
 #[derive(Clone, Copy, Debug)]
 pub struct MapState<'a> {
     /// True once converged or out of iterations.
+#[cfg_attr(not(any(test, feature = "internals")), allow(dead_code))]
     pub ended: bool,
     /// Ticks done.
     pub iteration_count: usize,
@@ -215,6 +216,7 @@ impl MapSimulation {
     /// optimiser's attraction moves) instead of the Lloyd step: the new
     /// positions, a diagram, a Newton weight step, a diagram. Positions must lie
     /// inside the clip. Counts as a tick but never ends the simulation.
+    #[cfg(any(test, feature = "internals"))]
     pub fn tick_with_positions(&mut self, positions: &[Point]) {
         for (site, p) in self.sites.iter_mut().zip(positions) {
             site.position = *p;

@@ -3,34 +3,41 @@
 //!
 //! A layout is computed top-down: the root gets the outline polygon, then each
 //! internal node's cell is split among its children by a one-level power-diagram
-//! optimisation ([`map`]), run by the recursion in [`treemap`]. A warm layout
-//! ([`warm`]) runs the same recursion from a [`Previous`] layout, given as an
-//! explicit argument ([`Request::previous`]), never kept as hidden state.
+//! optimisation (`map`), run by the recursion in `treemap` ([`layout()`] is
+//! the plain treemap alone; [`compute()`] runs the method the data calls for).
+//! A warm layout (`warm`) runs the same recursion from a [`Previous`] layout,
+//! given as an explicit argument ([`Request::previous`]), never kept as hidden
+//! state.
 
-/// Invariant checks a finished layout must pass.
-pub mod check;
 /// The whole pure layout step: prepare, constraints, method dispatch.
 pub mod compute;
-/// Snapshots of a similarity layout during optimisation, for the HTML slider.
-pub mod frames;
-/// One-level optimiser: Lloyd steps plus weight adaptation towards target areas.
-pub mod map;
 /// Which layout strategy runs.
 pub mod method;
-/// Similarity-driven layouts: initialisation, baselines, joint optimisation.
-pub mod neighbor;
 /// Run parameters and their defaults.
 pub mod params;
 /// The previous layout of a dataset, keyed by node id: a warm start's input.
 pub mod previous;
 /// Progress reports and the stop they can ask for.
 pub mod progress;
-/// Start positions and weights for one diagram.
-pub mod seed;
-/// Top-down recursion over the hierarchy.
-pub mod treemap;
-/// The warm layout: start every diagram from the previous layout, settle areas.
-pub mod warm;
+
+// The stages of the optimiser: crate-private (see `internal!` in lib.rs); what
+// the API needs of them is re-exported below.
+internal! {
+    /// Invariant checks a finished layout must pass.
+    mod check;
+    /// Snapshots of a similarity layout during optimisation, for the HTML slider.
+    mod frames;
+    /// One-level optimiser: Lloyd steps plus weight adaptation towards target areas.
+    mod map;
+    /// Similarity-driven layouts: initialisation, baselines, joint optimisation.
+    mod neighbor;
+    /// Start positions and weights for one diagram.
+    mod seed;
+    /// Top-down recursion over the hierarchy.
+    mod treemap;
+    /// The warm layout: start every diagram from the previous layout, settle areas.
+    mod warm;
+}
 
 use crate::geom::shared_edge::extent_diagonal;
 use crate::geom::{level_adjacency, ConvexPolygon, LevelAdjacency, Point};
@@ -129,7 +136,7 @@ impl Layout {
         )
     }
 
-    /// Checks every invariant of a finished layout against its dataset; see [`check`].
+    /// Checks every invariant of a finished layout against its dataset; see `layout::check`.
     pub fn sanity_check(&self, dataset: &Dataset) -> Result<(), SanityError> {
         check::sanity_check(self, dataset)
     }

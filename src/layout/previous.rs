@@ -2,7 +2,7 @@
 //! warm start (issue 6, "warm start as in stable treemaps"). Owns the model and
 //! the decision whether a previous layout fits a new run; may not read files
 //! or parse text (the layout-JSON reader is `crate::previous`, at the edge) and
-//! does not lay anything out (that is [`crate::layout::warm`]).
+//! does not lay anything out (that is `layout::warm`).
 //!
 //! Nodes are matched by id, never by index: a new dataset may add, drop or
 //! reorder nodes. A node *survives* when the previous layout has its id under

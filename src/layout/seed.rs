@@ -10,6 +10,7 @@ use crate::rng::Rng;
 
 /// `n` positions uniformly at random inside `clip` (d3-voronoi-map's default
 /// `initialPosition` policy), reproducible from `rng`.
+#[cfg(any(test, feature = "internals"))]
 pub fn random_positions(clip: &ConvexPolygon, n: usize, rng: &mut Rng) -> Vec<Point> {
     (0..n)
         .map(|_| clip.sample(rng.next_f64(), rng.next_f64()))

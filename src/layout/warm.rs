@@ -63,6 +63,7 @@ struct WarmStart {
 /// Lays `dataset` out starting from `previous`; see the module doc. The caller
 /// has checked [`Previous::fits`]. `similarity` places new nodes; without it
 /// they start beside the parent's centroid.
+#[cfg(any(test, feature = "internals"))]
 pub fn layout_warm(
     dataset: &Dataset,
     params: &Params,

@@ -12,6 +12,8 @@
 //! - `assemble`: per-cell state, output cells, neighbour symmetry.
 
 mod assemble;
+// Invariant checks of a diagram, for the tests and the repository's tools.
+#[cfg(any(test, feature = "internals"))]
 mod check;
 mod clip;
 mod fast;

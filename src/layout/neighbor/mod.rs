@@ -56,7 +56,7 @@ use crate::geom::{ConvexPolygon, Point};
 use crate::neighborhood::{projection, Constraint};
 use nptreemap_formats::Dataset;
 
-pub use params::{NeighborParams, CENTROID_PULL, SHAPE_WEIGHT};
+pub use params::NeighborParams;
 
 /// Candidates per level followed down the tree when looking ahead.
 const LOOKAHEAD_CANDIDATES: usize = 3;
@@ -90,6 +90,7 @@ pub fn projection_of(dataset: &Dataset, similarity: impl Fn(usize, usize) -> f64
 /// Lays out a prepared dataset (uniform depth) with a similarity-driven method.
 /// `constraints` are those of `neighborhood::build_constraints`;
 /// `projection` has one point per node (see [`projection_of`]).
+#[cfg(any(test, feature = "internals"))]
 pub fn layout_similar(
     dataset: &Dataset,
     constraints: &[Constraint],

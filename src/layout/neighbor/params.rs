@@ -34,11 +34,11 @@ pub struct NeighborParams {
     pub lookahead_max_nodes: usize,
     /// What shape costs in a level's score: each cell's bounding-box aspect
     /// ratio above 1 counts this many constraints against it (issue 12: long
-    /// cells cannot hold a label). Default: see [`SHAPE_WEIGHT`].
+    /// cells cannot hold a label). Default: 0.25.
     pub shape_weight: f64,
     /// Share of the way to its cell's centroid every site goes each tick,
     /// besides its attraction move: the pull that keeps cells round. 0 turns
-    /// it off. Default: see [`CENTROID_PULL`].
+    /// it off. Default: 0.1.
     pub centroid_pull: f64,
     /// Run the paper prototype's optimiser instead of ours (method-reference
     /// §5): 151 ticks, weights held at the CVT's until t = 105 and then grown
@@ -48,7 +48,7 @@ pub struct NeighborParams {
     /// area error is the prototype's too. Default: false.
     pub prototype: bool,
     /// Frames per level recorded while optimising, for the HTML page's
-    /// slider (see [`crate::layout::frames`]); 0 records none. Recording does not
+    /// slider (see [`crate::layout::Frame`]); 0 records none. Recording does not
     /// change the layout. Default: 0.
     pub frames: usize,
 }
@@ -77,10 +77,10 @@ impl Default for NeighborParams {
 /// unit of aspect above 1 (issue 12: long cells cannot hold a label). What
 /// other values trade, constraints realised against leaf aspect, is the
 /// table of `examples/pareto.rs` in BENCHMARKS.md.
-pub const SHAPE_WEIGHT: f64 = 0.25;
+pub(crate) const SHAPE_WEIGHT: f64 = 0.25;
 
 /// Default [`NeighborParams::centroid_pull`]; see [`SHAPE_WEIGHT`].
-pub const CENTROID_PULL: f64 = 0.1;
+pub(crate) const CENTROID_PULL: f64 = 0.1;
 
 /// Distance constants as shares of the level's unit length, the square root of
 /// its mean cell area. Derived from the prototype's pixels (method-reference
