@@ -8,10 +8,14 @@
 //! Why: the all-pairs scan is the one `O(n²·d)` step of the method. On a
 //! 100,000-leaf level it took 44.8 s of the whole method's 75 s, most of it not in
 //! the dot products but in storing each f64 row (0.8 MB per row) and reading it
-//! back to bin it. Here a row is binned as it is computed, from a histogram of its
-//! scores and a small head per score, and the kernel does twice the pairs per
-//! instruction in f32 (BENCHMARKS.md, "Constraints through an f32 filter").
-//! Written by hand: no crate does filtered exact binning.
+//! back to bin it. Here a row is binned as it is computed: AVX2 turns each block
+//! of 16 f32 dot products into scores and a mask of the pairs that need a closer
+//! look, the rest are only counted in the row's histogram of scores, and per score
+//! only the few candidates that may still be among its best are kept; their exact
+//! similarities are computed at the end, for the top scores of each bin alone.
+//! The kernel does twice the pairs per instruction in f32 (BENCHMARKS.md,
+//! "Constraints through an f32 filter"). Written by hand: no crate does filtered
+//! exact binning.
 
 use super::constraints::{bin_table, Bin, Bins, Candidate, BIN_HEAD};
 use super::similarity::{pair_similarity, score, NodeFeatures, SimilarityKind};
