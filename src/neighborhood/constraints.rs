@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 use nptreemap_formats::Dataset;
 use rayon::prelude::*;
 
+use super::dot_kernel::kernel;
 use super::filtered_rows::{Filter, RowState};
 use super::similarity::{
     clamp_unit, cosine_from_parts, norm_of, pair_similarity, score, NodeFeatures, SimilarityKind,
@@ -184,7 +185,7 @@ impl Transposed {
             r += KERNEL_ROWS;
         }
         for (a, row) in acc[r..].iter_mut().zip(&rows[r..]) {
-            *a = kernel::<1>(&[row], columns)[0];
+            *a = kernel::<f64, 1, LANES>(&[row], columns)[0];
         }
     }
 }
@@ -192,24 +193,6 @@ impl Transposed {
 /// Rows one kernel call sums at once: 4 rows × 8 lanes are 8 AVX registers.
 const KERNEL_ROWS: usize = 4;
 
-/// `R` rows' dot products with one block's `columns` (`d` chunks of [`LANES`]).
-#[inline(always)]
-fn kernel<const R: usize>(rows: &[&[f64]; R], columns: &[f64]) -> [[f64; LANES]; R] {
-    let mut acc = [[0.0f64; LANES]; R];
-    let d = columns.len() / LANES;
-    // Sliced to `d` up front so the loop below has no bounds checks to spill for.
-    let rows: [&[f64]; R] = rows.map(|row| &row[..d]);
-    for (k, column) in columns.chunks_exact(LANES).enumerate() {
-        let column: &[f64; LANES] = column.try_into().expect("invariant: chunks of LANES");
-        for r in 0..R {
-            let x = rows[r][k];
-            for lane in 0..LANES {
-                acc[r][lane] += x * column[lane];
-            }
-        }
-    }
-    acc
-}
 
 /// [`kernel`] compiled for AVX where the CPU has it (checked once per call by
 /// the standard library's cached detection), else for the baseline. AVX's
@@ -222,7 +205,7 @@ fn kernel_dispatch(rows: &[&[f64]; KERNEL_ROWS], columns: &[f64]) -> [[f64; LANE
             return unsafe { kernel_avx(rows, columns) };
         }
     }
-    kernel::<KERNEL_ROWS>(rows, columns)
+    kernel::<f64, KERNEL_ROWS, LANES>(rows, columns)
 }
 
 /// [`kernel`] in AVX intrinsics: the four rows' eight sums stay in eight

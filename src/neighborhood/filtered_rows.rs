@@ -18,6 +18,7 @@
 //! exact binning.
 
 use super::constraints::{bin_table, Bin, Bins, Candidate, BIN_HEAD};
+use super::dot_kernel::kernel;
 use super::similarity::{pair_similarity, score, NodeFeatures, SimilarityKind};
 
 /// Lanes per column block: two AVX registers of f32.
@@ -364,26 +365,8 @@ unsafe fn classify_avx2(
     mask
 }
 
-/// `R` rows' dot products with one block's `columns` (`d` chunks of [`LANES`]),
-/// each lane summed left to right from 0.
-#[inline(always)]
-fn kernel<const R: usize>(rows: &[&[f32]; R], columns: &[f32]) -> [[f32; LANES]; R] {
-    let mut acc = [[0.0f32; LANES]; R];
-    let d = columns.len() / LANES;
-    let rows: [&[f32]; R] = rows.map(|row| &row[..d]);
-    for (k, column) in columns.chunks_exact(LANES).enumerate() {
-        let column: &[f32; LANES] = column.try_into().expect("invariant: chunks of LANES");
-        for r in 0..R {
-            let x = rows[r][k];
-            for lane in 0..LANES {
-                acc[r][lane] += x * column[lane];
-            }
-        }
-    }
-    acc
-}
 
-/// [`kernel`] in AVX where the CPU has it. The choice changes no output: the
+/// The dot-product kernel in AVX where the CPU has it. The choice changes no output: the
 /// filter's bound holds for either, and every decision near it is exact.
 fn kernel_dispatch(rows: &[&[f32]; KERNEL_ROWS], columns: &[f32]) -> [[f32; LANES]; KERNEL_ROWS] {
     #[cfg(target_arch = "x86_64")]
@@ -393,10 +376,10 @@ fn kernel_dispatch(rows: &[&[f32]; KERNEL_ROWS], columns: &[f32]) -> [[f32; LANE
             return unsafe { kernel_avx(rows, columns) };
         }
     }
-    kernel::<KERNEL_ROWS>(rows, columns)
+    kernel::<f32, KERNEL_ROWS, LANES>(rows, columns)
 }
 
-/// [`kernel`] in AVX intrinsics, the eight sums in eight registers.
+/// The kernel in AVX intrinsics, the eight sums in eight registers.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
 unsafe fn kernel_avx(rows: &[&[f32]; KERNEL_ROWS], columns: &[f32]) -> [[f32; LANES]; KERNEL_ROWS] {

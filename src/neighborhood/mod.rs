@@ -6,6 +6,8 @@
 //! Pure: no I/O.
 /// Binning and filtering of similarities into constraints (stages A to E).
 pub mod constraints;
+/// The portable dot-product kernel of the dense similarity rows.
+mod dot_kernel;
 /// Exact bins of dense cosine and Pearson rows through an f32 filter.
 mod filtered_rows;
 /// Assignment: Kuhn–Munkres, and recursive bisection for large groups.
