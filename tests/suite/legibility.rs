@@ -468,32 +468,14 @@ fn pictures() -> Vec<(String, PathBuf)> {
     // Every example, with its own config (titles, outlines, border).
     let config = dir.join("examples/nptreemap.yaml");
     copy_dir(&root.join("examples"), &dir.join("examples"));
-    let run = support::bin()
-        .arg("build")
-        .arg(&config)
-        .output()
-        .expect("run nptreemap build");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    support::build(&config);
     for name in ["countries", "movies", "foods", "stocks", "world"] {
         out.push((
             name.to_owned(),
             dir.join(format!("examples/out/{name}.svg")),
         ));
     }
-    let run = support::bin()
-        .arg("build")
-        .arg(dir.join("examples/countries/nptreemap.yaml"))
-        .output()
-        .expect("run nptreemap build");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    support::build(&dir.join("examples/countries/nptreemap.yaml"));
     out.push((
         "countries (n-gon)".to_owned(),
         dir.join("examples/countries/out/countries.svg"),
@@ -526,16 +508,7 @@ fn pictures() -> Vec<(String, PathBuf)> {
     for name in ["debian-packages", "python-stdlib", "man-pages", "usr-bin"] {
         let to = dir.join("real").join(name);
         copy_dir(&root.join("tests/data/real").join(name), &to);
-        let run = support::bin()
-            .arg("build")
-            .arg(to.join("nptreemap.yaml"))
-            .output()
-            .expect("run nptreemap build");
-        assert!(
-            run.status.success(),
-            "{name}: {}",
-            String::from_utf8_lossy(&run.stderr)
-        );
+        support::build(&to.join("nptreemap.yaml"));
         out.push((name.to_owned(), to.join(format!("out/{name}.svg"))));
     }
     out

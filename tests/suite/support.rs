@@ -45,6 +45,22 @@ pub(crate) fn example(name: &str, tag: &str) -> PathBuf {
     dir.join("nptreemap.yaml")
 }
 
+/// Runs `nptreemap build CONFIG` and asserts success.
+pub(crate) fn build(config: &Path) -> Output {
+    let out = bin()
+        .arg("build")
+        .arg(config)
+        .output()
+        .expect("run nptreemap");
+    assert!(
+        out.status.success(),
+        "nptreemap build {} failed: {}",
+        config.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 /// Runs `nptreemap layout INPUT --out ...` and asserts success.
 pub(crate) fn layout(input: &Path, outs: &[&Path], extra: &[&str]) -> Output {
     let mut cmd = bin();
