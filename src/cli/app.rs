@@ -34,6 +34,10 @@ enum Command {
     /// table and a pairs, vectors or series table, or a genres column.
     Init(super::init::InitArgs),
     /// Validate a YAML config and its data without writing anything.
+    ///
+    /// Reading the data runs the `command:` of every `format: exec` dataset,
+    /// as `build` does: check only configs you trust (without CONFIG, the
+    /// nearest nptreemap.yaml from the working directory upward is used).
     Check(super::build::CheckArgs),
     /// Lay out one hierarchy file and write JSON, SVG, PNG and/or HTML.
     Layout(super::layout::LayoutArgs),
@@ -46,6 +50,27 @@ enum Command {
     Completions(super::shell::CompletionsArgs),
     /// Print the man page (roff).
     Man,
+}
+
+/// SIGINT and SIGTERM still end the process as they would, but first kill
+/// the exec adapters it runs: each runs in a process group of its own, which
+/// neither a signal to nptreemap nor the terminal's Ctrl-C reaches. (`watch`
+/// stops its daemon, and its adapters, itself.)
+fn stop_adapters_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        tracing::warn!(
+            "cannot handle SIGINT and SIGTERM: a stop signal may leave an adapter running"
+        );
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            crate::exec::shut_down();
+            let _ = signal_hook::low_level::emulate_default_handler(signal);
+            std::process::exit(128 + signal);
+        }
+    });
 }
 
 /// Runs the command line on the process's arguments.
@@ -64,6 +89,13 @@ pub fn main() -> ExitCode {
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
         .init();
+    #[cfg(feature = "watch")]
+    let stops_itself = matches!(cli.command, Command::Watch(_));
+    #[cfg(not(feature = "watch"))]
+    let stops_itself = false;
+    if !stops_itself {
+        stop_adapters_on_signals();
+    }
     let result = match cli.command {
         Command::Build(args) => super::build::build(&args),
         Command::Check(args) => super::build::check(&args),

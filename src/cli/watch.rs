@@ -54,6 +54,8 @@ pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
                     continue;
                 }
                 let again = stop.swap(true, Ordering::SeqCst);
+                // Adapters run in process groups of their own: stop them too.
+                crate::exec::shut_down();
                 let _ = tx.send(Message::Stop);
                 if again {
                     // A second stop signal: no more waiting.

@@ -238,6 +238,8 @@ pub fn run(
         daemon.apply(work);
         daemon.report_settled();
     }
+    // No adapter outlives the daemon.
+    crate::exec::terminate_all();
     (daemon.report)(Status::Stopped);
     Ok(())
 }
