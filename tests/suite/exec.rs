@@ -7,13 +7,12 @@
 //! running after a timeout or a stop signal, and output read up to a cap in
 //! bounded memory.
 
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Stdio};
-use std::sync::mpsc::{channel, Receiver, RecvTimeoutError};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use crate::support;
+use crate::watch::Daemon;
 
 fn build(config: &std::path::Path) -> std::process::Output {
     support::bin()
@@ -61,19 +60,46 @@ fn the_example_adapter_builds_a_checker_clean_layout() {
 #[test]
 fn a_failing_adapter_names_the_command_and_quotes_its_stderr() {
     let dir = support::temp_dir("exec_failing");
-    std::fs::write(dir.join("data.txt"), "x\n").expect("data");
+    std::fs::write(dir.join("my data.txt"), "x\n").expect("data");
     std::fs::write(
         dir.join("nptreemap.yaml"),
-        "datasets:\n  - name: mine\n    format: exec\n    command: [sh, -c, 'echo \"row 7 is bad\" >&2; exit 4', adapter]\n    files: {data: data.txt}\n    outputs: [{path: out/a.svg}]\n",
+        "datasets:\n  - name: mine\n    format: exec\n    command: [sh, -c, 'echo \"row 7 is bad\" >&2; exit 4', adapter]\n    files: {data: my data.txt}\n    outputs: [{path: out/a.svg}]\n",
     )
     .expect("config");
     let out = build(&dir.join("nptreemap.yaml"));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("dataset \"mine\": `sh -c"), "{stderr}");
     assert!(stderr.contains("failed (exit status: 4)"), "{stderr}");
     assert!(stderr.contains("row 7 is bad"), "{stderr}");
     assert!(!dir.join("out").exists(), "nothing is written");
+    // The whole command line, as a user can paste it into a shell in the
+    // config's folder: a shell (here Python's POSIX shlex) splits it into
+    // the command and its file.
+    let shown = stderr
+        .split_once("dataset \"mine\": `")
+        .and_then(|(_, rest)| rest.split_once('`'))
+        .map(|(line, _)| line)
+        .unwrap_or_else(|| panic!("no command line in {stderr}"));
+    let words = std::process::Command::new("python3")
+        .args([
+            "-c",
+            "import json, shlex, sys; print(json.dumps(shlex.split(sys.argv[1])))",
+        ])
+        .arg(shown)
+        .output()
+        .expect("python3");
+    let words: Vec<String> = serde_json::from_slice(&words.stdout).expect("words");
+    assert_eq!(
+        words,
+        [
+            "sh",
+            "-c",
+            "echo \"row 7 is bad\" >&2; exit 4",
+            "adapter",
+            "my data.txt"
+        ],
+        "{shown}"
+    );
 }
 
 #[test]
@@ -221,81 +247,19 @@ fn an_out_of_range_timeout_is_a_config_error_naming_file_line_and_range() {
     }
 }
 
-/// `nptreemap watch` on a config, its status lines on a channel; killed on drop.
-struct Watch {
-    child: Child,
-    lines: Receiver<String>,
-    seen: Vec<String>,
-}
-
-impl Watch {
-    fn start(config: &Path) -> Self {
-        let mut child = support::bin()
-            .arg("watch")
-            .arg(config)
-            .stdout(Stdio::piped())
-            .stderr(std::fs::File::create(config.with_extension("log")).expect("log"))
-            .spawn()
-            .expect("start nptreemap watch");
-        let stdout = child.stdout.take().expect("piped stdout");
-        let (tx, lines) = channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stdout).lines() {
-                let Ok(line) = line else { break };
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
-        });
-        Watch {
-            child,
-            lines,
-            seen: Vec::new(),
+/// Sends `signal` to `watch` and waits (at most 30 s) for it to end.
+fn stop(watch: &mut Daemon, signal: libc::c_int) -> std::process::ExitStatus {
+    unsafe { libc::kill(watch.child.id() as libc::pid_t, signal) };
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        if let Some(status) = watch.child.try_wait().expect("wait") {
+            return status;
         }
-    }
-
-    /// Waits (at most two minutes) for a status line holding every one of `parts`.
-    fn expect(&mut self, parts: &[&str]) -> String {
-        let deadline = Instant::now() + Duration::from_secs(120);
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.lines.recv_timeout(left) {
-                Ok(line) => {
-                    self.seen.push(line.clone());
-                    if parts.iter().all(|p| line.contains(p)) {
-                        return line;
-                    }
-                }
-                Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => panic!(
-                    "no status line with {parts:?} (exit: {:?}); lines so far:\n{}",
-                    self.child.try_wait(),
-                    self.seen.join("\n")
-                ),
-            }
-        }
-    }
-
-    /// Sends `signal` and waits (at most 30 s) for the daemon to end.
-    fn stop(&mut self, signal: libc::c_int) -> std::process::ExitStatus {
-        unsafe { libc::kill(self.child.id() as libc::pid_t, signal) };
-        let deadline = Instant::now() + Duration::from_secs(30);
-        loop {
-            if let Some(status) = self.child.try_wait().expect("wait") {
-                return status;
-            }
-            assert!(
-                Instant::now() < deadline,
-                "watch still runs 30 s after a stop signal"
-            );
-            std::thread::sleep(Duration::from_millis(50));
-        }
-    }
-}
-
-impl Drop for Watch {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        assert!(
+            Instant::now() < deadline,
+            "watch still runs 30 s after a stop signal"
+        );
+        std::thread::sleep(Duration::from_millis(50));
     }
 }
 
@@ -313,7 +277,7 @@ fn watch_reports_an_out_of_range_timeout_as_a_status_line_and_goes_on() {
         .replace("files: {}", "files: {data: data.txt}");
     std::fs::write(&config, &text).expect("config");
     std::fs::write(dir.join("data.txt"), "1\n").expect("data");
-    let mut watch = Watch::start(&config);
+    let mut watch = Daemon::start(&config);
     watch.expect(&["mine: start", "wrote a.svg"]);
     std::fs::write(&config, text.replace("timeout: 30", "timeout: 1e20")).expect("edit");
     watch.expect(&[
@@ -326,7 +290,7 @@ fn watch_reports_an_out_of_range_timeout_as_a_status_line_and_goes_on() {
     // Still running, and still building with the previous config.
     std::fs::write(dir.join("data.txt"), "2\n").expect("data edit");
     watch.expect(&["mine: data", "a.svg"]);
-    assert_eq!(watch.stop(libc::SIGTERM).code(), Some(0));
+    assert_eq!(stop(&mut watch, libc::SIGTERM).code(), Some(0));
 }
 
 #[test]
@@ -464,13 +428,13 @@ fn a_stop_signal_to_build_stops_the_adapters_group() {
 #[test]
 fn a_stop_signal_to_watch_stops_the_adapters_group() {
     let (dir, config) = adapter_dir("exec_sigterm_watch", LINGERING, "    timeout: 100\n", "");
-    let mut watch = Watch::start(&config);
+    let mut watch = Daemon::start(&config);
     let _reap = Reap(dir.clone());
     let pids = [
         pid_in(&dir.join("adapter.pid")),
         pid_in(&dir.join("bg.pid")),
     ];
-    assert_eq!(watch.stop(libc::SIGTERM).code(), Some(0));
+    assert_eq!(stop(&mut watch, libc::SIGTERM).code(), Some(0));
     assert_gone(&pids, "after watch's SIGTERM");
 }
 
@@ -494,41 +458,6 @@ fn the_example_builds_from_another_folder() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(dir.join("out/sources.svg").is_file());
-}
-
-#[test]
-fn the_error_shows_the_whole_command_line_quoted_as_a_shell_would() {
-    let dir = support::temp_dir("exec_argv");
-    std::fs::write(dir.join("my data.txt"), "x\n").expect("data");
-    std::fs::write(
-        dir.join("nptreemap.yaml"),
-        "datasets:\n  - name: mine\n    format: exec\n    command: [sh, -c, 'echo bad >&2; exit 3', adapter]\n    files: {data: my data.txt}\n    outputs: [out/a.svg]\n",
-    )
-    .expect("config");
-    let out = build(&dir.join("nptreemap.yaml"));
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{stderr}");
-    // What a user can paste into a shell in the config's folder: a shell
-    // (here Python's POSIX shlex) splits it into the command and its file.
-    let shown = stderr
-        .split_once("dataset \"mine\": `")
-        .and_then(|(_, rest)| rest.split_once('`'))
-        .map(|(line, _)| line)
-        .unwrap_or_else(|| panic!("no command line in {stderr}"));
-    let words = std::process::Command::new("python3")
-        .args([
-            "-c",
-            "import json, shlex, sys; print(json.dumps(shlex.split(sys.argv[1])))",
-        ])
-        .arg(shown)
-        .output()
-        .expect("python3");
-    let words: Vec<String> = serde_json::from_slice(&words.stdout).expect("words");
-    assert_eq!(
-        words,
-        ["sh", "-c", "echo bad >&2; exit 3", "adapter", "my data.txt"],
-        "{shown}"
-    );
 }
 
 #[test]

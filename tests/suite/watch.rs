@@ -69,14 +69,15 @@ const CONFIG: &str = "datasets:
 ";
 
 /// The running daemon: its status lines arrive on a channel; killed on drop.
-struct Daemon {
-    child: Child,
+/// (`exec` drives it too.)
+pub(crate) struct Daemon {
+    pub(crate) child: Child,
     lines: Receiver<String>,
     seen: Vec<String>,
 }
 
 impl Daemon {
-    fn start(config: &Path) -> Self {
+    pub(crate) fn start(config: &Path) -> Self {
         let mut child = support::bin()
             .arg("watch")
             .arg(config)
@@ -103,7 +104,7 @@ impl Daemon {
     }
 
     /// Waits for the next status line containing every one of `parts`.
-    fn expect(&mut self, parts: &[&str]) -> String {
+    pub(crate) fn expect(&mut self, parts: &[&str]) -> String {
         let deadline = Instant::now() + Duration::from_secs(120);
         loop {
             let left = deadline.saturating_duration_since(Instant::now());
