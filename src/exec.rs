@@ -259,12 +259,12 @@ impl Adapter {
 }
 
 impl Drop for Adapter {
-    /// On every way out (an early return, a panic): nothing is left running.
+    /// On every way out (an early return, a panic): nothing is left running,
+    /// and the leader is reaped (no zombie piles up in a long `watch`; a
+    /// second wait returns the status already taken).
     fn drop(&mut self) {
-        if !self.ended {
-            self.end_group();
-            let _ = self.child.wait();
-        }
+        self.end_group();
+        let _ = self.child.wait();
     }
 }
 
@@ -735,6 +735,29 @@ mod tests {
                 "{script}: {e}"
             );
         }
+    }
+
+    #[test]
+    fn an_adapter_stopped_at_the_cap_is_reaped() {
+        let pids = pid_file("reaped.pid");
+        let one = Bounds {
+            timeout: 20 * SECOND,
+            max_mb: 1,
+        };
+        let e = run(
+            &sh("echo $$ > \"$1\"; exec yes"),
+            std::slice::from_ref(&pids),
+            Path::new("/"),
+            one,
+        )
+        .expect_err("over the cap");
+        assert!(matches!(e, ExecError::TooLarge { .. }), "{e}");
+        // Reaped: not even a zombie is left (a long `watch` would pile them up).
+        let pid = pid_in(&pids);
+        assert!(
+            !Path::new(&format!("/proc/{pid}")).exists(),
+            "the adapter {pid} was not reaped"
+        );
     }
 
     #[test]
