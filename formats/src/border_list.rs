@@ -1,4 +1,4 @@
-//! The border-list format: a node table (see [`crate::table`]) plus a pair list
+//! The border-list format: a node table (see [`crate::node_table`]) plus a pair list
 //! saying which nodes are neighbours, e.g. countries that share a land border.
 //! Owns the pair-list columns and how pairs become symmetric relations.
 //!
@@ -20,7 +20,8 @@ use std::collections::HashMap;
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
-use crate::table::{node_tree, read_table, Table, TableTree, NODES_ROLE};
+use crate::node_table::{node_tree, TableTree, NODES_ROLE};
+use crate::table::{read_table, Table};
 use crate::warning::Warning;
 
 /// The border-list [`Format`] (name `border-list`, inputs `nodes` and `pairs`).

@@ -1,4 +1,4 @@
-//! The embedding-matrix format: a node table (see [`crate::table`]) plus one feature
+//! The embedding-matrix format: a node table (see [`crate::node_table`]) plus one feature
 //! vector per leaf, compared by cosine similarity. Owns the vector file's layout,
 //! header detection and the checks that make cosine defined.
 //!
@@ -28,8 +28,9 @@ use crate::dataset::{ModelError, FEATURE_BOUND};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 use crate::limits::{Limit, Limits};
+use crate::node_table::{node_tree, TableTree, NODES_ROLE};
 use crate::npy::{is_npy, read_npy, Matrix};
-use crate::table::{node_tree, read_rows, read_rows_capped, Row, RowCap, TableTree, NODES_ROLE};
+use crate::table::{read_rows, read_rows_capped, Row, RowCap};
 use crate::warning::Warning;
 
 /// The embedding-matrix [`Format`] (name `embedding-matrix`, inputs `nodes` and

@@ -42,13 +42,15 @@ pub mod genre_table;
 pub mod hierarchy_json;
 /// [`Limits`]: how large an input the readers accept.
 pub mod limits;
+/// Node tables → hierarchies (grouping, path or parent columns).
+pub mod node_table;
 /// NumPy `.npy` matrices (embedding vectors saved by `numpy.save`).
 pub mod npy;
 /// The list of formats, looked up by name.
 pub mod registry;
 /// "Did you mean" hints for misspelt names.
 pub mod suggest;
-/// CSV/TSV rows with positions, and node tables → hierarchies.
+/// CSV/TSV rows with positions, and tables with a header.
 pub mod table;
 /// Time series: a node table plus values by date, compared by Pearson correlation.
 pub mod time_series;

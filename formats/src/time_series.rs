@@ -1,4 +1,4 @@
-//! The time-series format: a node table (see [`crate::table`]) plus a table of values
+//! The time-series format: a node table (see [`crate::node_table`]) plus a table of values
 //! by date and id, compared by Pearson correlation (the paper's stock example). Owns
 //! the series table's layout, missing values and the checks that make correlation
 //! defined.
@@ -27,7 +27,8 @@ use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 use crate::limits::Limit;
-use crate::table::{node_tree, read_table_capped, RowCap, Table, TableTree, NODES_ROLE};
+use crate::node_table::{node_tree, TableTree, NODES_ROLE};
+use crate::table::{read_table_capped, RowCap, Table};
 use crate::warning::Warning;
 
 /// The time-series [`Format`] (name `time-series`, inputs `nodes` and `series`).

@@ -5,7 +5,8 @@
 //! `data/countries.csv` holds 31 real countries (2023 populations, rounded) on four
 //! continents; the expected counts below were counted by hand from the file.
 
-use nptreemap_formats::table::{read_rows, read_table, tree_from_table};
+use nptreemap_formats::node_table::tree_from_table;
+use nptreemap_formats::table::{read_rows, read_table};
 use nptreemap_formats::{Dataset, FormatError, FormatOptions};
 
 const COUNTRIES: &[u8] = include_bytes!("data/countries.csv");
