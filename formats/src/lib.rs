@@ -40,6 +40,8 @@ pub mod format;
 pub mod genre_table;
 /// The paper's hierarchy JSON and d3-hierarchy style JSON.
 pub mod hierarchy_json;
+/// Positions in JSON text, for the hierarchy JSON reader's errors.
+mod json_path;
 /// [`Limits`]: how large an input the readers accept.
 pub mod limits;
 /// Node tables → hierarchies (grouping, path or parent columns).
