@@ -30,7 +30,7 @@ use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role
 use crate::limits::{Limit, Limits};
 use crate::node_table::{node_tree, TableTree, NODES_ROLE};
 use crate::npy::{is_npy, read_npy, Matrix};
-use crate::table::{read_rows, read_rows_capped, Row, RowCap};
+use crate::table::{read_rows_capped, Row, RowCap};
 use crate::warning::Warning;
 
 /// The embedding-matrix [`Format`] (name `embedding-matrix`, inputs `nodes` and
@@ -70,9 +70,9 @@ impl Format for EmbeddingMatrix {
         let in_vectors = |error| InputError::new("vectors", error);
         let mut tree = node_tree(inputs, options)?;
         if is_npy(vectors) {
-            let matrix = read_npy(vectors).map_err(in_vectors)?;
+            let matrix = read_npy(vectors, &options.limits).map_err(in_vectors)?;
             let owners = matrix_owners(&tree, &matrix, inputs.get("ids"), options)?;
-            add_matrix(&mut tree, &matrix, &owners).map_err(in_vectors)?;
+            add_matrix(&mut tree, matrix, &owners).map_err(in_vectors)?;
         } else {
             if inputs.get("ids").is_some() {
                 return Err(InputError::new(
@@ -245,7 +245,7 @@ fn zero_vector(line: Option<usize>, what: &str) -> FormatError {
 #[allow(clippy::result_large_err)] // InputError's shape is the Format API's
 fn matrix_owners(
     tree: &TableTree,
-    matrix: &Matrix,
+    matrix: &Matrix<'_>,
     ids: Option<&[u8]>,
     options: &FormatOptions,
 ) -> Result<Vec<usize>, InputError> {
@@ -273,7 +273,9 @@ fn matrix_owners(
         return Ok(rows);
     };
     let in_ids = |error| InputError::new("ids", error);
-    let rows = read_rows(ids, options.delimiter).map_err(in_ids)?;
+    // One id per matrix row, plus an optional header.
+    let cap = RowCap::new(options.limits, Limit::Nodes, 1, "ids");
+    let rows = read_rows_capped(ids, options.delimiter, Some(cap)).map_err(in_ids)?;
     // A first line that names no node is a header (`id`); a typo there shows in
     // the count, and the message says it was taken for one.
     let header = rows
@@ -323,26 +325,45 @@ fn matrix_owners(
         .collect()
 }
 
-/// Sets row `i` of the matrix as the features of node `owners[i]`.
-fn add_matrix(tree: &mut TableTree, matrix: &Matrix, owners: &[usize]) -> Result<(), FormatError> {
-    for (i, &index) in owners.iter().enumerate() {
-        let row = matrix.row(i);
-        let what = format!("matrix row {} (node {:?})", i + 1, tree.specs[index].id);
+/// Sets row `i` of the matrix as the features of node `owners[i]`, with the
+/// checks of a CSV row (finite values within [`FEATURE_BOUND`], not all zero).
+/// The rows are decoded once, into the vectors the nodes keep.
+fn add_matrix(
+    tree: &mut TableTree,
+    matrix: Matrix<'_>,
+    owners: &[usize],
+) -> Result<(), FormatError> {
+    for (i, (row, &index)) in matrix.into_rows().into_iter().zip(owners).enumerate() {
+        let what = || format!("matrix row {} (node {:?})", i + 1, tree.specs[index].id);
         if let Some(j) = row.iter().position(|v| !v.is_finite()) {
             return Err(FormatError::Structure {
                 line: None,
                 column: None,
                 message: format!(
-                    "{what}, column {}: {}; every value must be a finite number",
+                    "{}, column {}: {}; every value must be a finite number",
+                    what(),
+                    j + 1,
+                    row[j]
+                ),
+            });
+        }
+        if let Some(j) = row.iter().position(|v| v.abs() > FEATURE_BOUND) {
+            return Err(FormatError::Structure {
+                line: None,
+                column: None,
+                message: format!(
+                    "{}, column {}: {:e}: vector values must lie within ±{FEATURE_BOUND:e} \
+                     (sums of their squares would overflow)",
+                    what(),
                     j + 1,
                     row[j]
                 ),
             });
         }
         if row.iter().all(|&v| v == 0.0) {
-            return Err(zero_vector(None, &what));
+            return Err(zero_vector(None, &what()));
         }
-        tree.specs[index].features = Some(row.to_vec());
+        tree.specs[index].features = Some(row);
     }
     Ok(())
 }
