@@ -69,4 +69,4 @@ pub use genre_table::GenreTable;
 pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};
 pub use limits::{Limit, LimitError, Limits};
 pub use time_series::TimeSeries;
-pub use warning::Warning;
+pub use warning::{Warning, WarningKind, Warnings};

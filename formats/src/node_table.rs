@@ -46,7 +46,7 @@ use crate::error::FormatError;
 use crate::format::{FormatOptions, InputError, Inputs, Role};
 use crate::limits::{Limit, Limits};
 use crate::table::{read_table_capped, RowCap, Table};
-use crate::warning::Warning;
+use crate::warning::{Warning, WarningKind, Warnings};
 
 /// The node specs of a table's hierarchy, ready for [`DatasetBuilder`], with the
 /// line each came from so that model errors can point at the input.
@@ -61,7 +61,7 @@ pub struct TableTree {
     /// the synthetic root).
     pub from_row: Vec<bool>,
     /// What the readers found suspicious, carried into the dataset.
-    pub warnings: Vec<Warning>,
+    pub warnings: Warnings,
     /// The limits the tree is built within (node count here; depth by the builder).
     pub limits: Limits,
     // Lookup by id only; never iterated, so its order cannot reach results.
@@ -137,9 +137,7 @@ impl TableTree {
         for spec in specs {
             builder.add(spec);
         }
-        for warning in warnings {
-            builder.warn(warning);
-        }
+        builder.warnings(warnings);
         if let Some(hint) = hint {
             builder.similarity_hint(hint);
         }
@@ -209,9 +207,10 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
         limits: options.limits,
         ..TableTree::default()
     };
-    tree.warnings.extend(table.warnings_in(NODES_ROLE.name));
+    tree.warnings.append(table.warnings_in(NODES_ROLE.name));
     if table.rows.is_empty() {
         tree.warnings.push(Warning::new(
+            WarningKind::EmptyTable,
             NODES_ROLE.name,
             Some(table.header_line),
             "the table has a header but no rows: the picture is empty",
@@ -219,6 +218,7 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
     } else if weight_column.is_none() {
         // Equal cells are rarely what a table of sizes meant, so say so.
         tree.warnings.push(Warning::new(
+            WarningKind::NoWeight,
             NODES_ROLE.name,
             Some(table.header_line),
             "no weight column (set fields.weight, or name a column weight, value or size): \

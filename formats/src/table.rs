@@ -12,10 +12,13 @@
 //! 1-based field number (the first field is column 1), which is what people look for
 //! in a spreadsheet.
 
+use std::collections::hash_map::Entry;
+use std::collections::HashMap;
+
 use crate::dataset::ModelError;
 use crate::error::FormatError;
 use crate::limits::{Limit, Limits};
-use crate::warning::Warning;
+use crate::warning::{Warning, WarningKind, Warnings};
 
 /// One record of a CSV/TSV input, fields trimmed.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,17 +40,13 @@ pub struct Table {
     pub rows: Vec<Row>,
     /// Repeated column names (the first of each is the one used), as
     /// warnings without a role: [`Table::warnings_in`] gives them one.
-    pub warnings: Vec<Warning>,
+    pub warnings: Warnings,
 }
 
 impl Table {
     /// The table's warnings, as warnings about input `role`.
-    pub fn warnings_in(&self, role: &str) -> impl Iterator<Item = Warning> + '_ {
-        let role = role.to_owned();
-        self.warnings.iter().map(move |w| Warning {
-            role: role.clone(),
-            ..w.clone()
-        })
+    pub fn warnings_in(&self, role: &str) -> Warnings {
+        self.warnings.clone().with_role(role)
     }
 
     /// Index of the column called `name` (ASCII case-insensitive), if any.
@@ -153,10 +152,58 @@ impl RowCap {
     }
 }
 
+/// A bound on the fields of one record: past `fields` fields a reader stops
+/// keeping them and fails with `limit`'s error, so a row of a hundred million
+/// commas costs no memory. (A table's data rows are bounded by its header
+/// anyway; this bounds rows with no header to compare with, and headers.)
+#[derive(Clone, Copy, Debug)]
+pub struct FieldCap {
+    /// Most fields kept of one record.
+    pub fields: usize,
+    /// The limit this enforces.
+    pub limit: Limit,
+    /// The limits (for the error's figures).
+    pub limits: Limits,
+    /// What the fields past the first `extra` are, for the message ("values").
+    pub what: &'static str,
+}
+
+impl FieldCap {
+    /// A cap of `limit`'s value plus `extra` fields (an id before the values).
+    pub fn new(limits: Limits, limit: Limit, extra: usize, what: &'static str) -> Self {
+        FieldCap {
+            fields: usize::try_from(limits.get(limit))
+                .unwrap_or(usize::MAX)
+                .saturating_add(extra),
+            limit,
+            limits,
+            what,
+        }
+    }
+
+    /// The bound on a table's header: one column per node (a time series'
+    /// header names every node) plus the first. No table format reads more.
+    pub fn columns(limits: Limits) -> Self {
+        FieldCap::new(limits, Limit::Nodes, 1, "columns after the first")
+    }
+
+    fn error(&self, line: usize) -> FormatError {
+        let allowed = self.limits.get(self.limit);
+        FormatError::Model {
+            line: Some(line),
+            column: None,
+            source: ModelError::TooLarge(self.limits.exceeded(
+                self.limit,
+                format_args!("a row of more than {allowed} {}", self.what),
+            )),
+        }
+    }
+}
+
 /// Reads every record of a CSV/TSV input, without interpreting a header. Records may
 /// have different lengths; callers check. An input without any record is an error.
 pub fn read_rows(bytes: &[u8], delimiter: Option<u8>) -> Result<Vec<Row>, FormatError> {
-    read_rows_capped(bytes, delimiter, None)
+    read_rows_bounded(bytes, delimiter, None, None)
 }
 
 /// [`read_rows`], stopping with an error past `cap`'s records.
@@ -165,106 +212,90 @@ pub fn read_rows_capped(
     delimiter: Option<u8>,
     cap: Option<RowCap>,
 ) -> Result<Vec<Row>, FormatError> {
-    let delimiter = detect_delimiter(bytes, delimiter);
-    let bytes = strip_bom(bytes);
-    check_text(bytes, delimiter)?;
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .delimiter(delimiter)
-        .from_reader(bytes);
-    let mut rows = Vec::new();
-    let mut record = csv::ByteRecord::new();
-    let (mut line_at, mut counted_to) = (1, 0);
-    loop {
-        match reader.read_byte_record(&mut record) {
-            Ok(true) => {}
-            Ok(false) => break,
-            Err(error) => {
-                // check_text rejects what the csv crate could complain about, so this is
-                // a fallback; report it with the position the crate gives.
-                let line = error.position().map_or(1, |p| p.line() as usize);
-                return Err(FormatError::Syntax {
-                    line,
-                    column: 0,
-                    message: error.to_string(),
-                });
+    read_rows_bounded(bytes, delimiter, cap, None)
+}
+
+/// [`read_rows`], stopping with an error past `rows`' records or at a record
+/// with more than `fields`' fields.
+pub fn read_rows_bounded(
+    bytes: &[u8],
+    delimiter: Option<u8>,
+    rows: Option<RowCap>,
+    fields: Option<FieldCap>,
+) -> Result<Vec<Row>, FormatError> {
+    let mut records = Records::new(bytes, delimiter)?;
+    let mut out = Vec::new();
+    let max_fields = fields.map_or(usize::MAX, |cap| cap.fields);
+    while let Some(record) = records.next(max_fields)? {
+        let row = match record {
+            Record::Row(row) => row,
+            Record::TooWide { line, .. } => {
+                return Err(fields.map_or_else(
+                    // Unreachable: without a cap no record is too wide.
+                    || FormatError::Structure {
+                        line: Some(line),
+                        column: None,
+                        message: "the row has too many fields".to_owned(),
+                    },
+                    |cap| cap.error(line),
+                ));
+            }
+        };
+        if let Some(cap) = &rows {
+            if out.len() >= cap.rows {
+                return Err(cap.error(row.line));
             }
         }
-        // Lines from the byte offset, not csv's own line count, which goes wrong after
-        // CRLF (it reports the record after `\r\n` at the `\n`, on the line before).
-        // For the same reason skip line-end bytes at the reported offset: a record never
-        // starts with one. Offsets only grow, so this visits every byte once.
-        let mut start = record
-            .position()
-            .map_or(0, |p| usize::try_from(p.byte()).unwrap_or(usize::MAX))
-            .min(bytes.len());
-        while matches!(bytes.get(start), Some(b'\r' | b'\n')) {
-            start += 1;
-        }
-        if start > counted_to {
-            line_at += bytes[counted_to..start]
-                .iter()
-                .filter(|&&b| b == b'\n')
-                .count();
-            counted_to = start;
-        }
-        let line = line_at;
-        let mut fields = Vec::with_capacity(record.len());
-        for (index, field) in record.iter().enumerate() {
-            let text = std::str::from_utf8(field).map_err(|_| FormatError::Syntax {
-                line,
-                column: index + 1,
-                message: "the field is not valid UTF-8 text".to_owned(),
-            })?;
-            fields.push(text.trim().to_owned());
-        }
-        // A line of only whitespace reads as one empty field; treat it as empty.
-        if fields.len() == 1 && fields[0].is_empty() {
-            continue;
-        }
-        if let Some(cap) = &cap {
-            if rows.len() >= cap.rows {
-                return Err(cap.error(line));
-            }
-        }
-        rows.push(Row { line, fields });
+        out.push(row);
     }
-    if rows.is_empty() {
-        return Err(FormatError::Structure {
-            line: Some(1),
-            column: None,
-            message: "the input is empty: expected at least one CSV/TSV row".to_owned(),
-        });
+    if out.is_empty() {
+        return Err(empty_input());
     }
-    Ok(rows)
+    Ok(out)
+}
+
+fn empty_input() -> FormatError {
+    FormatError::Structure {
+        line: Some(1),
+        column: None,
+        message: "the input is empty: expected at least one CSV/TSV row".to_owned(),
+    }
 }
 
 /// Reads a CSV/TSV input whose first row is a header; every row must have as many
 /// fields as the header.
 pub fn read_table(bytes: &[u8], delimiter: Option<u8>) -> Result<Table, FormatError> {
-    read_table_capped(bytes, delimiter, None)
+    read_table_bounded(bytes, delimiter, None, None)
 }
 
 /// [`read_table`], stopping with an error past `cap`'s data rows (the header
-/// does not count).
+/// does not count) and at a header of more than [`FieldCap::columns`].
 pub fn read_table_capped(
     bytes: &[u8],
     delimiter: Option<u8>,
     cap: Option<RowCap>,
 ) -> Result<Table, FormatError> {
-    let cap = cap.map(|c| RowCap {
-        rows: c.rows.saturating_add(1),
-        ..c
-    });
-    let mut rows = read_rows_capped(bytes, delimiter, cap)?.into_iter();
-    let Some(header_row) = rows.next() else {
-        // read_rows never returns no rows; keep the error rather than a panic.
-        return Err(FormatError::Structure {
-            line: Some(1),
-            column: None,
-            message: "the input is empty: expected a header row".to_owned(),
-        });
+    let header = cap.map(|c| FieldCap::columns(c.limits));
+    read_table_bounded(bytes, delimiter, cap, header)
+}
+
+/// [`read_table`], stopping with an error past `rows`' data rows and at a
+/// header of more than `header`'s fields. A data row is read only up to the
+/// header's width: one field more is an error, and the rest of that row is
+/// counted for the message, not kept.
+pub fn read_table_bounded(
+    bytes: &[u8],
+    delimiter: Option<u8>,
+    rows: Option<RowCap>,
+    header: Option<FieldCap>,
+) -> Result<Table, FormatError> {
+    let mut records = Records::new(bytes, delimiter)?;
+    let header_row = match records.next(header.map_or(usize::MAX, |cap| cap.fields))? {
+        None => return Err(empty_input()),
+        Some(Record::Row(row)) => row,
+        Some(Record::TooWide { line, .. }) => {
+            return Err(header.map_or_else(empty_input, |cap| cap.error(line)))
+        }
     };
     for (index, name) in header_row.fields.iter().enumerate() {
         if name.is_empty() {
@@ -275,49 +306,193 @@ pub fn read_table_capped(
             });
         }
     }
-    let mut warnings = Vec::new();
-    for (index, name) in header_row.fields.iter().enumerate() {
-        if let Some(first) = header_row.fields[..index]
-            .iter()
-            .position(|earlier| earlier.eq_ignore_ascii_case(name))
-        {
-            warnings.push(Warning::new(
-                "",
-                Some(header_row.line),
-                format!(
-                    "column {} repeats the name {name:?} of column {}; only column {} is read",
-                    index + 1,
-                    first + 1,
-                    first + 1
-                ),
-            ));
-        }
-    }
+    let warnings = repeated_names(&header_row);
     let width = header_row.fields.len();
-    let rows: Vec<Row> = rows.collect();
-    for row in &rows {
-        if row.fields.len() != width {
-            return Err(FormatError::Structure {
-                line: Some(row.line),
-                column: None,
-                message: format!(
-                    "wrong number of fields: found {}, the header (line {}) has {width}",
-                    row.fields.len(),
-                    header_row.line
-                ),
-            });
+    let wrong_width = |line: usize, found: usize| FormatError::Structure {
+        line: Some(line),
+        column: None,
+        message: format!(
+            "wrong number of fields: found {found}, the header (line {}) has {width}",
+            header_row.line
+        ),
+    };
+    let mut data = Vec::new();
+    while let Some(record) = records.next(width)? {
+        let row = match record {
+            Record::TooWide { line, fields } => return Err(wrong_width(line, fields)),
+            Record::Row(row) if row.fields.len() != width => {
+                return Err(wrong_width(row.line, row.fields.len()))
+            }
+            Record::Row(row) => row,
+        };
+        if let Some(cap) = &rows {
+            if data.len() >= cap.rows {
+                return Err(cap.error(row.line));
+            }
         }
+        data.push(row);
     }
     Ok(Table {
         header: header_row.fields,
         header_line: header_row.line,
-        rows,
+        rows: data,
         warnings,
     })
 }
 
-/// Rejects bytes that are not CSV text before the csv crate reads them: NUL bytes
-/// (binary data) and quoting the csv crate would silently accept and reinterpret
+/// A warning for each header name that repeats an earlier one (ASCII
+/// case-insensitively), naming both columns. One pass with a map of the names
+/// seen: comparing every name with every earlier one took 16 s for 100,000
+/// names.
+fn repeated_names(header: &Row) -> Warnings {
+    let mut first_of: HashMap<String, usize> = HashMap::with_capacity(header.fields.len());
+    let mut warnings = Warnings::new();
+    for (index, name) in header.fields.iter().enumerate() {
+        match first_of.entry(name.to_ascii_lowercase()) {
+            Entry::Vacant(slot) => {
+                slot.insert(index);
+            }
+            Entry::Occupied(first) => {
+                let first = *first.get() + 1;
+                warnings.push(Warning::new(
+                    WarningKind::RepeatedColumn,
+                    "",
+                    Some(header.line),
+                    format!(
+                        "column {} repeats the name {name:?} of column {first}; only column \
+                         {first} is read",
+                        index + 1,
+                    ),
+                ));
+            }
+        }
+    }
+    warnings
+}
+
+/// What [`Records::next`] read.
+enum Record {
+    /// A record within the bound on its fields (blank records are skipped).
+    Row(Row),
+    /// A record with more fields than the bound: `fields` were counted, the
+    /// bound's worth kept and dropped.
+    TooWide { line: usize, fields: usize },
+}
+
+/// The records of a CSV/TSV input, one at a time, read field by field with
+/// `csv_core` (the csv crate's own parser) so that a record can be given up at
+/// any field: the csv crate's `ByteRecord` holds a record whole (a row of 100
+/// million commas took 3.5 GB before its length could be checked).
+struct Records<'a> {
+    bytes: &'a [u8],
+    core: csv_core::Reader,
+    /// Bytes of `bytes` consumed.
+    at: usize,
+    /// The line of byte `counted_to`, both moving forward only, so lines are
+    /// counted once per byte.
+    line_at: usize,
+    counted_to: usize,
+    /// The current field's bytes (unquoted by `csv_core`).
+    field: Vec<u8>,
+}
+
+impl<'a> Records<'a> {
+    /// Checks the text (see [`check_text`]) and starts reading it with
+    /// `delimiter` (or the detected one).
+    fn new(bytes: &'a [u8], delimiter: Option<u8>) -> Result<Self, FormatError> {
+        let delimiter = detect_delimiter(bytes, delimiter);
+        let bytes = strip_bom(bytes);
+        check_text(bytes, delimiter)?;
+        Ok(Records {
+            bytes,
+            core: csv_core::ReaderBuilder::new().delimiter(delimiter).build(),
+            at: 0,
+            line_at: 1,
+            counted_to: 0,
+            field: vec![0; 256],
+        })
+    }
+
+    /// The 1-based line of the record starting at byte `start`.
+    fn line_of(&mut self, mut start: usize) -> usize {
+        // csv_core consumes a record's line end in the call that reads the next
+        // record, and skips empty lines there too: a record never starts with a
+        // line-end byte, so skip them to find its first line.
+        while matches!(self.bytes.get(start), Some(b'\r' | b'\n')) {
+            start += 1;
+        }
+        if start > self.counted_to {
+            self.line_at += self.bytes[self.counted_to..start]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count();
+            self.counted_to = start;
+        }
+        self.line_at
+    }
+
+    /// The next record that is not blank (one field of only whitespace), its
+    /// fields trimmed, keeping at most `max_fields` of them; `None` at the end.
+    fn next(&mut self, max_fields: usize) -> Result<Option<Record>, FormatError> {
+        use csv_core::ReadFieldResult as Read;
+        loop {
+            let line = self.line_of(self.at);
+            let mut fields: Vec<String> = Vec::new();
+            // Fields ended in this record, and bytes of the current one.
+            let (mut count, mut len) = (0usize, 0usize);
+            loop {
+                let (result, read, written) = self
+                    .core
+                    .read_field(&self.bytes[self.at..], &mut self.field[len..]);
+                self.at += read;
+                len += written;
+                match result {
+                    // The whole rest was given: the next call (with no input)
+                    // ends the field.
+                    Read::InputEmpty => {}
+                    // Past the bound the field's bytes are only skipped.
+                    Read::OutputFull if count >= max_fields => len = 0,
+                    Read::OutputFull => {
+                        let grown = self.field.len().saturating_mul(2);
+                        self.field.resize(grown, 0);
+                    }
+                    Read::Field { record_end } => {
+                        count += 1;
+                        if count <= max_fields {
+                            let text = std::str::from_utf8(&self.field[..len]).map_err(|_| {
+                                FormatError::Syntax {
+                                    line,
+                                    column: count,
+                                    message: "the field is not valid UTF-8 text".to_owned(),
+                                }
+                            })?;
+                            fields.push(text.trim().to_owned());
+                        }
+                        len = 0;
+                        if record_end {
+                            break;
+                        }
+                    }
+                    Read::End => return Ok(None),
+                }
+            }
+            if count > max_fields {
+                return Ok(Some(Record::TooWide {
+                    line,
+                    fields: count,
+                }));
+            }
+            // A line of only whitespace reads as one empty field; treat it as empty.
+            if fields.len() == 1 && fields[0].is_empty() {
+                continue;
+            }
+            return Ok(Some(Record::Row(Row { line, fields })));
+        }
+    }
+}
+
+/// Rejects bytes that are not CSV text before they are parsed: NUL bytes
+/// (binary data) and quoting `csv_core` would silently accept and reinterpret
 /// (an unterminated quoted field swallows the rest of the file; a stray quote is
 /// kept as text). Positions as in the module docs.
 fn check_text(bytes: &[u8], delimiter: u8) -> Result<(), FormatError> {
