@@ -20,7 +20,8 @@
 //!   value becomes a group node with id `group:` + the values joined by `/`
 //!   (`group:Asia`, `group:Asia/EastAsia`; a `/` or `\` inside a value is escaped
 //!   with `\`, so `Asia/East` is `group:Asia\/East`) and the value as its label;
-//!   the row's node hangs under its innermost group.
+//!   the row's node hangs under its innermost group. A row whose own id is a
+//!   generated group's id is an error, whichever comes first.
 //! - **a path column** ([`FormatOptions::path`], segments split by
 //!   [`FormatOptions::path_separator`], default `/`): without an id column the last
 //!   segment is the row's node (id = the whole path, label = the last segment) and
@@ -202,6 +203,9 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
         .map(|name| table.required_column(name, "a grouping column"))
         .collect::<Result<Vec<_>, _>>()?;
     let separator = options.path_separator.unwrap_or('/');
+    let id_field = id_column
+        .or(path_column)
+        .map_or_else(|| "id".to_owned(), |c| table.header[c].clone());
 
     let mut tree = TableTree {
         limits: options.limits,
@@ -276,9 +280,7 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
                 line: Some(row.line),
                 column: id_col,
                 node: None,
-                field: id_column
-                    .or(path_column)
-                    .map_or_else(|| "id".to_owned(), |c| table.header[c].clone()),
+                field: id_field.clone(),
                 message: "the id is empty".to_owned(),
             });
         }
@@ -301,10 +303,24 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
             }
             push_escaped(&mut joined, value);
             let group_id = format!("group:{joined}");
-            if tree.find(&group_id).is_none() {
-                let mut spec = NodeSpec::new(group_id.clone()).label(value.clone());
-                spec.parent = parent.clone();
-                tree.push(spec, Some(row.line), Some(column + 1), false)?;
+            match tree.find(&group_id) {
+                None => {
+                    let mut spec = NodeSpec::new(group_id.clone()).label(value.clone());
+                    spec.parent = parent.clone();
+                    tree.push(spec, Some(row.line), Some(column + 1), false)?;
+                }
+                // A row took this id first: it must not become the group.
+                Some(taken) if tree.from_row[taken] => {
+                    return Err(group_id_taken(
+                        tree.lines[taken].unwrap_or(row.line),
+                        id_col,
+                        &id_field,
+                        &group_id,
+                        value,
+                        row.line,
+                    ));
+                }
+                Some(_) => {}
             }
             parent = Some(group_id);
         }
@@ -342,10 +358,44 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
                 })?);
             }
         }
+        // A generated group took this id first (a synthetic root, line None,
+        // is a plain duplicate for `push`).
+        if let Some(group) = tree.find(&spec.id).filter(|&i| !tree.from_row[i]) {
+            if let (Some(group_line), Some(value)) = (tree.lines[group], &tree.specs[group].label) {
+                return Err(group_id_taken(
+                    row.line, id_col, &id_field, &spec.id, value, group_line,
+                ));
+            }
+        }
         tree.push(spec, Some(row.line), id_col, true)?;
     }
     check_parent_cycles(&tree)?;
     Ok(tree)
+}
+
+/// The error for the row on `row_line` whose id `id` is also the id of the
+/// group generated for `value` from `group_line` (ids `group:` + the values):
+/// whichever came first, taking the group's place would silently move the
+/// group's rows under the row's parent, and a duplicate-id error would blame a
+/// row that names no such id.
+fn group_id_taken(
+    row_line: usize,
+    column: Option<usize>,
+    field: &str,
+    id: &str,
+    value: &str,
+    group_line: usize,
+) -> FormatError {
+    FormatError::Field {
+        line: Some(row_line),
+        column,
+        node: Some(id.to_owned()),
+        field: field.to_owned(),
+        message: format!(
+            "the id of the group {value:?} generated from line {group_line} (group ids are \
+             `group:` and the grouping values); give the row another id"
+        ),
+    }
 }
 
 /// Appends a group value to a group id, escaping the separator `/` (and the
