@@ -26,7 +26,10 @@
 //!
 //! The similarity hint comes from root flags: `useNeighborLeafs: true` gives
 //! [`SimilarityHint::NeighborList`]; else `similarityMeasure` (`cosine`, `jaccard`,
-//! `binary`); else cosine when any node has features. Other fields are ignored.
+//! `binary`); without either flag, neighbour lists that name nodes of the file give
+//! [`SimilarityHint::NeighborList`] (what an adapter printing them means); else
+//! cosine when any node has features. Neighbour lists left unused by a flag, or
+//! chosen over feature vectors, are a warning. Other fields are ignored.
 //!
 //! # Error positions
 //!
@@ -50,6 +53,7 @@ use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
 use crate::json_path::{extend, line_column, locate, skip_whitespace, syntax_error, Step};
 use crate::limits::{Limit, Limits};
+use crate::warning::{Warning, WarningKind};
 
 /// Options for [`parse_hierarchy_json`]. The defaults honour the file's own flags.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -115,15 +119,21 @@ pub fn parse_hierarchy_json(
         })
         .collect();
 
-    let hint = match flags.hint {
-        Some(hint) => Some(hint),
-        None if specs.iter().any(|spec| spec.features.is_some()) => Some(SimilarityHint::Cosine),
-        None => None,
-    };
+    let listing = relations.iter().filter(|r| !r.is_empty()).count();
+    let has_features = specs.iter().any(|spec| spec.features.is_some());
+    let (hint, note) = similarity_hint(&flags, listing, has_features);
 
     let node_ids: Vec<String> = specs.iter().map(|spec| spec.id.clone()).collect();
     let mut builder = DatasetBuilder::new();
     builder.limits(options.limits);
+    if let Some(note) = note {
+        builder.warn(Warning::new(
+            WarningKind::Neighbors,
+            HIERARCHY_ROLES[0].name,
+            None,
+            note,
+        ));
+    }
     for (mut spec, relations) in specs.into_iter().zip(relations) {
         spec.relations = relations;
         builder.add(spec);
@@ -134,6 +144,47 @@ pub fn parse_hierarchy_json(
     builder
         .build()
         .map_err(|source| reader.model_error(source, &node_ids, &origins))
+}
+
+/// The similarity the file asks for, and a note when its neighbour lists
+/// (`listing` nodes have some that name nodes of the file) go unused or win
+/// over its feature vectors. An explicit flag decides; without one, neighbour
+/// lists are what an adapter that prints them means (issue 21: they were
+/// silently ignored without the paper's `useNeighborLeafs`), else vectors give
+/// cosine. The paper's files set the flag wherever they list neighbours.
+fn similarity_hint(
+    flags: &Flags,
+    listing: usize,
+    has_features: bool,
+) -> (Option<SimilarityHint>, Option<String>) {
+    let measure = flags.measure.map(|(hint, _)| hint);
+    match (flags.neighbor_lists, measure) {
+        (Some(true), _) => (Some(SimilarityHint::NeighborList), None),
+        (None, None) if listing > 0 => {
+            let note = has_features.then(|| {
+                "nodes carry both neighbor lists and feature vectors: the neighbor lists are \
+                 the similarity (\"useNeighborLeafs\": false, or a \"similarityMeasure\", on \
+                 the root uses the vectors instead)"
+                    .to_owned()
+            });
+            (Some(SimilarityHint::NeighborList), note)
+        }
+        (flag, _) => {
+            let hint = measure.or(has_features.then_some(SimilarityHint::Cosine));
+            let why = match (flag, flags.measure) {
+                (Some(false), _) => "\"useNeighborLeafs\" is false".to_owned(),
+                (_, Some((_, name))) => format!("\"similarityMeasure\" is {name:?}"),
+                _ => String::new(),
+            };
+            let note = (listing > 0).then(|| {
+                format!(
+                    "the neighbor lists of {listing} node(s) are not used: {why} on the root \
+                     (\"useNeighborLeafs\": true uses them)"
+                )
+            });
+            (hint, note)
+        }
+    }
 }
 
 /// How weights are read, decided once from the options and the root's flags.
@@ -152,7 +203,10 @@ enum WeightRule {
 struct Flags {
     weight: WeightRule,
     feature_field: String,
-    hint: Option<SimilarityHint>,
+    /// `useNeighborLeafs`, when given.
+    neighbor_lists: Option<bool>,
+    /// `similarityMeasure`, when given, with its name.
+    measure: Option<(SimilarityHint, &'static str)>,
 }
 
 /// Where a node sits: its parent's spec index and its index in the parent's
@@ -219,9 +273,9 @@ impl Reader<'_> {
             .unwrap_or("embeddings")
             .to_owned();
 
-        let neighbor_list = match root.get("useNeighborLeafs") {
-            None | Some(Value::Null) => false,
-            Some(Value::Bool(b)) => *b,
+        let neighbor_lists = match root.get("useNeighborLeafs") {
+            None | Some(Value::Null) => None,
+            Some(Value::Bool(b)) => Some(*b),
             Some(other) => {
                 return Err(flag_error(
                     "useNeighborLeafs",
@@ -232,9 +286,9 @@ impl Reader<'_> {
         // Checked even when `useNeighborLeafs` wins, so a typo never goes unnoticed.
         let measure = match string_flag("similarityMeasure")? {
             None => None,
-            Some("cosine") => Some(SimilarityHint::Cosine),
-            Some("jaccard") => Some(SimilarityHint::Jaccard),
-            Some("binary") => Some(SimilarityHint::Binary),
+            Some("cosine") => Some((SimilarityHint::Cosine, "cosine")),
+            Some("jaccard") => Some((SimilarityHint::Jaccard, "jaccard")),
+            Some("binary") => Some((SimilarityHint::Binary, "binary")),
             Some(other) => {
                 return Err(flag_error(
                     "similarityMeasure",
@@ -242,16 +296,11 @@ impl Reader<'_> {
                 ))
             }
         };
-        let hint = if neighbor_list {
-            Some(SimilarityHint::NeighborList)
-        } else {
-            measure
-        };
-
         Ok(Flags {
             weight,
             feature_field,
-            hint,
+            neighbor_lists,
+            measure,
         })
     }
 
