@@ -466,7 +466,9 @@ pub fn render_outputs(
 
 /// The input warnings of a parsed dataset (a header without rows, a column
 /// named twice, a self pair, a pair repeated with another strength), one
-/// line each, `file: line L: message`.
+/// line each, `file: line L: message`; past the first few of a kind the
+/// dataset carries one `file: and N more ...` line instead
+/// ([`nptreemap_formats::Warnings`]), so a flood never reaches the journal.
 pub fn warnings(files: &[InputFile], dataset: &Dataset) -> Vec<String> {
     dataset
         .warnings()

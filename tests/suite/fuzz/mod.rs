@@ -1,11 +1,13 @@
 //! The fuzzing harness's short, deterministic slice (issue 11): every parser
 //! (CSV tables through each table format, hierarchy JSON, the YAML config,
-//! layout JSON state files) and the layout on random small datasets, a few
+//! layout JSON state files, `.npy` vectors and an exec adapter's output, issue
+//! 21) and the layout on random small datasets, a few
 //! thousand cases each from fixed seeds, with no panic, no case over its time
 //! bound and no case allocating past its bound. The long run (≥ 10 million
 //! cases per parser) is `cargo bench --bench fuzz`; BENCHMARKS.md has its
 //! figures.
 
+mod npy_adapter;
 mod targets;
 
 use std::sync::Arc;
@@ -72,6 +74,40 @@ fn hierarchy_json_never_panics() {
         Run {
             cases: 3_000,
             seed: 12,
+            bounds: PARSER,
+            replay: None,
+        },
+    );
+    assert_clean(&s, 3_000);
+    assert!(s.accepted > 0 && s.accepted < s.cases, "both paths: {s:?}");
+}
+
+#[test]
+fn npy_vectors_never_panic() {
+    let s = targets::drive(
+        "npy",
+        npy_adapter::npy_cases(),
+        npy_adapter::check_npy,
+        Run {
+            cases: 3_000,
+            seed: 16,
+            bounds: PARSER,
+            replay: None,
+        },
+    );
+    assert_clean(&s, 3_000);
+    assert!(s.accepted > 0 && s.accepted < s.cases, "both paths: {s:?}");
+}
+
+#[test]
+fn adapter_output_never_panics() {
+    let s = targets::drive(
+        "adapter",
+        npy_adapter::adapter_cases(),
+        npy_adapter::check_adapter,
+        Run {
+            cases: 3_000,
+            seed: 17,
             bounds: PARSER,
             replay: None,
         },
