@@ -46,10 +46,21 @@ enum Command {
     Eval(super::eval::EvalArgs),
     /// Time the layout of one file (parsing excluded) and print one JSON line.
     Bench(super::bench::BenchArgs),
+    /// Print the documented defaults of every config key (`--defaults`).
+    Config(super::defaults::ConfigArgs),
     /// Print a shell completion script.
     Completions(super::shell::CompletionsArgs),
-    /// Print the man page (roff).
-    Man,
+    /// Print the man page (roff), or a subcommand's (`nptreemap man build`).
+    Man(super::man::ManArgs),
+}
+
+/// Whether log lines may carry colour codes: only on a terminal, and not when
+/// `NO_COLOR` is set to anything but the empty string (no-color.org). A log
+/// read from a file, a pipe or the journal gets plain text.
+fn colour() -> bool {
+    use std::io::IsTerminal;
+    let no_color = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
+    !no_color && std::io::stderr().is_terminal()
 }
 
 /// SIGINT and SIGTERM still end the process as they would, but first kill
@@ -88,6 +99,7 @@ pub fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
+        .with_ansi(colour())
         .init();
     #[cfg(feature = "watch")]
     let stops_itself = matches!(cli.command, Command::Watch(_));
@@ -105,8 +117,9 @@ pub fn main() -> ExitCode {
         Command::Layout(args) => super::layout::run(&args),
         Command::Eval(args) => super::eval::run(&args),
         Command::Bench(args) => super::bench::run(&args),
+        Command::Config(args) => super::defaults::run(&args),
         Command::Completions(args) => super::shell::completions(&args, Cli::command()),
-        Command::Man => super::shell::man(Cli::command()),
+        Command::Man(args) => super::man::man(&args, Cli::command()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
