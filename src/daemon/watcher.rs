@@ -168,7 +168,7 @@ impl DirWatcher {
                 Some(_) => self.watch(&dir).ok(),
                 None => None,
             };
-            tracing::debug!(dir = %dir.display(), ?known, ?watched, "watched folder changed");
+            tracing::debug!(?dir, ?known, ?watched, "watched folder changed");
             self.dirs.insert(dir.clone(), watched);
             // A folder that exists but cannot be watched yet is retried at
             // the next check; it counts as changed once it is watched.
@@ -255,7 +255,9 @@ pub fn next_batch(
             Message::Wake if first.is_none() => return Batch::Idle,
             Message::Wake => {}
             Message::Fs(Err(e)) => {
-                tracing::warn!(error = %e, "file watcher error");
+                // Debug-quoted: the message may name a path, which may hold a
+                // newline (a log line must stay one line).
+                tracing::warn!(error = ?e.to_string(), "file watcher error");
             }
             Message::Fs(Ok(event)) => {
                 if !changes_content(&event.kind) {
