@@ -137,9 +137,8 @@ impl Daemon {
 }
 
 /// How long a test waits for an event of the daemon (a status line, an
-/// exit) before it fails: generous, as the suite runs on loaded machines;
-/// a test never asserts how fast something happened.
-const WAIT: Duration = Duration::from_secs(120);
+/// exit, a file) before it fails.
+const WAIT: Duration = support::WAIT;
 
 /// A status line without its time of day (`HH:MM:SS `, issue 22 item 4),
 /// which every line must start with.
