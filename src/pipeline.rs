@@ -716,7 +716,7 @@ pub fn check_outputs(reads: &[Named], writes: &[Named]) -> Result<(), BuildError
 pub fn remove_stale_temps(writes: &[Named]) {
     let paths: Vec<PathBuf> = writes.iter().map(|w| w.path.clone()).collect();
     for path in store::remove_stale_temps(&paths) {
-        tracing::info!(path = %path.display(), "removed a temp file left by an interrupted run");
+        tracing::info!(?path, "removed a temp file left by an interrupted run");
     }
 }
 

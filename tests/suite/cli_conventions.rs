@@ -297,7 +297,7 @@ fn the_first_build_of_watch_shows_a_progress_bar_on_a_terminal() {
     let bin = env!("CARGO_BIN_EXE_nptreemap");
     // `timeout` ends the daemon (SIGTERM: exit 0) once the first build is done.
     let mut child = on_a_terminal_now(&format!(
-        "timeout -s TERM 60 {bin} watch --cold {}",
+        "timeout -s TERM 300 {bin} watch --cold {}",
         config.display()
     ))
     .stdout(std::process::Stdio::piped())
