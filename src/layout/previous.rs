@@ -77,7 +77,7 @@ impl PreviousNode {
             ));
         }
         let bound = POWER_WEIGHT_BOUND * diagonal * diagonal;
-        if let Some(w) = self.power_weight.filter(|w| !(w.abs() <= bound)) {
+        if let Some(w) = self.power_weight.filter(|w| w.is_nan() || w.abs() > bound) {
             return Err((
                 "power_weight",
                 format!(

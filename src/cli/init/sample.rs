@@ -91,7 +91,7 @@ impl Input {
         let content = if npy::is_npy(&head) {
             // The reader takes the whole file; the size limit is checked first.
             let bytes = workspace::read_input(path, limits).map_err(file_error)?;
-            let matrix = npy::read_npy(&bytes).map_err(|e| parse_error(path, e))?;
+            let matrix = npy::read_npy(&bytes, limits).map_err(|e| parse_error(path, e))?;
             Content::Npy {
                 rows: matrix.rows,
                 cols: matrix.cols,
