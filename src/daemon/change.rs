@@ -135,7 +135,8 @@ pub fn diff(old: &Config, new: &Config) -> ChangeSet {
                     || before.fields != d.fields
                     || before.similarity != d.similarity
                     || before.command != d.command
-                    || before.timeout != d.timeout;
+                    || before.timeout != d.timeout
+                    || before.max_adapter_mb != d.max_adapter_mb;
                 if layout_changed || inputs_changed {
                     set.relayout.insert(d.name.clone(), Reason::Layout);
                 } else if render_changed || before.title != d.title || before.outputs != d.outputs {
