@@ -9,14 +9,13 @@
 
 #![allow(unreachable_pub)]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::OnceLock;
 
 use proptest::prelude::*;
 
 use nptreemap::config::{Config, DatasetConfig};
-use nptreemap::exec;
-use nptreemap::pipeline::{self, Fault, InputFile};
+use nptreemap::pipeline::{self, Fault};
 use nptreemap_formats::npy::read_npy;
 use nptreemap_formats::{EmbeddingMatrix, Format, FormatOptions, Inputs, Limits};
 
@@ -418,19 +417,12 @@ fn exec_datasets() -> &'static (DatasetConfig, DatasetConfig) {
 }
 
 /// Parses one adapter output as the pipeline parses an exec dataset's stdout
-/// (`pipeline::parse_inputs` with the dataset's config and the stdout as its
-/// `hierarchy` input, named as `run_exec` names it): accepted only within the
+/// (`pipeline::parse_adapter_output`, the path `run_exec` takes): accepted only within the
 /// limits; refused as the input's fault, naming the command's stdout.
 pub fn check_adapter(case: &AdapterCase) -> Result<bool, String> {
     let (default, small) = exec_datasets();
     let d = if case.small { small } else { default };
-    let stdout = PathBuf::from(format!("`{}` (stdout)", exec::display(&d.command)));
-    let files = [InputFile {
-        role: "hierarchy".to_string(),
-        path: stdout,
-        bytes: case.stdout.clone(),
-    }];
-    match pipeline::parse_inputs(d, &files) {
+    match pipeline::parse_adapter_output(d, case.stdout.clone()) {
         Ok(dataset) => {
             check_dataset(&dataset, &d.fields.limits)?;
             Ok(true)
