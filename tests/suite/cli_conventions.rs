@@ -18,7 +18,8 @@ fn run_in(dir: &Path, args: &[&str]) -> Output {
         .expect("run nptreemap")
 }
 
-fn ok(out: &Output) -> String {
+/// Asserts success; returns stdout.
+pub(crate) fn ok(out: &Output) -> String {
     assert!(
         out.status.success(),
         "{}",
