@@ -10,6 +10,10 @@ use roff::{bold, italic, roman, Inline, Roff};
 use super::UsageError;
 use nptreemap_formats::suggest::did_you_mean;
 
+/// The id of `man`'s SUBCOMMAND argument (`app.rs` gives it the
+/// subcommands' names as possible values).
+pub(crate) const SUBCOMMAND_ARG: &str = "subcommand";
+
 /// Arguments of `nptreemap man`.
 #[derive(Debug, Args)]
 pub(crate) struct ManArgs {
