@@ -161,6 +161,7 @@ fn a_large_table_is_sampled_and_checked_against_the_limits() {
     huge.set_len(300 << 20).expect("sparse file");
     let out = run_capped(&dir, 600, "init huge.csv");
     refused(&out, &["huge.csv", "limits.max_file_mb"]);
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
