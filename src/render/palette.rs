@@ -594,6 +594,34 @@ pub fn child_shade(parent: Rgb, index: usize, count: usize) -> Rgb {
     lighten(parent, SHADE_DARKEST + t * (SHADE_LIGHTEST - SHADE_DARKEST))
 }
 
+/// The colour of child `index` of `count` siblings under a parent of colour
+/// `parent` whose main child (the heaviest) is `main`: as [`child_shade`],
+/// except that the main child keeps the parent's colour exactly, taking the
+/// lightness step nearest the parent's (the child that step was for takes
+/// the main child's). So the parent's colour, the one its legend swatch
+/// shows, is on the map too, on its largest cell (down the hierarchy, its
+/// heaviest leaf): issue 21, a legend swatch `#8cd17d` whose largest cell was
+/// `#65c151`.
+pub fn sibling_shade(parent: Rgb, index: usize, count: usize, main: usize) -> Rgb {
+    if count <= 1 || index == main {
+        return parent;
+    }
+    let index = index.min(count - 1);
+    let half = count.div_ceil(2);
+    let step = |i: usize| if i % 2 == 0 { i / 2 } else { half + i / 2 };
+    let offset =
+        |s: usize| SHADE_DARKEST + s as f64 / (count - 1) as f64 * (SHADE_LIGHTEST - SHADE_DARKEST);
+    let nearest = (0..count)
+        .min_by(|&a, &b| offset(a).abs().total_cmp(&offset(b).abs()))
+        .unwrap_or(0);
+    let own = if step(index) == nearest && main < count {
+        step(main)
+    } else {
+        step(index)
+    };
+    lighten(parent, offset(own))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -814,6 +842,28 @@ mod tests {
         assert!(luminance(lighten(c, 0.3)) > luminance(c));
         assert!(luminance(lighten(c, -0.3)) < luminance(c));
         assert_eq!(lighten(c, f64::NAN), c);
+    }
+
+    /// Issue 21: the legend showed a group's colour that no cell had. The
+    /// main child keeps it; the siblings stay distinct from it and from each
+    /// other.
+    #[test]
+    fn the_main_child_keeps_its_parents_colour() {
+        let p = TABLEAU20[5];
+        for count in 2..12 {
+            for main in 0..count {
+                let shades: Vec<Rgb> = (0..count)
+                    .map(|i| sibling_shade(p, i, count, main))
+                    .collect();
+                assert_eq!(shades[main], p, "{count} children, main {main}");
+                for i in 0..count {
+                    for j in 0..i {
+                        assert_ne!(shades[i], shades[j], "{count}: {i} {j}");
+                    }
+                }
+            }
+        }
+        assert_eq!(sibling_shade(p, 0, 1, 0), p);
     }
 
     #[test]
