@@ -130,10 +130,10 @@ const RING_CANDIDATES: usize = 4096;
 /// of consecutive colours spreads round the hue circle.
 const GOLDEN_ANGLE: f64 = 137.507_764;
 
-/// Up to `n` distinct colours spread over OKLCH: within each of the [`RINGS`],
+/// Up to `n` distinct colours spread over OKLCH: within each of the `RINGS`,
 /// hues by the golden angle, lightness cycling through the ring's three
 /// levels, the ring's chroma (reduced where sRGB cannot show it). A fixed,
-/// bounded search ([`RING_CANDIDATES`] per ring): past the colours it finds,
+/// bounded search (`RING_CANDIDATES` per ring): past the colours it finds,
 /// the palette is shorter than `n` and [`assign`] reuses colours.
 /// Deterministic; a shorter palette is a prefix of a longer one.
 pub fn generated(n: usize) -> Vec<Rgb> {
@@ -168,9 +168,9 @@ pub const ALIKE: f64 = 0.1;
 /// enough (past that, colours are reused evenly). `order` lists the groups by
 /// priority (heaviest first): earlier groups get earlier palette colours.
 /// `fixed[g]` is a group's own colour, kept as given. Deterministic greedy:
-/// each group takes, among the first [`WINDOW`] least-used colours in palette
+/// each group takes, among the first `WINDOW` least-used colours in palette
 /// order, the first far enough from its coloured neighbours, else the one
-/// farthest from them; then [`improve`] repairs what is left. Near-linear in
+/// farthest from them; then `improve` repairs what is left. Near-linear in
 /// the groups: a flat table is a map of up to `max_nodes` top-level groups.
 pub fn assign(
     palette: &[Rgb],
@@ -426,7 +426,7 @@ fn oklab_to_linear([l, a, b]: [f64; 3]) -> [f64; 3] {
 /// The colour of OKLCH lightness `l`, chroma `c` and hue `h` (degrees), with
 /// the chroma reduced until sRGB can show it. A chroma beyond any sRGB
 /// colour's (about 0.32) or not finite counts as that most; the reduction
-/// runs in steps of [`CHROMA_STEP`], so it ends after at most
+/// runs in steps of `CHROMA_STEP`, so it ends after at most
 /// `MAX_CHROMA / CHROMA_STEP` steps with chroma 0 (a grey, always shown).
 pub fn from_oklch(l: f64, c: f64, h: f64) -> Rgb {
     let (sin, cos) = h.to_radians().sin_cos();
