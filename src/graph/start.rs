@@ -1,0 +1,96 @@
+//! Warm or cold: the one place a build decides which previous layout its
+//! layout starts from. In order:
+//!
+//! 1. `--cold` (or caching turned off, `NPTREEMAP_NO_CACHE`): none.
+//! 2. The graph's own last layout, kept in memory between rebuilds (the
+//!    watch daemon), if it was made with the layout settings in force.
+//! 3. The stored layout (`crate::state::layout`), if the manifest records
+//!    that it was made with the layout settings in force and its bytes are
+//!    the ones recorded.
+//! 4. Otherwise none, and the build says why: nothing stored yet, the
+//!    layout settings changed (seed, method, outline, canvas, similarity,
+//!    convergence, iterations: every setting that shapes the picture), or
+//!    the stored layout has no record of its settings (an older version made
+//!    it).
+//!
+//! The layout core then checks that the previous layout fits the data
+//! (`Previous::fits`: at least half the nodes survive); one that does not
+//! is refused and the layout starts cold, as it says.
+
+use std::sync::Arc;
+
+use crate::config::DatasetConfig;
+use crate::fingerprint::Fingerprint;
+use crate::layout::{Computed, Previous};
+use crate::state::{self, manifest::Manifest};
+
+/// The previous layout chosen for a run, and why.
+#[derive(Debug, Default)]
+pub struct Chosen {
+    /// The layout to start from; `None` for a cold start.
+    pub previous: Option<Arc<Previous>>,
+    /// The fingerprint of the stored layout's bytes, when it was chosen.
+    pub stored: Option<Fingerprint>,
+    /// Why the start is cold, in a few words (`None` when warm).
+    pub cold_because: Option<&'static str>,
+    /// A stored layout that is there but cannot be read: the user is told,
+    /// since the picture will move.
+    pub warning: Option<String>,
+}
+
+/// The graph's last layout and the settings it was made with.
+pub struct Memory<'a> {
+    /// Its settings' fingerprint.
+    pub settings: Fingerprint,
+    /// The layout.
+    pub computed: &'a Computed,
+}
+
+/// Chooses the previous layout of a run with layout settings `settings`
+/// (see the module doc for the order).
+pub fn choose(
+    d: &DatasetConfig,
+    cold: bool,
+    memory: Option<Memory<'_>>,
+    manifest: &Manifest,
+    settings: Fingerprint,
+) -> Chosen {
+    let cold_because = |why| Chosen {
+        cold_because: Some(why),
+        ..Chosen::default()
+    };
+    if cold {
+        return cold_because("--cold");
+    }
+    if let Some(memory) = memory {
+        if memory.settings != settings {
+            return cold_because("the layout settings changed");
+        }
+        return Chosen {
+            previous: Some(Arc::new(memory.computed.previous())),
+            ..Chosen::default()
+        };
+    }
+    let stored = state::layout::read(d);
+    if let Some(warning) = stored.warning {
+        return Chosen {
+            cold_because: Some("the stored layout cannot be read"),
+            warning: Some(warning),
+            ..Chosen::default()
+        };
+    }
+    let (Some(previous), Some(bytes)) = (stored.previous, stored.fingerprint) else {
+        return cold_because("no stored layout");
+    };
+    match &manifest.layout {
+        Some(record) if record.state == bytes && record.settings == settings => Chosen {
+            previous: Some(previous),
+            stored: Some(bytes),
+            ..Chosen::default()
+        },
+        Some(record) if record.state == bytes => {
+            cold_because("the layout settings changed since the stored layout")
+        }
+        _ => cold_because("the stored layout has no record of its layout settings"),
+    }
+}
