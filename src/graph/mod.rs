@@ -328,7 +328,7 @@ impl DatasetGraph {
                     settings: last.settings,
                     computed: &last.computed,
                 });
-                let chosen = start::choose(d, job.cold || !cache, memory, &manifest, settings);
+                let chosen = start::choose(d, job.cold || !cache, memory, settings);
                 warnings.extend(chosen.warning);
                 let mut request = job.request.clone();
                 request.previous = chosen.previous;
@@ -587,28 +587,57 @@ impl DatasetGraph {
         (prepared, constraints, Some(key))
     }
 
+    /// Runs the stages before the layout (prepare and constraints) for a
+    /// dataset [`DatasetGraph::lay_out`] will lay out, so that timing the
+    /// layouts measures the layout stage alone.
+    pub fn prepare_for(
+        &mut self,
+        d: &DatasetConfig,
+        dataset: &Dataset,
+        request: &Request,
+    ) -> Result<(), BuildError> {
+        let planned = plan(dataset, request).map_err(|source| BuildError::Layout {
+            dataset: d.name.clone(),
+            source,
+        })?;
+        if let Some(kind) = planned.kind {
+            let source = keys::dataset(dataset);
+            self.similar(None, source, dataset, kind, &d.name, &mut StageReport::default());
+        }
+        Ok(())
+    }
+
     /// Lays out a dataset that is not configured for a build (`layout`,
     /// `eval`): prepare and constraints through the graph's memos, so that
     /// several methods or starts on one dataset compute them once.
     pub fn lay_out(
         &mut self,
+        d: &DatasetConfig,
         dataset: &Dataset,
         request: &Request,
         stages: &mut StageReport,
-    ) -> Result<Computed, LayoutError> {
-        let planned = plan(dataset, request)?;
+    ) -> Result<Computed, BuildError> {
+        let layout_error = |source| BuildError::Layout {
+            dataset: d.name.clone(),
+            source,
+        };
+        let planned = plan(dataset, request).map_err(layout_error)?;
         let input = match planned.kind {
             None => Prepared::Plain(Arc::new(dataset.clone())),
             Some(kind) => {
                 let source = keys::dataset(dataset);
                 let (prepared, constraints, _) =
-                    self.similar(None, source, dataset, kind, "dataset", stages);
+                    self.similar(None, source, dataset, kind, &d.name, stages);
                 Prepared::Similar(prepared, constraints.as_ref().clone())
             }
         };
         let t = Instant::now();
-        let computed = lay_out_planned(input, planned, request)?;
-        stages.record("dataset", Stage::Layout, true, ms_since(t), "");
+        let computed = lay_out_planned(input, planned, request).map_err(layout_error)?;
+        let note = match &computed.start {
+            Start::Warm { .. } => "warm",
+            _ => "cold",
+        };
+        stages.record(&d.name, Stage::Layout, true, ms_since(t), note);
         Ok(computed)
     }
 

@@ -4,9 +4,8 @@
 //! 1. `--cold` (or caching turned off, `NPTREEMAP_NO_CACHE`): none.
 //! 2. The graph's own last layout, kept in memory between rebuilds (the
 //!    watch daemon), if it was made with the layout settings in force.
-//! 3. The stored layout (`crate::state::layout`), if the manifest records
-//!    that it was made with the layout settings in force and its bytes are
-//!    the ones recorded.
+//! 3. The stored layout (`crate::state::layout`), if it records that it was
+//!    made with the layout settings in force.
 //! 4. Otherwise none, and the build says why: nothing stored yet, the
 //!    layout settings changed (seed, method, outline, canvas, similarity,
 //!    convergence, iterations: every setting that shapes the picture), or
@@ -22,7 +21,7 @@ use std::sync::Arc;
 use crate::config::DatasetConfig;
 use crate::fingerprint::Fingerprint;
 use crate::layout::{Computed, Previous};
-use crate::state::{self, manifest::Manifest};
+use crate::state;
 
 /// The previous layout chosen for a run, and why.
 #[derive(Debug, Default)]
@@ -52,7 +51,6 @@ pub fn choose(
     d: &DatasetConfig,
     cold: bool,
     memory: Option<Memory<'_>>,
-    manifest: &Manifest,
     settings: Fingerprint,
 ) -> Chosen {
     let cold_because = |why| Chosen {
@@ -82,15 +80,13 @@ pub fn choose(
     let (Some(previous), Some(bytes)) = (stored.previous, stored.fingerprint) else {
         return cold_because("no stored layout");
     };
-    match &manifest.layout {
-        Some(record) if record.state == bytes && record.settings == settings => Chosen {
+    match stored.settings {
+        Some(made_with) if made_with == settings => Chosen {
             previous: Some(previous),
             stored: Some(bytes),
             ..Chosen::default()
         },
-        Some(record) if record.state == bytes => {
-            cold_because("the layout settings changed since the stored layout")
-        }
-        _ => cold_because("the stored layout has no record of its layout settings"),
+        Some(_) => cold_because("the layout settings changed since the stored layout"),
+        None => cold_because("the stored layout has no record of its layout settings"),
     }
 }

@@ -1,12 +1,15 @@
 //! The stored layout of a dataset (`<name>.layout.json`): the last layout in
 //! full precision (layout JSON written by [`layout_json::state`]), from which
-//! the next build or a restarted `watch` starts warm. Reading it, writing it,
-//! and recording in the manifest which settings it was made with. Whether a
-//! build starts from it is decided in one place, `graph::start`.
+//! the next build or a restarted `watch` starts warm, with the fingerprint
+//! of the layout settings it was made with in its second line
+//! (`"nptreemap_settings"`, a field readers of the format ignore). The
+//! settings travel inside the file, so no interrupted write can pair a
+//! layout with another layout's settings. Whether a build starts from it is
+//! decided in one place, `graph::start`.
 
 use std::sync::Arc;
 
-use super::manifest::{self, LayoutRecord};
+use super::manifest;
 use crate::config::DatasetConfig;
 use crate::fingerprint::Fingerprint;
 use crate::layout::{Computed, Previous};
@@ -19,6 +22,9 @@ pub struct StoredLayout {
     pub previous: Option<Arc<Previous>>,
     /// The fingerprint of the file's bytes, when it was read.
     pub fingerprint: Option<Fingerprint>,
+    /// The fingerprint of the layout settings it was made with, when it
+    /// records them (files of older versions do not).
+    pub settings: Option<Fingerprint>,
     /// Why a stored layout that is there could not be used (truncated by a
     /// full disk, edited by hand): the layout starts cold, so the picture
     /// jumps; the user should hear of it. One line, naming the file.
@@ -48,15 +54,32 @@ pub fn read(d: &DatasetConfig) -> StoredLayout {
         Ok(previous) => StoredLayout {
             previous: Some(Arc::new(previous)),
             fingerprint: Some(Fingerprint::of_bytes(text.as_bytes())),
+            settings: settings_of(&text),
             warning: None,
         },
         Err(e) => unusable(e.to_string()),
     }
 }
 
-/// The stored layout's text for a computation (full precision).
+/// The field holding the settings' fingerprint.
+const SETTINGS_FIELD: &str = "\"nptreemap_settings\": \"";
+
+/// The stored layout's text for a computation: layout JSON in full
+/// precision, with the fingerprint of its layout settings as the first field.
 pub fn text(computed: &Computed) -> String {
-    layout_json::state(computed)
+    let doc = layout_json::state(computed);
+    let key = manifest::settings_key(&computed.settings);
+    match doc.strip_prefix("{\n") {
+        Some(rest) => format!("{{\n  {SETTINGS_FIELD}{key}\",\n{rest}"),
+        None => doc,
+    }
+}
+
+/// The settings' fingerprint a stored layout's text records, if any.
+fn settings_of(text: &str) -> Option<Fingerprint> {
+    let head = text.get(..text.len().min(200))?;
+    let at = head.find(SETTINGS_FIELD)? + SETTINGS_FIELD.len();
+    Fingerprint::parse(head.get(at..at + 32)?)
 }
 
 /// Writes a stored layout's text (atomically; unchanged bytes are not
@@ -68,22 +91,40 @@ pub fn write(d: &DatasetConfig, text: &str) -> std::io::Result<bool> {
     }
 }
 
-/// Stores a dataset's layout and records in the manifest the settings it
-/// was made with, without its inputs (which this caller, `nptreemap watch`,
-/// does not fingerprint yet): the next build starts warm from it but
-/// renders its outputs to compare them. The build itself writes the
-/// complete record (`graph`).
+/// Stores a dataset's layout for a caller that does not keep the manifest
+/// (`nptreemap watch`, until it runs on the stage graph): the next build
+/// starts warm from it, and the manifest's record of an older layout is
+/// dropped so that nothing is taken as up to date on its word. The build
+/// writes the complete record itself (`graph`).
 pub fn store(d: &DatasetConfig, computed: &Computed) -> std::io::Result<()> {
-    let text = text(computed);
-    write(d, &text)?;
+    write(d, &text(computed))?;
     let mut m = manifest::read(d);
-    m.layout = Some(LayoutRecord {
-        inputs: None,
-        settings: manifest::settings_key(&computed.settings),
-        state: Fingerprint::of_bytes(text.as_bytes()),
-        constraints: computed.constraints.len(),
-        realized: computed.realized.iter().filter(|r| **r).count(),
-        warnings: Vec::new(),
-    });
-    manifest::write(d, &m).map(|_| ())
+    if m.layout.take().is_some() {
+        manifest::write(d, &m)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::{compute, Request};
+    use nptreemap_formats::{DatasetBuilder, NodeSpec};
+
+    #[test]
+    fn the_stored_layout_carries_its_settings_and_stays_layout_json() {
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("r"));
+        for (id, w) in [("a", 1.0), ("b", 2.0)] {
+            b.add(NodeSpec::new(id).parent("r").weight(w));
+        }
+        let computed = compute(&b.build().expect("valid"), &Request::default()).expect("layout");
+        let text = text(&computed);
+        assert_eq!(
+            settings_of(&text),
+            Some(manifest::settings_key(&computed.settings))
+        );
+        assert!(layout_json::read(&text).is_ok());
+        assert_eq!(settings_of(&layout_json::state(&computed)), None);
+    }
 }

@@ -1,9 +1,8 @@
 //! The manifest of a dataset's state (`<name>.manifest.json`): what the
 //! stored layout was made from and what every output was rendered from, as
 //! fingerprints. It is what lets a build that changes nothing stop after
-//! reading and hashing the inputs and the outputs, and what tells a warm
-//! start whether the stored layout was made with the layout settings in
-//! force (a seed change must not be answered by the old picture).
+//! reading and hashing the inputs and the outputs, and what tells which
+//! outputs a changed build need not render again.
 //!
 //! Deterministic JSON (no times, no absolute paths: outputs are named
 //! relative to the config's folder), so it can be committed; about 150 bytes
@@ -46,7 +45,7 @@ pub struct LayoutRecord {
     pub inputs: Option<Fingerprint>,
     /// The layout settings ([`settings_key`]).
     pub settings: Fingerprint,
-    /// The stored layout file's bytes.
+    /// The stored layout file's bytes (what the outputs' render keys name).
     pub state: Fingerprint,
     /// Its constraints, for the build's status line.
     pub constraints: usize,

@@ -3,14 +3,16 @@
 //! config's `state_dir:`):
 //!
 //! - `<name>.layout.json`, the stored layout ([`layout`]): the last layout
-//!   in full precision, the next build's warm start. Deterministic bytes (no
-//!   time, no absolute path); meant to be committed with the outputs, so that
-//!   a fresh clone lays an edited dataset out warm from the same layout.
+//!   in full precision with the fingerprint of the layout settings it was
+//!   made with, the next build's warm start. Deterministic bytes (no time,
+//!   no absolute path); meant to be committed with the outputs, so that a
+//!   fresh clone lays an edited dataset out warm from the same layout. About
+//!   as large as the layout JSON output (5 KB per leaf of a deep tree).
 //! - `<name>.manifest.json`, the manifest ([`manifest`]): fingerprints of the
 //!   inputs and layout settings the stored layout was made from and of every
 //!   output's bytes and render settings. A build or `build --check` whose
 //!   inputs, settings and outputs match it is done after reading and hashing
-//!   them. Small (a few hundred bytes), deterministic, committed.
+//!   them. Small (about 150 bytes per output), deterministic, committed.
 //! - `cache/<name>.constraints.bin` ([`constraints`]): the constraints of
 //!   the last similarity inputs, so that an edit that leaves them alone (a
 //!   weight) recomputes none. Local only: a `.gitignore` in `cache/` says so,
