@@ -328,7 +328,7 @@ impl DatasetGraph {
                     settings: last.settings,
                     computed: &last.computed,
                 });
-                let chosen = start::choose(d, job.cold || !cache, memory, settings);
+                let chosen = start::choose(d, cold_because(job.cold, cache), memory, settings);
                 warnings.extend(chosen.warning);
                 let mut request = job.request.clone();
                 request.previous = chosen.previous;
@@ -697,6 +697,17 @@ impl DatasetGraph {
             self.manifest = Some(m);
         }
         written
+    }
+}
+
+/// Why a build may not start warm, if it may not.
+fn cold_because(cold: bool, cache: bool) -> Option<&'static str> {
+    if cold {
+        Some("--cold")
+    } else if !cache {
+        Some("caching off: NPTREEMAP_NO_CACHE")
+    } else {
+        None
     }
 }
 

@@ -46,10 +46,11 @@ pub struct Memory<'a> {
 }
 
 /// Chooses the previous layout of a run with layout settings `settings`
-/// (see the module doc for the order).
+/// (see the module doc for the order); `cold` says why none may be used
+/// (`--cold`), if so.
 pub fn choose(
     d: &DatasetConfig,
-    cold: bool,
+    cold: Option<&'static str>,
     memory: Option<Memory<'_>>,
     settings: Fingerprint,
 ) -> Chosen {
@@ -57,8 +58,8 @@ pub fn choose(
         cold_because: Some(why),
         ..Chosen::default()
     };
-    if cold {
-        return cold_because("--cold");
+    if let Some(why) = cold {
+        return cold_because(why);
     }
     if let Some(memory) = memory {
         if memory.settings != settings {
