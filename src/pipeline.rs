@@ -477,6 +477,7 @@ pub fn stored_layout(d: &DatasetConfig) -> StoredLayout {
 }
 
 /// Where a dataset's last layout is kept between runs (see [`crate::state`]).
+#[cfg(any(test, feature = "internals"))]
 pub fn state_path(d: &DatasetConfig) -> Option<PathBuf> {
     state::layout_path(d)
 }

@@ -119,7 +119,7 @@ fn say_layout(b: &DatasetBuild) {
         LayoutStep::UpToDate => {
             "up to date (inputs, layout settings and outputs as recorded)".to_string()
         }
-        LayoutStep::Reused => "layout reused (inputs and layout settings unchanged)".to_string(),
+        LayoutStep::Reused => "layout reused (every diagram as it was)".to_string(),
         LayoutStep::Warm => format!("laid out warm in {:.0} ms", b.layout_ms),
         LayoutStep::Cold(why) => format!("laid out cold in {:.0} ms ({why})", b.layout_ms),
     };
@@ -134,20 +134,29 @@ fn say_layout(b: &DatasetBuild) {
         )
     };
     super::status(format_args!("{}: {how}; {realized}", b.name));
+    if let Some(report) = b.computed.as_ref().map(|c| &c.report) {
+        if report.unconverged > 0 {
+            tracing::warn!(
+                dataset = %b.name,
+                unconverged = report.unconverged,
+                diagrams = report.diagrams,
+                "some diagrams stopped at the iteration cap above the area-error target"
+            );
+        }
+    }
 }
 
 /// Names each output whose file would change (or is missing); writes nothing.
 fn compare_outputs<'a>(built: impl Iterator<Item = &'a DatasetBuild>) -> anyhow::Result<()> {
     let mut stale = Vec::new();
     let mut fresh = 0;
-    for out in built.flat_map(|b| &b.outputs) {
+    for b in built {
         // A file that cannot be read is as stale as a missing one.
-        if out.stale() {
+        for out in b.stale() {
             super::status(format_args!("stale {}", out.path.display()));
             stale.push(out.path.clone());
-        } else {
-            fresh += 1;
         }
+        fresh += b.outputs.len() - b.stale().count();
     }
     if stale.is_empty() {
         super::status(format_args!("{fresh} outputs up to date"));

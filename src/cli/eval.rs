@@ -13,9 +13,9 @@ use clap::Args;
 use super::progress::LayoutBar;
 use super::{LayoutOptions, UsageError};
 use crate::config::DatasetConfig;
+use crate::graph::{DatasetGraph, GraphOptions, StageReport};
 use crate::layout::{Computed, Method, Previous, Request, Start};
 use crate::measure::{stability, table2, EvalMetrics, Stability};
-use crate::graph::{DatasetGraph, GraphOptions, StageReport};
 use crate::pipeline::{self, Rendered};
 use crate::{layout_json, Dataset};
 

@@ -9,8 +9,8 @@ use clap::Args;
 use super::progress::LayoutBar;
 use super::{LayoutOptions, UsageError};
 use crate::config::{kind_of, OutputConfig};
-use crate::layout::{Method, Start};
 use crate::graph::{DatasetGraph, GraphOptions, StageReport};
+use crate::layout::{Method, Start};
 use crate::pipeline;
 
 /// Arguments of `nptreemap layout`.

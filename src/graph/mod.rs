@@ -60,7 +60,7 @@ use crate::render::Style;
 use crate::state::manifest::{self, LayoutRecord, Manifest, OutputRecord};
 use crate::state::{self};
 use crate::workspace;
-pub use report::{Stage, StageReport, StageRun};
+pub use report::{Stage, StageReport};
 
 /// How a graph reuses results.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

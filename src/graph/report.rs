@@ -80,6 +80,7 @@ impl StageReport {
     }
 
     /// How many times `stage` ran.
+    #[cfg(any(test, feature = "internals"))]
     pub fn ran(&self, stage: Stage) -> usize {
         self.runs
             .iter()
@@ -88,6 +89,7 @@ impl StageReport {
     }
 
     /// How many times `stage`'s result was reused.
+    #[cfg(any(test, feature = "internals"))]
     pub fn reused(&self, stage: Stage) -> usize {
         self.runs
             .iter()

@@ -1,0 +1,184 @@
+#!/usr/bin/env python3
+"""What a rebuild costs against a cold build (issue 22): the release binary's
+`nptreemap build` on a C-headers-like tree, timed edit by edit in one run.
+
+For each case it writes target/incremental/CASE/: the tree (benches/c_headers.py
+over a real source tree, default /usr/include; `headers500` keeps 500 of its
+headers), a config with SVG, PNG, layout JSON and HTML outputs and
+`limits.max_dimensions` raised to 10,000 (the tree has thousands of distinct
+included names, each a dimension of the Jaccard vectors; the default limit is
+1,024), then runs, each in a fresh process:
+
+  cold          build --cold (no state folder yet)
+  no-op         build again, nothing changed
+  no-op check   build --check, nothing changed
+  weight +10%   one header's size times 1.1
+  similarity    one header includes one more name (one similarity row)
+  render        render.border_width changed in the config
+
+and prints wall time, peak RSS (os.wait4), the ratio to the cold build, how
+the layout was got (the build's status line) and which stages ran (from
+`-v`). Markdown on stdout and in target/incremental/report.md.
+
+Usage (from the repository root):
+    python3 benches/incremental.py                     # headers and headers500
+    python3 benches/incremental.py --cases headers500 --root /usr/include
+    python3 benches/incremental.py --no-build --binary target/release/nptreemap
+
+Python 3 standard library only.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import os
+import platform
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+OUT = REPO / "target" / "incremental"
+CASES = {"headers": 0, "headers500": 500}
+
+CONFIG = """# benches/incremental.py: a C-headers-like tree (benches/c_headers.py).
+# limits.max_dimensions is raised: every distinct included name is a
+# dimension of the Jaccard vectors.
+limits: {{max_dimensions: 10000}}
+render: {{border_width: {border}}}
+datasets:
+  - name: headers
+    format: hierarchy-json
+    files: {{hierarchy: tree.json}}
+    outputs: [out/headers.svg, out/headers.png, out/headers.json, out/headers.html]
+"""
+
+
+def run_measured(binary: Path, args: list[str], cwd: Path) -> dict:
+    """Runs the binary in `cwd`: wall time, exit code, output, and the
+    child's peak RSS (os.wait4, so Popen must not reap it first)."""
+    t = time.perf_counter()
+    p = subprocess.Popen(
+        [str(binary), *args],
+        cwd=cwd,
+        stdout=open(cwd / "stdout.txt", "w"),
+        stderr=open(cwd / "stderr.txt", "w"),
+    )
+    _, status, usage = os.wait4(p.pid, 0)
+    wall = time.perf_counter() - t
+    p.returncode = os.waitstatus_to_exitcode(status)
+    return {
+        "args": args,
+        "wall_s": wall,
+        "rss_mb": usage.ru_maxrss / 1024,
+        "code": p.returncode,
+        "stdout": (cwd / "stdout.txt").read_text(),
+        "stderr": (cwd / "stderr.txt").read_text(),
+    }
+
+
+STAGE = re.compile(r"headers: (\w+) (ran|reused) in ([0-9.]+) ms")
+
+
+def stages(stderr: str) -> str:
+    ran: dict[str, float] = {}
+    for name, how, ms in STAGE.findall(stderr):
+        if how == "ran":
+            ran[name] = ran.get(name, 0.0) + float(ms)
+    return ", ".join(f"{k} {v / 1000:.2f} s" if v >= 100 else f"{k} {v:.0f} ms" for k, v in ran.items()) or "none"
+
+
+def layout_line(stdout: str) -> str:
+    for line in stdout.splitlines():
+        if line.startswith("headers: "):
+            return line[len("headers: "):].split(";")[0]
+    return ""
+
+
+def first_leaf(node: dict) -> dict:
+    while node.get("children"):
+        node = node["children"][0]
+    return node
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--cases", default=",".join(CASES))
+    ap.add_argument("--root", default="/usr/include")
+    ap.add_argument("--binary", default=str(REPO / "target" / "release" / "nptreemap"))
+    ap.add_argument("--no-build", action="store_true")
+    args = ap.parse_args()
+    binary = Path(args.binary)
+    if not args.no_build:
+        subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=REPO, check=True)
+    report = [
+        f"`python3 benches/incremental.py --cases {args.cases} --root {args.root}`, "
+        f"{dt.date.today()}, {platform.machine()} {os.cpu_count()} cores, {platform.platform()}",
+        "",
+    ]
+    failed = False
+    for case in args.cases.split(","):
+        folder = OUT / case
+        shutil.rmtree(folder, ignore_errors=True)
+        folder.mkdir(parents=True)
+        gen = [sys.executable, str(REPO / "benches" / "c_headers.py"), str(folder / "tree.json"), "--root", args.root]
+        if CASES[case]:
+            gen += ["--leaves", str(CASES[case])]
+        described = subprocess.run(gen, check=True, capture_output=True, text=True).stderr.strip()
+        (folder / "nptreemap.yaml").write_text(CONFIG.format(border=2))
+        steps = []
+
+        def step(name: str, build_args: list[str]):
+            r = run_measured(binary, ["-v", *build_args, "nptreemap.yaml"], folder)
+            r["name"] = name
+            steps.append(r)
+            print(f"{case}: {name}: {r['wall_s']:.2f} s ({layout_line(r['stdout'])})", file=sys.stderr)
+            return r
+
+        step("cold", ["build", "--cold"])
+        step("no-op build", ["build"])
+        step("no-op build --check", ["build", "--check"])
+        tree = json.loads((folder / "tree.json").read_text())
+        leaf = first_leaf(tree)
+        leaf["size"] = round(leaf["size"] * 1.1) + 1
+        (folder / "tree.json").write_text(json.dumps(tree, separators=(",", ":")))
+        step("one weight +10%", ["build"])
+        vector = leaf["embeddings"]
+        k = vector.index(0) if 0 in vector else 0
+        vector[k] = 1 - vector[k]
+        (folder / "tree.json").write_text(json.dumps(tree, separators=(",", ":")))
+        step("one similarity row", ["build"])
+        (folder / "nptreemap.yaml").write_text(CONFIG.format(border=3))
+        step("`render:` change", ["build"])
+
+        cold = steps[0]["wall_s"]
+        report += [
+            f"**{case}**: {described.split(': ', 1)[-1]}; "
+            f"outputs {sum(f.stat().st_size for f in (folder / 'out').glob('headers.*')) / 1e6:.1f} MB, "
+            f"state folder {sum(f.stat().st_size for f in (folder / 'out' / '.nptreemap').rglob('*') if f.is_file()) / 1e6:.1f} MB "
+            f"(of which cache {sum(f.stat().st_size for f in (folder / 'out' / '.nptreemap' / 'cache').rglob('*') if f.is_file()) / 1e6:.1f} MB)",
+            "",
+            "| step | wall | peak RSS | ratio to cold | layout | stages that ran |",
+            "|---|---:|---:|---:|---|---|",
+        ]
+        for s in steps:
+            ok = s["code"] == 0
+            failed |= not ok
+            report.append(
+                f"| {s['name']} | {s['wall_s']:.2f} s | {s['rss_mb']:.0f} MB | {100 * s['wall_s'] / cold:.1f}% | "
+                f"{layout_line(s['stdout']) if ok else 'exit ' + str(s['code'])} | {stages(s['stderr'])} |"
+            )
+        report.append("")
+        (folder / "steps.json").write_text(json.dumps(steps, indent=1))
+    text = "\n".join(report)
+    print(text)
+    (OUT / "report.md").write_text(text + "\n")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
