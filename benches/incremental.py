@@ -16,7 +16,9 @@ included names, each a dimension of the Jaccard vectors; the default limit is
   similarity    one header includes one more name (one similarity row)
   render        render.border_width changed in the config
 
-and prints wall time, peak RSS (os.wait4), the ratio to the cold build, how
+and prints wall and CPU time (user + system), peak RSS (os.wait4), their
+ratios to the cold build (CPU time is the steadier figure on a shared
+machine), how
 the layout was got (the build's status line) and which stages ran (from
 `-v`). Markdown on stdout and in target/incremental/report.md.
 
@@ -75,6 +77,7 @@ def run_measured(binary: Path, args: list[str], cwd: Path) -> dict:
         "args": args,
         "wall_s": wall,
         "rss_mb": usage.ru_maxrss / 1024,
+        "cpu_s": usage.ru_utime + usage.ru_stime,
         "code": p.returncode,
         "stdout": (cwd / "stdout.txt").read_text(),
         "stderr": (cwd / "stderr.txt").read_text(),
@@ -156,20 +159,22 @@ def main() -> int:
         step("`render:` change", ["build"])
 
         cold = steps[0]["wall_s"]
+        cold_cpu = steps[0]["cpu_s"]
         report += [
             f"**{case}**: {described.split(': ', 1)[-1]}; "
             f"outputs {sum(f.stat().st_size for f in (folder / 'out').glob('headers.*')) / 1e6:.1f} MB, "
             f"state folder {sum(f.stat().st_size for f in (folder / 'out' / '.nptreemap').rglob('*') if f.is_file()) / 1e6:.1f} MB "
             f"(of which cache {sum(f.stat().st_size for f in (folder / 'out' / '.nptreemap' / 'cache').rglob('*') if f.is_file()) / 1e6:.1f} MB)",
             "",
-            "| step | wall | peak RSS | ratio to cold | layout | stages that ran |",
-            "|---|---:|---:|---:|---|---|",
+            "| step | wall | CPU | peak RSS | wall / cold | CPU / cold | layout | stages that ran |",
+            "|---|---:|---:|---:|---:|---:|---|---|",
         ]
         for s in steps:
             ok = s["code"] == 0
             failed |= not ok
             report.append(
-                f"| {s['name']} | {s['wall_s']:.2f} s | {s['rss_mb']:.0f} MB | {100 * s['wall_s'] / cold:.1f}% | "
+                f"| {s['name']} | {s['wall_s']:.2f} s | {s['cpu_s']:.2f} s | {s['rss_mb']:.0f} MB | "
+                f"{100 * s['wall_s'] / cold:.1f}% | {100 * s['cpu_s'] / cold_cpu:.1f}% | "
                 f"{layout_line(s['stdout']) if ok else 'exit ' + str(s['code'])} | {stages(s['stderr'])} |"
             )
         report.append("")

@@ -203,11 +203,20 @@ fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1000.0
 }
 
-/// The fingerprint of the file at `path`, if it is there and readable.
-fn on_disk(path: &Path) -> Option<Fingerprint> {
-    workspace::read_bytes(path)
-        .ok()
-        .map(|bytes| Fingerprint::of_bytes(&bytes))
+/// An output's file as the build found it.
+#[derive(Clone, Copy)]
+struct OnDisk {
+    fingerprint: Fingerprint,
+    len: u64,
+}
+
+/// The fingerprint and size of the file at `path`, if it is there and
+/// readable.
+fn on_disk(path: &Path) -> Option<OnDisk> {
+    workspace::read_bytes(path).ok().map(|bytes| OnDisk {
+        fingerprint: Fingerprint::of_bytes(&bytes),
+        len: bytes.len() as u64,
+    })
 }
 
 impl DatasetGraph {
@@ -259,7 +268,7 @@ impl DatasetGraph {
                 }
             })
             .clone();
-        let disk: Vec<Option<Fingerprint>> = d.outputs.iter().map(|o| on_disk(&o.path)).collect();
+        let disk: Vec<Option<OnDisk>> = d.outputs.iter().map(|o| on_disk(&o.path)).collect();
 
         if let Some(done) = self.up_to_date(job, &manifest, inputs, settings, &disk, &mut stages) {
             return Ok(done);
@@ -381,7 +390,7 @@ impl DatasetGraph {
             let t = Instant::now();
             let known = manifest
                 .output(d, &out.path)
-                .filter(|r| cache && r.render == key && Some(r.bytes) == *disk);
+                .filter(|r| cache && r.render == key && disk.map(|f| f.fingerprint) == Some(r.bytes));
             let built = match known {
                 Some(record) => {
                     stages.record(name, Stage::Render, false, ms_since(t), "file up to date");
@@ -389,8 +398,8 @@ impl DatasetGraph {
                         path: out.path.clone(),
                         bytes: None,
                         fingerprint: record.bytes,
-                        len: 0,
-                        on_disk: *disk,
+                        len: disk.map_or(0, |f| f.len),
+                        on_disk: disk.map(|f| f.fingerprint),
                     }
                 }
                 None => {
@@ -402,7 +411,7 @@ impl DatasetGraph {
                         fingerprint: Fingerprint::of_bytes(&bytes),
                         len: bytes.len() as u64,
                         bytes: Some(bytes),
-                        on_disk: *disk,
+                        on_disk: disk.map(|f| f.fingerprint),
                     }
                 }
             };
@@ -412,11 +421,6 @@ impl DatasetGraph {
                 bytes: built.fingerprint,
             });
             outputs.push(built);
-        }
-        for o in &mut outputs {
-            if o.len == 0 {
-                o.len = std::fs::metadata(&o.path).map_or(0, |m| m.len());
-            }
         }
         let realized = computed.realized.iter().filter(|r| **r).count();
         pending.manifest = Some(Manifest {
@@ -455,7 +459,7 @@ impl DatasetGraph {
         manifest: &Manifest,
         inputs: Fingerprint,
         settings: Fingerprint,
-        disk: &[Option<Fingerprint>],
+        disk: &[Option<OnDisk>],
         stages: &mut StageReport,
     ) -> Option<DatasetBuild> {
         let d = job.dataset;
@@ -471,13 +475,13 @@ impl DatasetGraph {
             let key = keys::render(inputs, settings, record.state, &job.style, out);
             let r = manifest
                 .output(d, &out.path)
-                .filter(|r| r.render == key && Some(r.bytes) == *disk)?;
+                .filter(|r| r.render == key && disk.map(|f| f.fingerprint) == Some(r.bytes))?;
             outputs.push(OutputBuild {
                 path: out.path.clone(),
                 bytes: None,
                 fingerprint: r.bytes,
-                len: std::fs::metadata(&out.path).map_or(0, |m| m.len()),
-                on_disk: *disk,
+                len: disk.map_or(0, |f| f.len),
+                on_disk: disk.map(|f| f.fingerprint),
             });
         }
         let name = d.name.as_str();
