@@ -20,8 +20,10 @@ use serde_json::{json, Value};
 use crate::support;
 use cdp::Browser;
 
-/// Cap on the whole browser session, startup included.
-const BUDGET: Duration = Duration::from_secs(30);
+/// Cap on the whole browser session, startup included: generous, as the
+/// suite runs on loaded machines (each step waits for its event, and ends
+/// as soon as it comes).
+const BUDGET: Duration = Duration::from_secs(120);
 
 /// Viewport size: the 1000-unit map plus the checkbox row fits without scrolling.
 const VIEWPORT: (u32, u32) = (1100, 1100);

@@ -17,6 +17,7 @@ mod escaping;
 mod exec;
 mod fuzz;
 mod incremental;
+mod init;
 mod labels;
 mod legibility;
 mod neighborhood;
