@@ -99,6 +99,23 @@ fn refuse_special(path: &Path) -> std::io::Result<()> {
 /// `refuse_special`).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     refuse_special(path)?;
+    write_via_temp(path, bytes).map_err(without_temp_path)
+}
+
+/// The error without the temp file's name, which `tempfile` adds to errors
+/// of its own calls (`No space left on device (os error 28) at path
+/// "/out/.a.svg.123.XyZ.tmp"`): the caller names the output, and a name
+/// that is random each time would make the same failure (a full disk,
+/// retried) read as a new one.
+fn without_temp_path(e: std::io::Error) -> std::io::Error {
+    let text = e.to_string();
+    match text.find(" at path ") {
+        Some(cut) => std::io::Error::new(e.kind(), text[..cut].to_string()),
+        None => e,
+    }
+}
+
+fn write_via_temp(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let dir = dir_of(path);
     std::fs::create_dir_all(&dir)?;
     let prefix = format!(".{}.{}.", temp_stem(&name_of(path)), std::process::id());
@@ -113,7 +130,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
     let mut tmp = builder.tempfile_in(&dir)?;
-    tmp.write_all(bytes)?;
+    tmp.as_file_mut().write_all(bytes)?;
     tmp.as_file().sync_all()?;
     // On failure the returned NamedTempFile is dropped, which deletes it.
     tmp.persist(path).map_err(|e| e.error)?;
@@ -291,6 +308,28 @@ mod tests {
         assert_eq!(remove_stale_temps(&[out]), vec![stale.clone()]);
         assert!(!stale.exists() && live.exists() && other.exists());
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A failed write names no temp file (whose random name would make the
+    /// same failure, retried, read as a new one each time), but keeps the
+    /// system's reason: here tempfile's own error for a folder that is gone.
+    #[test]
+    fn write_errors_do_not_name_the_temp_file() {
+        let dir = scratch("gone");
+        let _ = std::fs::remove_dir_all(&dir);
+        let raw = tempfile::Builder::new()
+            .prefix(".x.1.")
+            .tempfile_in(&dir)
+            .expect_err("no folder");
+        assert!(raw.to_string().contains(".x.1."), "{raw}");
+        let plain = without_temp_path(raw);
+        assert_eq!(
+            plain.to_string(),
+            std::io::Error::from_raw_os_error(libc::ENOENT).to_string()
+        );
+        assert_eq!(plain.kind(), std::io::ErrorKind::NotFound);
+        // What names no temp file is left as it is.
+        assert_eq!(without_temp_path(std::io::Error::other("x")).to_string(), "x");
     }
 
     /// Issue 21 item 9: what is not a regular file (a FIFO, a link to a

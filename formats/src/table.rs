@@ -11,6 +11,15 @@
 //! than a silent guess. Positions: lines are 1-based; the column of a field is its
 //! 1-based field number (the first field is column 1), which is what people look for
 //! in a spreadsheet.
+//!
+//! # Bounds
+//!
+//! Records are read field by field, so every bound holds before memory is spent:
+//! a table's data row is refused at its first field past the header's width (the
+//! rest of it is counted for the message, not kept), rows without a header and
+//! headers stop at a [`FieldCap`](crate::table::FieldCap), and a
+//! [`RowCap`](crate::table::RowCap) stops at a record count. Checking the header
+//! for repeated names is one pass with a map.
 
 use std::collections::hash_map::Entry;
 use std::collections::HashMap;

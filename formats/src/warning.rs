@@ -174,7 +174,7 @@ impl Warnings {
     }
 
     /// The warnings kept, then one line per kind and input that had more:
-    /// "and N more <kind> (the first 5 are listed)", without a line.
+    /// "and N more `<kind>` (the first 5 are listed)", without a line.
     pub fn into_vec(self) -> Vec<Warning> {
         let mut summaries = Vec::new();
         for (role, kind, total) in self.seen {

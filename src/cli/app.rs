@@ -3,7 +3,7 @@
 
 use std::process::ExitCode;
 
-use clap::{CommandFactory, Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Neighborhood-preserving Voronoi treemaps.
 #[derive(Debug, Parser)]
@@ -84,9 +84,25 @@ fn stop_adapters_on_signals() {
     });
 }
 
+/// The command line's definition, with what derive cannot say: `man`'s
+/// SUBCOMMAND takes the names of the other subcommands (so completion
+/// scripts offer them).
+fn command() -> clap::Command {
+    let cli = Cli::command();
+    let pages: Vec<String> = cli
+        .get_subcommands()
+        .map(|s| s.get_name().to_owned())
+        .collect();
+    cli.mut_subcommand("man", |man| {
+        man.mut_arg(super::man::SUBCOMMAND_ARG, |arg| {
+            arg.value_parser(clap::builder::PossibleValuesParser::new(pages))
+        })
+    })
+}
+
 /// Runs the command line on the process's arguments.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::from_arg_matches(&command().get_matches()).unwrap_or_else(|e| e.exit());
     super::set_quiet(cli.quiet);
     let level = match (cli.quiet, cli.verbose) {
         (true, _) => "error",
@@ -118,8 +134,8 @@ pub fn main() -> ExitCode {
         Command::Eval(args) => super::eval::run(&args),
         Command::Bench(args) => super::bench::run(&args),
         Command::Config(args) => super::defaults::run(&args),
-        Command::Completions(args) => super::shell::completions(&args, Cli::command()),
-        Command::Man(args) => super::man::man(&args, Cli::command()),
+        Command::Completions(args) => super::shell::completions(&args, command()),
+        Command::Man(args) => super::man::man(&args, command()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -10,6 +10,10 @@ use roff::{bold, italic, roman, Inline, Roff};
 use super::UsageError;
 use nptreemap_formats::suggest::did_you_mean;
 
+/// The id of `man`'s SUBCOMMAND argument (`app.rs` gives it the
+/// subcommands' names as possible values).
+pub(crate) const SUBCOMMAND_ARG: &str = "subcommand";
+
 /// Arguments of `nptreemap man`.
 #[derive(Debug, Args)]
 pub(crate) struct ManArgs {
@@ -124,6 +128,16 @@ fn built(mut cli: clap::Command) -> clap::Command {
     cli
 }
 
+/// The sections every page opens with: title, NAME, SYNOPSIS, DESCRIPTION,
+/// OPTIONS.
+fn head(man: &Man, out: &mut Vec<u8>) -> std::io::Result<()> {
+    man.render_title(out)?;
+    man.render_name_section(out)?;
+    man.render_synopsis_section(out)?;
+    man.render_description_section(out)?;
+    man.render_options_section(out)
+}
+
 /// Prints the man page of `args.subcommand`, or of `nptreemap` itself
 /// (`nptreemap man > nptreemap.1; man ./nptreemap.1`).
 pub(crate) fn man(args: &ManArgs, cli: clap::Command) -> anyhow::Result<()> {
@@ -132,11 +146,7 @@ pub(crate) fn man(args: &ManArgs, cli: clap::Command) -> anyhow::Result<()> {
     match &args.subcommand {
         None => {
             let man = Man::new(cli.clone());
-            man.render_title(&mut out)?;
-            man.render_name_section(&mut out)?;
-            man.render_synopsis_section(&mut out)?;
-            man.render_description_section(&mut out)?;
-            man.render_options_section(&mut out)?;
+            head(&man, &mut out)?;
             man.render_subcommands_section(&mut out)?;
             let mut roff = Roff::new();
             roff.control("PP", []).text([
@@ -164,11 +174,7 @@ pub(crate) fn man(args: &ManArgs, cli: clap::Command) -> anyhow::Result<()> {
                 })?;
             let version = cli.get_version().unwrap_or_default();
             let man = Man::new(sub.clone()).source(format!("nptreemap {version}"));
-            man.render_title(&mut out)?;
-            man.render_name_section(&mut out)?;
-            man.render_synopsis_section(&mut out)?;
-            man.render_description_section(&mut out)?;
-            man.render_options_section(&mut out)?;
+            head(&man, &mut out)?;
             let mut roff = Roff::new();
             exit_status(&mut roff);
             roff.control("SH", ["SEE ALSO"]);

@@ -174,7 +174,8 @@ pub fn channel() -> (Sender<Message>, Receiver<Message>) {
 pub fn shutdown() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
-        // No adapter outlives the daemon.
+        // Whatever must end with the daemon ends here, first (what the
+        // workers started: adapters' processes), then the writes.
         crate::exec::terminate_all();
         std::mem::forget(crate::store::writing());
     });
@@ -239,17 +240,17 @@ pub fn run(
         daemon.queue.build(&name, Reason::Start);
     }
     daemon.dispatch();
-    let result = daemon.watch(&mut watcher, rx);
+    daemon.watch(&mut watcher, rx);
     daemon.stop.store(true, Ordering::SeqCst);
     shutdown();
     daemon.say(Status::Stopped);
-    result
+    Ok(())
 }
 
 impl Daemon<'_> {
     /// The loop: wait for events (or an outcome, or the next due time),
     /// turn them into work, hand it out, report, until a stop.
-    fn watch(&mut self, watcher: &mut DirWatcher, rx: &Receiver<Message>) -> Result<(), DaemonError> {
+    fn watch(&mut self, watcher: &mut DirWatcher, rx: &Receiver<Message>) {
         while !self.stopping() {
             let aliases = self.aliases.clone();
             let batch = watcher::next_batch(
@@ -296,7 +297,6 @@ impl Daemon<'_> {
             self.dispatch();
             self.report_settled();
         }
-        Ok(())
     }
 
     fn dataset(&self, name: &str) -> Option<&DatasetConfig> {

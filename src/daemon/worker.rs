@@ -368,7 +368,10 @@ impl State {
         }
         let started = Instant::now();
         let written = match self.unwritten.take() {
-            Some(outputs) => {
+            Some(mut outputs) => {
+                // Only outputs the config still has (it may have changed
+                // since; a render of the new config comes first anyway).
+                outputs.retain(|r| job.dataset.outputs.iter().any(|o| o.path == r.path));
                 let written = pipeline::write_outputs(&outputs);
                 if !written.failed.is_empty() {
                     self.unwritten = Some(outputs);

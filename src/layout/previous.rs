@@ -44,7 +44,7 @@ impl PreviousNode {
 
     /// Whether this node's values are ones a layout of `canvas` can have:
     /// a finite, non-negative target weight, a site and cell within the
-    /// canvas (give or take [`OUTSIDE_SHARE`] of its diagonal), and a power
+    /// canvas (give or take `OUTSIDE_SHARE` of its diagonal), and a power
     /// weight within [`POWER_WEIGHT_BOUND`] squared diagonals. On failure,
     /// the field and what is wrong with it. The one home of these rules: the
     /// layout-JSON reader names the offending field with them, and

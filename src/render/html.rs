@@ -93,7 +93,6 @@ const STYLE: &str = r#".nptreemap { font: 14px Helvetica, Arial, sans-serif; col
   .nptreemap .np-background { fill: #161616; }
   .nptreemap .np-cells, .nptreemap .np-tabs { stroke: #161616; }
   .nptreemap .np-labels { fill: #f2f2f2; stroke: #161616; }
-  .nptreemap .np-group-labels { fill: #ffffff; }
   .nptreemap .np-legend-labels, .nptreemap .np-title { fill: #e8e8e8; }
   .nptreemap .np-map path.np-partner { stroke: #fff; }
   .nptreemap .np-tooltip { background: #262626; color: #e8e8e8; border-color: #555; }

@@ -130,10 +130,10 @@ const RING_CANDIDATES: usize = 4096;
 /// of consecutive colours spreads round the hue circle.
 const GOLDEN_ANGLE: f64 = 137.507_764;
 
-/// Up to `n` distinct colours spread over OKLCH: within each of the [`RINGS`],
+/// Up to `n` distinct colours spread over OKLCH: within each of the `RINGS`,
 /// hues by the golden angle, lightness cycling through the ring's three
 /// levels, the ring's chroma (reduced where sRGB cannot show it). A fixed,
-/// bounded search ([`RING_CANDIDATES`] per ring): past the colours it finds,
+/// bounded search (`RING_CANDIDATES` per ring): past the colours it finds,
 /// the palette is shorter than `n` and [`assign`] reuses colours.
 /// Deterministic; a shorter palette is a prefix of a longer one.
 pub fn generated(n: usize) -> Vec<Rgb> {
@@ -168,9 +168,9 @@ pub const ALIKE: f64 = 0.1;
 /// enough (past that, colours are reused evenly). `order` lists the groups by
 /// priority (heaviest first): earlier groups get earlier palette colours.
 /// `fixed[g]` is a group's own colour, kept as given. Deterministic greedy:
-/// each group takes, among the first [`WINDOW`] least-used colours in palette
+/// each group takes, among the first `WINDOW` least-used colours in palette
 /// order, the first far enough from its coloured neighbours, else the one
-/// farthest from them; then [`improve`] repairs what is left. Near-linear in
+/// farthest from them; then `improve` repairs what is left. Near-linear in
 /// the groups: a flat table is a map of up to `max_nodes` top-level groups.
 pub fn assign(
     palette: &[Rgb],
@@ -426,7 +426,7 @@ fn oklab_to_linear([l, a, b]: [f64; 3]) -> [f64; 3] {
 /// The colour of OKLCH lightness `l`, chroma `c` and hue `h` (degrees), with
 /// the chroma reduced until sRGB can show it. A chroma beyond any sRGB
 /// colour's (about 0.32) or not finite counts as that most; the reduction
-/// runs in steps of [`CHROMA_STEP`], so it ends after at most
+/// runs in steps of `CHROMA_STEP`, so it ends after at most
 /// `MAX_CHROMA / CHROMA_STEP` steps with chroma 0 (a grey, always shown).
 pub fn from_oklch(l: f64, c: f64, h: f64) -> Rgb {
     let (sin, cos) = h.to_radians().sin_cos();
@@ -592,6 +592,34 @@ pub fn child_shade(parent: Rgb, index: usize, count: usize) -> Rgb {
     };
     let t = step as f64 / (count - 1) as f64;
     lighten(parent, SHADE_DARKEST + t * (SHADE_LIGHTEST - SHADE_DARKEST))
+}
+
+/// The colour of child `index` of `count` siblings under a parent of colour
+/// `parent` whose main child (the heaviest) is `main`: as [`child_shade`],
+/// except that the main child keeps the parent's colour exactly, taking the
+/// lightness step nearest the parent's (the child that step was for takes
+/// the main child's). So the parent's colour, the one its legend swatch
+/// shows, is on the map too, on its largest cell (down the hierarchy, its
+/// heaviest leaf): issue 21, a legend swatch `#8cd17d` whose largest cell was
+/// `#65c151`.
+pub fn sibling_shade(parent: Rgb, index: usize, count: usize, main: usize) -> Rgb {
+    if count <= 1 || index == main {
+        return parent;
+    }
+    let index = index.min(count - 1);
+    let half = count.div_ceil(2);
+    let step = |i: usize| if i % 2 == 0 { i / 2 } else { half + i / 2 };
+    let offset =
+        |s: usize| SHADE_DARKEST + s as f64 / (count - 1) as f64 * (SHADE_LIGHTEST - SHADE_DARKEST);
+    let nearest = (0..count)
+        .min_by(|&a, &b| offset(a).abs().total_cmp(&offset(b).abs()))
+        .unwrap_or(0);
+    let own = if step(index) == nearest && main < count {
+        step(main)
+    } else {
+        step(index)
+    };
+    lighten(parent, offset(own))
 }
 
 #[cfg(test)]
@@ -814,6 +842,28 @@ mod tests {
         assert!(luminance(lighten(c, 0.3)) > luminance(c));
         assert!(luminance(lighten(c, -0.3)) < luminance(c));
         assert_eq!(lighten(c, f64::NAN), c);
+    }
+
+    /// Issue 21: the legend showed a group's colour that no cell had. The
+    /// main child keeps it; the siblings stay distinct from it and from each
+    /// other.
+    #[test]
+    fn the_main_child_keeps_its_parents_colour() {
+        let p = TABLEAU20[5];
+        for count in 2..12 {
+            for main in 0..count {
+                let shades: Vec<Rgb> = (0..count)
+                    .map(|i| sibling_shade(p, i, count, main))
+                    .collect();
+                assert_eq!(shades[main], p, "{count} children, main {main}");
+                for i in 0..count {
+                    for j in 0..i {
+                        assert_ne!(shades[i], shades[j], "{count}: {i} {j}");
+                    }
+                }
+            }
+        }
+        assert_eq!(sibling_shade(p, 0, 1, 0), p);
     }
 
     #[test]

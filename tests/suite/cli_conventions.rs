@@ -18,7 +18,8 @@ fn run_in(dir: &Path, args: &[&str]) -> Output {
         .expect("run nptreemap")
 }
 
-fn ok(out: &Output) -> String {
+/// Asserts success; returns stdout.
+pub(crate) fn ok(out: &Output) -> String {
     assert!(
         out.status.success(),
         "{}",
@@ -470,6 +471,13 @@ fn completions_offer_the_values_of_enum_flags() {
             );
         }
     }
+    // `man`'s SUBCOMMAND: the subcommands' names.
+    let man = bash
+        .split("nptreemap__subcmd__man)")
+        .nth(1)
+        .and_then(|rest| rest.lines().find(|l| l.trim().starts_with("opts=")))
+        .expect("man's opts line");
+    assert!(man.contains("build watch init"), "{man}");
     // eval's --method also takes `all`.
     assert!(
         completes("--method").iter().any(|l| l.contains(" all")),

@@ -7,19 +7,11 @@
 use std::path::Path;
 use std::process::Output;
 
+use crate::cli_conventions::ok;
 use crate::support;
 
 fn run_in(dir: &Path, args: &[&str]) -> Output {
     support::output_within(support::bin().args(args).current_dir(dir), 120)
-}
-
-fn ok(out: &Output) -> String {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 /// Asserts exit code 2 and every needle in stderr; returns stderr.
@@ -44,6 +36,14 @@ fn two_tables(tag: &str) -> std::path::PathBuf {
     dir
 }
 
+/// `nptreemap init nodes.csv pairs.csv -o OUTPUT --force` in `dir`.
+fn init_over(dir: &Path, output: &str) -> Output {
+    run_in(
+        dir,
+        &["init", "nodes.csv", "pairs.csv", "-o", output, "--force"],
+    )
+}
+
 #[test]
 fn output_naming_an_input_is_refused_however_it_is_named() {
     let dir = two_tables("init_over_input");
@@ -58,10 +58,7 @@ fn output_naming_an_input_is_refused_however_it_is_named() {
         outputs.extend(["link.yaml", "hard.yaml"]);
     }
     for output in outputs {
-        let out = run_in(
-            &dir,
-            &["init", "nodes.csv", "pairs.csv", "-o", output, "--force"],
-        );
+        let out = init_over(&dir, output);
         refused(&out, &[output, "input"]);
         assert_eq!(
             std::fs::read_to_string(dir.join("nodes.csv")).expect("nodes"),
@@ -94,17 +91,7 @@ fn output_that_is_a_fifo_or_a_dangling_link_is_refused_without_blocking() {
     assert!(made.success());
     // A FIFO opened for writing blocks until a reader comes: output_within
     // fails the test instead of hanging it.
-    let out = run_in(
-        &dir,
-        &[
-            "init",
-            "nodes.csv",
-            "pairs.csv",
-            "-o",
-            "fifo.yaml",
-            "--force",
-        ],
-    );
+    let out = init_over(&dir, "fifo.yaml");
     refused(&out, &["fifo.yaml", "FIFO"]);
     assert!(std::fs::symlink_metadata(&fifo)
         .expect("fifo")
@@ -129,31 +116,11 @@ fn output_that_is_a_fifo_or_a_dangling_link_is_refused_without_blocking() {
     }
     // A folder is no config file either.
     std::fs::create_dir(dir.join("folder.yaml")).expect("dir");
-    let out = run_in(
-        &dir,
-        &[
-            "init",
-            "nodes.csv",
-            "pairs.csv",
-            "-o",
-            "folder.yaml",
-            "--force",
-        ],
-    );
+    let out = init_over(&dir, "folder.yaml");
     refused(&out, &["folder.yaml", "directory"]);
     // And the ordinary case still works, replacing a regular file with --force.
     std::fs::write(dir.join("mine.yaml"), "old").expect("write");
-    ok(&run_in(
-        &dir,
-        &[
-            "init",
-            "nodes.csv",
-            "pairs.csv",
-            "-o",
-            "mine.yaml",
-            "--force",
-        ],
-    ));
+    ok(&init_over(&dir, "mine.yaml"));
     let yaml = std::fs::read_to_string(dir.join("mine.yaml")).expect("written");
     assert!(yaml.contains("format: border-list"), "{yaml}");
 }
@@ -194,6 +161,7 @@ fn a_large_table_is_sampled_and_checked_against_the_limits() {
     huge.set_len(300 << 20).expect("sparse file");
     let out = run_capped(&dir, 600, "init huge.csv");
     refused(&out, &["huge.csv", "limits.max_file_mb"]);
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

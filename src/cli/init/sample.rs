@@ -172,6 +172,8 @@ pub(super) fn scan(
         })
     };
     let (file, _) = workspace::open_input(path, limits).map_err(file_error)?;
+    // Bounded even if the file grows while it is read.
+    let file = file.take(limits.max_file_bytes());
     let mut input = std::io::BufReader::with_capacity(1 << 16, file);
     let mut csv = csv_core::ReaderBuilder::new().delimiter(delimiter).build();
     let mut field = vec![0u8; MAX_ID_BYTES];
