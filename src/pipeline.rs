@@ -288,7 +288,7 @@ pub fn read_inputs(d: &DatasetConfig) -> Result<Vec<InputFile>, BuildError> {
 /// command gets their paths as they are valid in its folder, the config's,
 /// wherever nptreemap was started.
 fn run_exec(d: &DatasetConfig) -> Result<InputFile, BuildError> {
-    if let Some(missing) = d.files.values().find(|f| !f.exists()) {
+    if let Some(missing) = d.files.values().find(|f| !workspace::exists(f)) {
         return Err(BuildError::File(FileError::Read {
             path: missing.clone(),
             source: std::io::Error::from(std::io::ErrorKind::NotFound),
@@ -507,21 +507,6 @@ pub fn read_previous(path: &Path) -> Result<Previous, BuildError> {
     })
 }
 
-/// The stored layout of a dataset (see [`crate::state::layout`]).
-pub use crate::state::layout::StoredLayout;
-
-/// The layout stored for a dataset, if there is one (see
-/// [`crate::state::layout::read`]).
-pub fn stored_layout(d: &DatasetConfig) -> StoredLayout {
-    state::layout::read(d)
-}
-
-/// Where a dataset's last layout is kept between runs (see [`crate::state`]).
-#[cfg(any(test, feature = "internals"))]
-pub fn state_path(d: &DatasetConfig) -> Option<PathBuf> {
-    state::layout_path(d)
-}
-
 /// A file a run reads or writes, with the words a message names it by.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Named {
@@ -611,13 +596,6 @@ pub fn remove_stale_temps(writes: &[Named]) {
     for path in store::remove_stale_temps(&paths) {
         tracing::info!(?path, "removed a temp file left by an interrupted run");
     }
-}
-
-/// Stores a dataset's layout at its [`state_path`] in full precision
-/// (atomically; unchanged bytes are not rewritten), recording the settings
-/// it was made with (see [`crate::state::layout::store`]).
-pub fn store_layout(d: &DatasetConfig, computed: &Computed) -> std::io::Result<()> {
-    state::layout::store(d, computed)
 }
 
 #[cfg(test)]

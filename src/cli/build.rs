@@ -177,7 +177,7 @@ pub(crate) fn check(args: &CheckArgs) -> anyhow::Result<()> {
         for line in pipeline::warnings(&files, &dataset) {
             super::warn(line);
         }
-        if let Some(line) = pipeline::stored_layout(d).warning {
+        if let Some(line) = crate::state::layout::read(d).warning {
             super::warn(line);
         }
         super::status(format_args!(

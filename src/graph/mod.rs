@@ -197,6 +197,9 @@ pub struct DatasetGraph {
     prepared: Option<(Fingerprint, Arc<Dataset>)>,
     constraints: Option<(Fingerprint, Arc<Vec<Constraint>>)>,
     last: Option<Last>,
+    /// State a commit could not write (a full disk, a read-only folder),
+    /// kept for [`DatasetGraph::store_again`].
+    unstored: Option<Pending>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -338,7 +341,10 @@ impl DatasetGraph {
                     computed: &last.computed,
                 });
                 let chosen = start::choose(d, cold_because(job.cold, cache), memory, settings);
-                warnings.extend(chosen.warning);
+                // The stored layout's warning first: it is about the whole run.
+                if let Some(warning) = chosen.warning {
+                    warnings.insert(0, warning);
+                }
                 let mut request = job.request.clone();
                 request.previous = chosen.previous;
                 let t = Instant::now();
@@ -648,7 +654,8 @@ impl DatasetGraph {
     /// Writes a build's stale outputs (atomically, all or none of a set
     /// being under way at a forced exit), then its state: the stored layout,
     /// the constraint cache and the manifest. A state file that cannot be
-    /// written only costs the next build its reuse (logged).
+    /// written only costs the next build its reuse (logged, and kept for
+    /// [`DatasetGraph::store_again`]).
     pub fn commit(&mut self, job: &Job<'_>, build: &mut DatasetBuild) -> Written {
         let d = job.dataset;
         let t = Instant::now();
@@ -675,32 +682,70 @@ impl DatasetGraph {
             let note = if wrote { "written" } else { "file unchanged" };
             build.stages.record(&d.name, Stage::Write, wrote, ms, note);
         }
-        if !written.failed.is_empty() || !self.options.cache {
+        if !self.options.cache {
             return written;
         }
         let pending = std::mem::take(&mut build.pending);
-        let mut manifest = pending.manifest;
-        if let Some((text, _)) = &pending.layout {
-            if let Err(e) = state::layout::write(d, text) {
-                tracing::warn!(dataset = %d.name, error = %e, "cannot store the layout for warm starts");
-                // The manifest must not vouch for a layout that is not there.
-                if let Some(m) = &mut manifest {
-                    m.layout = None;
-                }
+        if written.failed.is_empty() {
+            self.unstored = None;
+            if let Err(e) = self.store(d, pending) {
+                tracing::warn!(dataset = %d.name, error = %e, "cannot write the state folder");
             }
+        } else {
+            // The outputs come first: the manifest may not vouch for files
+            // that were not written. Kept for the retry that writes them.
+            self.unstored = Some(pending);
         }
+        written
+    }
+
+    /// Writes the state a commit could not write (after its outputs could
+    /// not be written, or the state itself could not be): `Ok` when there
+    /// is none left to write.
+    pub fn store_again(&mut self, d: &DatasetConfig) -> std::io::Result<()> {
+        match self.unstored.take() {
+            Some(pending) => self.store(d, pending),
+            None => Ok(()),
+        }
+    }
+
+    /// Whether state is waiting for [`DatasetGraph::store_again`].
+    pub fn unstored(&self) -> bool {
+        self.unstored.is_some()
+    }
+
+    /// The last layout the graph made or took over (the watch daemon's
+    /// previous picture, for its stability figures).
+    pub fn last_layout(&self) -> Option<Arc<Computed>> {
+        self.last.as_ref().map(|last| Arc::clone(&last.computed))
+    }
+
+    /// Writes a build's state: the stored layout, the constraint cache and
+    /// the manifest. A constraint cache that cannot be written only costs
+    /// the next process its reuse (logged); a stored layout that cannot be
+    /// is kept for a retry with the manifest (which must not vouch for it).
+    fn store(&mut self, d: &DatasetConfig, pending: Pending) -> std::io::Result<()> {
         if let Some((key, prepared, constraints)) = &pending.constraints {
             if let Err(e) = state::constraints::write(d, *key, prepared, constraints) {
                 tracing::warn!(dataset = %d.name, error = %e, "cannot cache the constraints");
             }
         }
-        if let Some(m) = manifest {
+        if let Some((text, _)) = &pending.layout {
+            if let Err(e) = state::layout::write(d, text) {
+                self.unstored = Some(Pending {
+                    constraints: None,
+                    ..pending
+                });
+                return Err(e);
+            }
+        }
+        if let Some(m) = pending.manifest {
             if let Err(e) = manifest::write(d, &m) {
                 tracing::warn!(dataset = %d.name, error = %e, "cannot write the state manifest");
             }
             self.manifest = Some(m);
         }
-        written
+        Ok(())
     }
 }
 

@@ -1,6 +1,10 @@
 //! Warm or cold: the one place a build decides which previous layout its
 //! layout starts from. In order:
 //!
+//! For `layout`, `eval` and `bench`, which build no configured dataset, the
+//! previous layout is the `--previous` file, unless `--cold` ([`given`]).
+//! For `build` and `watch` ([`choose`]), in order:
+//!
 //! 1. `--cold` (or caching turned off, `NPTREEMAP_NO_CACHE`): none.
 //! 2. The graph's own last layout, kept in memory between rebuilds (the
 //!    watch daemon), if it was made with the layout settings in force.
@@ -43,6 +47,16 @@ pub struct Memory<'a> {
     pub settings: Fingerprint,
     /// The layout.
     pub computed: &'a Computed,
+}
+
+/// The previous layout of a run given one on the command line
+/// (`--previous`): it, unless `cold` (`--cold`).
+pub fn given(previous: Option<Arc<Previous>>, cold: bool) -> Option<Arc<Previous>> {
+    if cold {
+        None
+    } else {
+        previous
+    }
 }
 
 /// Chooses the previous layout of a run with layout settings `settings`

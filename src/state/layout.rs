@@ -91,20 +91,6 @@ pub fn write(d: &DatasetConfig, text: &str) -> std::io::Result<bool> {
     }
 }
 
-/// Stores a dataset's layout for a caller that does not keep the manifest
-/// (`nptreemap watch`, until it runs on the stage graph): the next build
-/// starts warm from it, and the manifest's record of an older layout is
-/// dropped so that nothing is taken as up to date on its word. The build
-/// writes the complete record itself (`graph`).
-pub fn store(d: &DatasetConfig, computed: &Computed) -> std::io::Result<()> {
-    write(d, &text(computed))?;
-    let mut m = manifest::read(d);
-    if m.layout.take().is_some() {
-        manifest::write(d, &m)?;
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

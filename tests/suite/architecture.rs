@@ -297,6 +297,55 @@ fn pure_modules_do_no_io() {
     );
 }
 
+/// Issue 22 item 1: the edges that run the stages reach files only through
+/// the one reader (`workspace.rs`) and the one writer (`store.rs`), so that
+/// every read is bounded and every write atomic in one place each.
+#[test]
+fn files_are_reached_only_through_the_reader_and_the_writer() {
+    const THROUGH_THEM: &[&str] = &[
+        "pipeline.rs",
+        "daemon/mod.rs",
+        "daemon/worker.rs",
+        "daemon/queue.rs",
+        "daemon/change.rs",
+        "daemon/event.rs",
+        "graph/",
+        "state/",
+        "cli/init/",
+        "cli/build.rs",
+    ];
+    const FILE_ACCESS: &[&str] = &[
+        "std::fs",
+        "fs::",
+        "File::",
+        ".exists()",
+        ".is_file()",
+        ".is_dir()",
+        ".metadata()",
+        "read_dir(",
+    ];
+    let mut offences = Vec::new();
+    let mut seen = 0;
+    for (rel, code) in sources() {
+        let rel = rel.to_string_lossy().replace('\\', "/");
+        if !THROUGH_THEM.iter().any(|p| rel.starts_with(p)) {
+            continue;
+        }
+        seen += 1;
+        for word in FILE_ACCESS {
+            if code.contains(word) {
+                offences.push(format!("src/{rel}: {word}"));
+            }
+        }
+    }
+    assert!(seen >= 15, "expected the edge files, found {seen}");
+    assert!(
+        offences.is_empty(),
+        "file access around workspace.rs and store.rs:\n{}",
+        offences.join("\n")
+    );
+}
+
 #[test]
 fn the_core_never_reaches_the_edges() {
     let graph = import_graph();
