@@ -102,9 +102,9 @@ fn files(roff: &mut Roff) {
     entry(
         roff,
         italic("OUTPUT_FOLDER/.nptreemap/DATASET.manifest.json"),
-        "Fingerprints of the inputs, layout settings and outputs of the last build: a build \
-         or build --check that finds them unchanged stops there. Commit it with the outputs \
-         and the stored layout.",
+        "Fingerprints of the inputs, layout settings and outputs of the last build (or watch \
+         rebuild): a build or build --check that finds them unchanged stops there, and watch \
+         starts without laying out. Commit it with the outputs and the stored layout.",
     );
     entry(
         roff,
