@@ -205,6 +205,9 @@ struct State {
     /// Fingerprint of the input bytes last built (or last failed on), so an
     /// event that changed nothing (a touch, a save without edits) costs nothing.
     fingerprint: Option<Fingerprint>,
+    /// Whether a build has succeeded: there are good outputs, and a failed
+    /// build's inputs, seen again unchanged, need no second attempt.
+    good: bool,
     /// The outputs of the last rebuild when some could not be written: the
     /// whole set, so that a retry leaves it consistent (the ones that were
     /// written are skipped as unchanged).
@@ -217,6 +220,7 @@ impl Default for State {
             // `NPTREEMAP_NO_CACHE=1` turns reuse off here too, as for `build`.
             graph: DatasetGraph::new(GraphOptions::from_env()),
             fingerprint: None,
+            good: false,
             unwritten: None,
         }
     }
@@ -268,14 +272,13 @@ impl State {
         let data_only = matches!(reason, Reason::Data(_) | Reason::Reload);
         if data_only
             && self.fingerprint == Some(fingerprint)
-            && self.graph.last_layout().is_some()
+            && self.good
             && !job.force
         {
             tracing::debug!(dataset = name, "inputs unchanged; nothing to do");
             return Outcome::Unchanged;
         }
         self.fingerprint = Some(fingerprint);
-        let before = self.graph.last_layout();
         let bar = Bar::take(shared, &reason, name);
         let mut request = job.request.clone();
         // A stop ends the layout itself (see `progress`).
@@ -307,27 +310,28 @@ impl State {
             LayoutStep::Reused => LayoutKind::Reused,
             LayoutStep::UpToDate => LayoutKind::UpToDate,
         };
-        // How far the cells moved, when there was a picture before and
-        // this one was laid out (cheap next to the layout: one pass over
-        // the leaves and the realised pairs).
-        let stability = match (&before, &build.computed, &build.layout) {
-            (Some(before), Some(after), LayoutStep::Warm | LayoutStep::Cold(_)) => {
-                Some(stability(&before.previous(), after))
-            }
+        // How far the cells moved from the layout the warm start began with
+        // (cheap next to the layout: one pass over the leaves and the
+        // realised pairs).
+        let stability = match (&build.started_from, &build.computed) {
+            (Some(before), Some(after)) => Some(stability(before, after)),
             _ => None,
         };
-        let rendered: Vec<Rendered> = build
-            .outputs
-            .iter()
-            .filter_map(|o| {
-                o.bytes.as_ref().map(|bytes| Rendered {
-                    path: o.path.clone(),
-                    bytes: bytes.clone(),
-                })
-            })
-            .collect();
         let written = self.graph.commit(&graph_job, &mut build);
-        self.unwritten = (!written.failed.is_empty()).then_some(rendered);
+        self.good = true;
+        // Kept for the retry only when some output could not be written.
+        self.unwritten = (!written.failed.is_empty()).then(|| {
+            build
+                .outputs
+                .iter()
+                .filter_map(|o| {
+                    o.bytes.as_ref().map(|bytes| Rendered {
+                        path: o.path.clone(),
+                        bytes: bytes.clone(),
+                    })
+                })
+                .collect()
+        });
         let unsaved = if written.failed.is_empty() && self.graph.unstored() {
             Some(std::io::Error::other(
                 "the state folder could not be written; retried",

@@ -53,7 +53,7 @@ use nptreemap_formats::Dataset;
 use crate::config::{DatasetConfig, OutputConfig};
 use crate::fingerprint::{Fingerprint, Fingerprinter};
 use crate::layout::compute::{lay_out_planned, plan, Prepared};
-use crate::layout::{Computed, LayoutError, Request, Start};
+use crate::layout::{Computed, LayoutError, Previous, Request, Start};
 use crate::neighborhood::{build_constraints, prepare, Constraint, SimilarityKind};
 use crate::pipeline::{self, BuildError, InputFile, Rendered, Written};
 use crate::render::Style;
@@ -158,6 +158,9 @@ pub struct DatasetBuild {
     pub notes: Vec<String>,
     /// What each stage did.
     pub stages: StageReport,
+    /// The previous layout the layout started from, when it ran warm (for
+    /// stability figures: how far the cells moved).
+    pub started_from: Option<Arc<Previous>>,
     pending: Pending,
 }
 
@@ -314,6 +317,7 @@ impl DatasetGraph {
         // the one decision picks.
         let mut notes = Vec::new();
         let mut pending = Pending::default();
+        let mut started_from = None;
         let (computed, state, step, layout_ms) = match &self.last {
             Some(last)
                 if cache && !job.cold && last.inputs == inputs && last.settings == settings =>
@@ -347,6 +351,7 @@ impl DatasetGraph {
                 }
                 let mut request = job.request.clone();
                 request.previous = chosen.previous;
+                started_from = request.previous.clone();
                 let t = Instant::now();
                 let computed = lay_out_planned(input, planned, &request).map_err(layout_error)?;
                 let layout_ms = ms_since(t);
@@ -441,6 +446,7 @@ impl DatasetGraph {
             }),
             outputs: records,
         });
+        let started_from = started_from.filter(|_| step == LayoutStep::Warm);
         Ok(DatasetBuild {
             name: d.name.clone(),
             layout: step,
@@ -452,6 +458,7 @@ impl DatasetGraph {
             warnings,
             notes,
             stages,
+            started_from,
             pending,
         })
     }
@@ -521,6 +528,7 @@ impl DatasetGraph {
             warnings,
             notes: Vec::new(),
             stages: std::mem::take(stages),
+            started_from: None,
             pending: Pending::default(),
         })
     }
@@ -712,12 +720,6 @@ impl DatasetGraph {
     /// Whether state is waiting for [`DatasetGraph::store_again`].
     pub fn unstored(&self) -> bool {
         self.unstored.is_some()
-    }
-
-    /// The last layout the graph made or took over (the watch daemon's
-    /// previous picture, for its stability figures).
-    pub fn last_layout(&self) -> Option<Arc<Computed>> {
-        self.last.as_ref().map(|last| Arc::clone(&last.computed))
     }
 
     /// Writes a build's state: the stored layout, the constraint cache and
