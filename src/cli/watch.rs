@@ -75,10 +75,38 @@ pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
         first_build_progress: Some(FirstBuildProgress(Arc::new(super::progress::sink))),
         ..Options::default()
     };
-    daemon::run(&args.config.path()?, options, tx, &rx, &mut |status| {
-        super::say(status);
-    })?;
+    // The status lines are printed; the rebuild events (what a live
+    // preview would push to its pages) are logged with `-vv`.
+    daemon::run(
+        &args.config.path()?,
+        options,
+        tx,
+        &rx,
+        &mut |report| match report {
+            daemon::event::Report::Line(line) => super::say(line),
+            daemon::event::Report::Rebuilt(event) => log_event(&event),
+        },
+    )?;
     Ok(())
+}
+
+/// Logs a rebuild event at debug level (`-vv`), every field of it.
+fn log_event(event: &daemon::event::Rebuilt) {
+    let at = daemon::status::time_of_day(event.at);
+    let (dataset, reason) = (&event.dataset, &event.reason);
+    match &event.result {
+        Ok(o) => tracing::debug!(
+            %dataset, %at, %reason, layout = ?o.layout, ms = o.ms,
+            written = o.written.len(), unchanged = o.unchanged.len(), failed = o.failed.len(),
+            stages = o.stages.runs.len(),
+            moved_mean = ?o.stability.map(|s| s.displacement_mean),
+            "rebuild event"
+        ),
+        Err(f) => tracing::debug!(
+            %dataset, %at, %reason, file = ?f.file, line = ?f.line, message = %f.message,
+            "rebuild event: failed"
+        ),
+    }
 }
 
 /// Ends the process with exit code 0 once no set of outputs is being written

@@ -17,7 +17,7 @@
 //! "Constraints through an f32 filter"). Written by hand: no crate does filtered
 //! exact binning.
 
-use super::constraints::{bin_table, Bin, Bins, Candidate, BIN_HEAD};
+use super::bins::{bin_table, Bin, Bins, Candidate, BIN_HEAD};
 use super::dot_kernel::kernel;
 use super::similarity::{pair_similarity, score, NodeFeatures, SimilarityKind};
 

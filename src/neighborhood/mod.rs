@@ -4,6 +4,8 @@
 //! (Kuhn–Munkres). Knows datasets, not layouts (adjacency of cells is
 //! [`crate::geom::adjacency`]'s, the paper's metrics [`crate::measure`]'s).
 //! Pure: no I/O.
+/// The similarity bins of one node (d3.bin thresholds, best entries per bin).
+mod bins;
 /// Binning and filtering of similarities into constraints (stages A to E).
 pub mod constraints;
 /// The portable dot-product kernel of the dense similarity rows.

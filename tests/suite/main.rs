@@ -16,6 +16,7 @@ mod determinism;
 mod escaping;
 mod exec;
 mod fuzz;
+mod incremental;
 mod init;
 mod labels;
 mod legibility;
