@@ -42,7 +42,7 @@ const MAX_ROWS: usize = 5;
 const MAX_CHARS: usize = 40;
 
 impl LegendItem {
-    fn text(&self) -> String {
+    pub(crate) fn text(&self) -> String {
         match self {
             LegendItem::Swatch { label, .. } => {
                 if label.chars().count() > MAX_CHARS {

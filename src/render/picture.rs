@@ -315,7 +315,7 @@ fn push_group_labels(out: &mut String, groups: &[Placed], style: &SvgStyle) {
 /// top-level groups (when they have children of their own; otherwise every
 /// cell is labelled already) in the style's order. Two groups with the same
 /// name are told apart by their ids.
-fn legend_items(
+pub(crate) fn legend_items(
     dataset: &Dataset,
     colors: &[Option<Rgb>],
     tabs: bool,
