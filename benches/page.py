@@ -10,16 +10,20 @@ a test: it asserts nothing and prints figures. Python 3 standard library only
     python3 benches/page.py measure PAGE.html [PAGE.html ...] [--hovers 30] [--runs 3]
     python3 benches/page.py shots PAGE.html --out DIR [--query TEXT]
 
-`make` writes two maps with their pages: `h20000`, a generated hierarchy of
-20,000 leaves in three levels (benches/gen_similar.py, seed 1), and `man-pages`,
+`make` writes three maps with their pages: `h20000`, a generated hierarchy of
+20,000 leaves in three levels (benches/gen_similar.py, seed 1), `man-pages`,
 this machine's English man pages of sections 1, 5, 7 and 8 (about 20,000;
-benches/realdata/make.py's reader), each laid out by `nptreemap build`.
+benches/realdata/make.py's reader), and `c-headers`, a deep tree: the C
+headers of /usr/include by folder, similar by the names they include; each
+laid out by `nptreemap build`.
 
 `measure` opens each page at 1280 x 900 and reports, per run (fresh tab):
 
 - load: navigation start to the load event, to the first contentful paint and
   to the mark `nptreemap-ready` that the page's script sets when its handlers
   are attached; "interactive" is the latest of load, first paint and ready;
+  and a first hover sent as soon as the page has loaded: when its feedback
+  was painted (it waits for the map's own first raster);
 - hover: the mouse moved onto a sample of leaf cells, one after another; for
   each, the Event Timing API's duration of the `pointerover` (input to the next
   paint, 8 ms resolution; Chromium reports none under 16 ms, counted as
@@ -187,7 +191,8 @@ class Browser:
             raise RuntimeError(f"{expression[:200]}: {r['exceptionDetails']}")
         return r["result"].get("value")
 
-    def wait(self, expression: str, what: str, limit: float = DEADLINE):
+    def wait(self, expression: str, what: str, limit: float | None = None):
+        limit = DEADLINE if limit is None else limit
         t0 = time.monotonic()
         while True:
             v = self.eval(expression)
@@ -196,6 +201,14 @@ class Browser:
             if time.monotonic() - t0 > limit:
                 raise RuntimeError(f"timed out waiting for {what}")
             time.sleep(0.02)
+
+    def try_wait(self, expression: str, what: str, limit: float):
+        """`wait`, or None when the page does not answer in time (a busy
+        renderer: the figure is then "more than `limit` s")."""
+        try:
+            return self.wait(expression, what, limit)
+        except (RuntimeError, TimeoutError, OSError):
+            return None
 
     def viewport(self, width: int, height: int, mobile: bool = False):
         self.call("Emulation.setDeviceMetricsOverride",
@@ -234,15 +247,17 @@ def file_url(path: Path) -> str:
 # input event, the time to the end of the next frame's main-thread work.
 PROBE = r"""
 window.__np = { events: [], frames: [] };
+function npInMap(t) { return !!(t && t.closest && t.closest(".np-map")); }
 new PerformanceObserver(function (list) {
   list.getEntries().forEach(function (e) {
-    window.__np.events.push({ name: e.name, start: e.startTime, duration: e.duration,
+    window.__np.events.push({ name: e.name, start: e.startTime, duration: e.duration, cell: npInMap(e.target),
                               processing: e.processingEnd - e.processingStart });
   });
 }).observe({ type: "event", durationThreshold: 16, buffered: true });
 ["pointerover", "keydown", "click"].forEach(function (type) {
   window.addEventListener(type, function (e) {
     var t = e.timeStamp;
+    if (!npInMap(e.target)) { return; }
     requestAnimationFrame(function () {
       setTimeout(function () { window.__np.frames.push({ name: type, start: t, ms: performance.now() - t }); }, 0);
     });
@@ -289,12 +304,12 @@ def summary(values: list, unit: str = "ms") -> str:
 
 
 def timing_summary(durations: list, count: int) -> str:
-    """Event Timing durations: entries exist only from 16 ms on."""
-    under = count - len(durations)
-    big = sorted(durations)
-    text = f"{under} of {count} < 16 ms"
-    if big:
-        text += f"; the others {', '.join(f'{d:.0f}' for d in big[:8])}{' ...' if len(big) > 8 else ''} ms"
+    """Event Timing durations of `count` inputs: entries exist only from 16 ms
+    on, so the inputs without one painted sooner."""
+    under = max(0, count - len(durations))
+    text = f"{under} of {count} under 16 ms"
+    if durations:
+        text += f"; the others {summary(durations)}"
     return text
 
 
@@ -314,41 +329,65 @@ def measure_page(browser: Browser, path: Path, args) -> dict:
           return { load: nav.loadEventEnd, dcl: nav.domContentLoadedEventEnd,
                    fcp: fcp ? fcp.startTime : null, ready: ready ? ready.startTime : null };
         })()""")
-        # Let the first frames settle before timing interactions.
-        time.sleep(1.0)
+        # The first hover, at once: its feedback can show only once the map
+        # itself is painted, so its paint time is when the page answers.
+        points = browser.eval(f"{LEAF_POINTS}({args.hovers + 1}, {run + 1})")
+        first = None
+        if points:
+            browser.mouse(points[0][1], points[0][2])
+            first = browser.try_wait("""(function () {
+              var e = window.__np.events.filter(function (e) { return e.name === "pointerover"; })[0];
+              var f = window.__np.frames.filter(function (f) { return f.name === "pointerover"; })[0];
+              if (e) { return { start: e.start, painted: e.start + e.duration }; }
+              // Event Timing reports a paint 16 ms or more after its input,
+              // once painted; none a second after the frame: under 16 ms.
+              if (f && performance.now() - (f.start + f.ms) > 1000) { return { start: f.start, painted: f.start + 16 }; }
+              return null;
+            })()""", "the first hover", args.deadline)
+            points = points[1:]
+            time.sleep(1.0)
+        load["first_hover"] = first
+        if points and first is None:
+            # The page did not answer its first hover in time: nothing more
+            # to time on it.
+            runs.append({"load": load, "hover_timing": [], "hover_frames": [], "hovers": 0,
+                         "focus_timing": [], "focus_frames": [], "tabs": 0, "stuck": args.deadline})
+            break
         browser.eval("window.__np.events = []; window.__np.frames = []; 0")
-        points = browser.eval(f"{LEAF_POINTS}({args.hovers}, {run + 1})")
         for _, x, y in points:
             browser.mouse(x, y)
             time.sleep(args.pause)
         browser.mouse(1, 1)
         time.sleep(0.5)
         hover = browser.eval("window.__np")
-        # Focus: Tab until a cell has focus, then through cells.
-        browser.eval("window.__np.events = []; window.__np.frames = []; document.activeElement && document.activeElement.blur(); 0")
+        focus = {"events": [], "frames": []}
         tabs = 0
-        for _ in range(8):
-            browser.key("Tab", "Tab", 9)
-            if browser.eval("!!(document.activeElement && document.activeElement.matches('path[data-id]'))"):
-                break
-        browser.eval("window.__np.events = []; window.__np.frames = []; 0")
-        for _ in range(args.hovers):
-            browser.key("Tab", "Tab", 9)
-            tabs += 1
-            time.sleep(args.pause)
-        focus = browser.eval("window.__np")
-        browser.eval("document.activeElement && document.activeElement.blur(); 0")
+        if args.hovers:
+            # Focus: Tab until a cell has focus, then through cells.
+            browser.eval("window.__np.events = []; window.__np.frames = []; document.activeElement && document.activeElement.blur(); 0")
+            for _ in range(8):
+                browser.key("Tab", "Tab", 9)
+                if browser.eval("!!(document.activeElement && document.activeElement.matches('path[data-id]'))"):
+                    break
+            browser.eval("window.__np.events = []; window.__np.frames = []; 0")
+            for _ in range(args.hovers):
+                browser.key("Tab", "Tab", 9)
+                tabs += 1
+                time.sleep(args.pause)
+            focus = browser.eval("window.__np")
+            browser.eval("document.activeElement && document.activeElement.blur(); 0")
         runs.append({
             "load": load,
-            "hover_timing": [e["duration"] for e in hover["events"] if e["name"] == "pointerover"],
+            "hover_timing": [e["duration"] for e in hover["events"] if e["name"] == "pointerover" and e["cell"]],
             "hover_frames": [f["ms"] for f in hover["frames"] if f["name"] == "pointerover"],
             "hovers": len(points),
-            "focus_timing": [e["duration"] for e in focus["events"] if e["name"] == "keydown"],
+            "focus_timing": [e["duration"] for e in focus["events"] if e["name"] == "keydown" and e["cell"]],
             "focus_frames": [f["ms"] for f in focus["frames"] if f["name"] == "keydown"],
             "tabs": tabs,
         })
     result = {"page": str(path), "bytes": path.stat().st_size, "runs": runs}
-    result.update(zoom_and_reach(browser, url, args))
+    if args.reach and not any(run.get("stuck") for run in runs):
+        result.update(zoom_and_reach(browser, url, args))
     return result
 
 
@@ -429,19 +468,31 @@ def report(results: list, args) -> str:
     for r in results:
         lines.append(f"### {Path(r['page']).name} ({r['bytes'] / 1e6:.1f} MB)")
         inter = []
+        first_hover = []
         for k, run in enumerate(r["runs"]):
             ld = run["load"]
             marks = [v for v in (ld["load"], ld["fcp"], ld["ready"]) if v is not None]
             inter.append(max(marks))
+            fh = ld.get("first_hover")
+            if fh:
+                first_hover.append(fh["painted"])
+            if run.get("stuck"):
+                lines.append(f"- run {k + 1}: load event {ld['load']:.0f} ms, first paint "
+                             f"{(ld['fcp'] or 0):.0f} ms; the first hover was not painted within "
+                             f"{run['stuck']:.0f} s (the page stopped answering; later runs skipped)")
+                continue
             lines.append(f"- run {k + 1}: load event {ld['load']:.0f} ms, first paint "
                          f"{(ld['fcp'] or 0):.0f} ms, script ready "
                          f"{'–' if ld['ready'] is None else '%.0f ms' % ld['ready']}; "
-                         f"interactive {max(marks):.0f} ms")
+                         f"interactive {max(marks):.0f} ms; the first hover (sent at "
+                         f"{'–' if not fh else '%.0f ms' % fh['start']}) painted at "
+                         f"{'–' if not fh else '%.0f ms' % fh['painted']}")
         hov_t = [d for run in r["runs"] for d in run["hover_timing"]]
         hov_f = [d for run in r["runs"] for d in run["hover_frames"]]
         foc_t = [d for run in r["runs"] for d in run["focus_timing"]]
         foc_f = [d for run in r["runs"] for d in run["focus_frames"]]
-        lines.append(f"- interactive: {summary(inter)}")
+        lines.append(f"- interactive (latest of load event, first paint, script ready): {summary(inter)}")
+        lines.append(f"- first hover's feedback painted, from navigation start: {summary(first_hover)}")
         lines.append(f"- hover, input to next paint (Event Timing): "
                      f"{timing_summary(hov_t, sum(run['hovers'] for run in r['runs']))}")
         lines.append(f"- hover, input to end of next frame (main thread): {summary(hov_f)}")
@@ -533,6 +584,40 @@ def shots(args):
 # ---------------------------------------------------------------- maps
 
 
+INCLUDE = __import__("re").compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', __import__("re").M)
+
+
+def c_headers(folder: Path, top: Path = Path("/usr/include"), dim: int = 32) -> int:
+    """A deep tree: the C headers under `top` by folder, sized by bytes,
+    similar by the names they include (hashed into `dim` dimensions, cosine)."""
+    import zlib
+    root = {"id": str(top), "name": top.name, "similarityMeasure": "cosine", "children": []}
+    nodes = {top: root}
+    leaves = 0
+    for path in sorted(top.rglob("*.h")):
+        if not path.is_file():
+            continue
+        text = path.read_text(encoding="utf-8", errors="replace")
+        vec = [0.0] * dim
+        for name in INCLUDE.findall(text):
+            vec[zlib.crc32(name.encode()) % dim] += 1.0
+        norm = sum(x * x for x in vec) ** 0.5 or 1.0
+        parent = top
+        for part in path.relative_to(top).parent.parts:
+            child = parent / part
+            if child not in nodes:
+                node = {"id": str(child.relative_to(top)), "name": part, "children": []}
+                nodes[parent]["children"].append(node)
+                nodes[child] = node
+            parent = child
+        nodes[parent]["children"].append({
+            "id": str(path.relative_to(top)), "name": path.name, "weight": len(text.encode()),
+            "embeddings": [round(x / norm, 4) for x in vec]})
+        leaves += 1
+    (folder / "c-headers.json").write_text(json.dumps(root), encoding="utf-8")
+    return leaves
+
+
 def make(args):
     out = Path(args.out)
     gen = out / "h20000"
@@ -564,7 +649,18 @@ def make(args):
         "    files: {nodes: pages.csv, vectors: vectors-resolved.tsv}\n"
         "    fields: {weight: bytes, groups: [section, package]}\n"
         "    outputs: [out/man-pages.html, out/man-pages.json]\n", encoding="utf-8")
-    for folder in (gen, man):
+    heads = out / "c-headers"
+    heads.mkdir(parents=True, exist_ok=True)
+    if not (heads / "c-headers.json").exists():
+        print(f"c-headers: {c_headers(heads)} headers")
+    (heads / "nptreemap.yaml").write_text(
+        "# This machine's C headers (/usr/include) by folder (benches/page.py make)\n"
+        "render:\n  labels: {unit: \" B\"}\n"
+        "datasets:\n  - name: c-headers\n"
+        "    title: C headers by size; neighbours include alike\n"
+        "    format: hierarchy-json\n    files: {hierarchy: c-headers.json}\n"
+        "    outputs: [out/c-headers.html, out/c-headers.json]\n", encoding="utf-8")
+    for folder in (gen, man, heads):
         t0 = time.monotonic()
         subprocess.run([args.bin, "build", str(folder / "nptreemap.yaml")], check=True)
         print(f"{folder.name}: built in {time.monotonic() - t0:.0f} s")
@@ -574,7 +670,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--chromium", default=shutil.which("chromium") or "/usr/bin/chromium")
     sub = ap.add_subparsers(dest="command", required=True)
-    m = sub.add_parser("make", help="build the two 20,000-leaf maps")
+    m = sub.add_parser("make", help="build the 20,000-leaf maps and the deep C-headers map")
     m.add_argument("--bin", default=str(REPO / "target" / "release" / "nptreemap"))
     m.add_argument("--out", default=str(REPO / "target" / "page-bench"))
     s = sub.add_parser("measure", help="measure pages")
@@ -584,11 +680,16 @@ def main() -> int:
     s.add_argument("--reach", type=int, default=20, help="leaves sampled for the clicks to their label")
     s.add_argument("--pause", type=float, default=0.25, help="seconds between interactions")
     s.add_argument("--json", help="also write the raw figures here")
+    s.add_argument("--deadline", type=float, default=60.0,
+                   help="seconds to wait for the first hover's paint before giving up")
     t = sub.add_parser("shots", help="screenshots of pages")
     t.add_argument("pages", nargs="+")
     t.add_argument("--out", required=True)
     t.add_argument("--query", default="")
     args = ap.parse_args()
+    global DEADLINE
+    # A busy renderer answers late: every read waits longer than any wait.
+    DEADLINE = max(DEADLINE, getattr(args, "deadline", 0) + 60)
     if args.command == "make":
         make(args)
         return 0

@@ -47,10 +47,15 @@ function fitSize(i, cx, cy, wEm, hEm) {
   return Math.max(0, best);
 }
 
-// Screen pixels per canvas unit when the whole map shows.
+// Screen pixels per canvas unit when the whole map shows (the picture's
+// box does not change with its view box; a resize forgets it).
+var unitPxKnown = 0;
 function unitPx() {
-  var r = svg.getBoundingClientRect();
-  return r.width > 0 ? r.width / full[2] : 1;
+  if (!unitPxKnown) {
+    var r = svg.getBoundingClientRect();
+    unitPxKnown = r.width > 0 ? r.width / full[2] : 1;
+  }
+  return unitPxKnown;
 }
 // Smallest zoom label on screen, pixels: the picture's smallest size, as
 // a PNG at scale 1 draws it; the largest is the picture's largest label as
@@ -59,6 +64,13 @@ var MIN_PX = LS ? Math.max(LS.min, 6) : 9;
 function sizeRange(z) {
   var px = unitPx() * z;
   return [MIN_PX / px, Math.max(LS.max * unitPx(), 2 * MIN_PX) / px];
+}
+
+// The shortest text leaf i may show: the label itself when short, else
+// its first four characters and an ellipsis.
+function shortestText(i) {
+  var chars = Array.from(labels[i]);
+  return chars.length <= 5 ? labels[i] : chars.slice(0, 4).join("").replace(/\s+$/, "") + "\u2026";
 }
 
 // What leaf i shows at zoom z: { text, size, x, y } or null.

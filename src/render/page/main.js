@@ -141,6 +141,7 @@ root.addEventListener("keydown", function (e) {
     var above = map.getBoundingClientRect().top - root.getBoundingClientRect().top;
     var room = Math.max(240, window.innerHeight - above - 16);
     map.style.maxWidth = Math.round(room * aspect) + "px";
+    unitPxKnown = 0;
   }
   fit();
   window.addEventListener("resize", fit);

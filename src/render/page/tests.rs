@@ -304,3 +304,36 @@ fn the_page_carries_real_nodes_only() {
     assert!(listed(lo, hi), "{}", nodes[lo]);
     assert!(!listed(hi, lo), "written once: {}", nodes[hi]);
 }
+
+#[test]
+fn the_page_leaves_out_cell_titles_and_link_lines() {
+    let svg_text = "<svg>\n<g class=\"np-cells\">\n\
+        <path data-id=\"a\" d=\"M0,0Z\" fill=\"#fff\"><title>A &lt;b&gt; (a)</title></path>\n\
+        <path data-id=\"b\" d=\"M1,1Z\" fill=\"none\"><title>B</title></path>\n</g>\n\
+        <g class=\"np-unrealized\" stroke=\"#d62728\" stroke-width=\"1.50\">\n\
+        <line x1=\"0\" y1=\"0\" x2=\"1\" y2=\"1\"/>\n<line x1=\"1\" y1=\"0\" x2=\"0\" y2=\"1\"/>\n</g>\n\
+        <g class=\"np-unlinked\"><circle cx=\"1\" cy=\"1\" r=\"2\"><title>3 unrealized link(s)</title></circle>\n</g>\n</svg>\n";
+    let light = lighten(svg_text);
+    assert_eq!(
+        light,
+        "<svg>\n<g class=\"np-cells\">\n\
+        <path data-id=\"a\" d=\"M0,0Z\" fill=\"#fff\"></path>\n\
+        <path data-id=\"b\" d=\"M1,1Z\" fill=\"none\"></path>\n</g>\n\
+        <g class=\"np-unrealized\" stroke=\"#d62728\" stroke-width=\"1.50\">\n</g>\n\
+        <g class=\"np-unlinked\"><circle cx=\"1\" cy=\"1\" r=\"2\"><title>3 unrealized link(s)</title></circle>\n</g>\n</svg>\n",
+        "the markers keep their titles"
+    );
+    // Nothing else is touched: a picture without either comes back as it was.
+    let (ds, layout) = sample();
+    let plain = svg(&ds, &layout, &SvgStyle::default()).replace("<title>", "<desc>");
+    assert_eq!(lighten(&plain), plain);
+}
+
+#[test]
+fn label_texts_count_the_leaf_label_group_only() {
+    let svg_text = "<g class=\"np-group-labels\"><text>G</text></g>\n\
+        <g class=\"np-labels\" font-size=\"9\">\n<text x=\"1\">a</text>\n\
+        <text font-size=\"9\"><tspan>b</tspan><tspan>c</tspan></text>\n</g>\n<text>legend</text>";
+    assert_eq!(label_texts(svg_text), 2);
+    assert_eq!(label_texts("<svg/>"), 0);
+}

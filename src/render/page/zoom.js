@@ -13,7 +13,7 @@ var focusable = new Uint8Array(N);
 // Zoom steps that would enlarge the view less than this are passed over.
 var MIN_GAIN = 1.5;
 // Deepest zoom, relative to the whole map.
-var MAX_ZOOM = 96;
+var MAX_ZOOM = 400;
 
 leafCells.forEach(function (i) { cells[i].setAttribute("tabindex", "0"); focusable[i] = 1; });
 
@@ -47,8 +47,9 @@ function leafBox(i, g) {
   var z = Math.max(2 * zoomOf(view.box), zoomOf(outer));
   var c = centroid(i);
   if (LS) {
-    var s = fitSize(i, c[0], c[1], textWidth(labels[i].slice(0, 5)) + 2 * PAD_EM, LINE_EM + PAD_EM);
-    if (s > 0) { z = Math.max(z, 1.15 * MIN_PX / (unitPx() * s)); }
+    // Large enough for the shortest text the leaf may show, with room.
+    var s = fitSize(i, c[0], c[1], textWidth(shortestText(i)) + 2 * PAD_EM, LINE_EM + PAD_EM);
+    if (s > 0) { z = Math.max(z, 1.25 * MIN_PX / (unitPx() * s)); }
   }
   z = Math.min(z, MAX_ZOOM);
   var w = full[2] / z, h = full[3] / z;
