@@ -1,5 +1,6 @@
 //! The fuzzing harness's long run (issue 11): the targets of
-//! `tests/suite/fuzz/targets.rs` (shared with the suite's short slice), by
+//! `tests/suite/fuzz/targets.rs` and `npy_adapter.rs` (`.npy` vectors and an
+//! exec adapter's output, issue 21; shared with the suite's short slice), by
 //! default 10 million cases per parser and 10,000 layouts, each case under a
 //! time bound (a hang aborts with the input) and an allocation bound.
 //!
@@ -21,6 +22,9 @@
 #[allow(dead_code)]
 mod targets;
 
+#[path = "../tests/suite/fuzz/npy_adapter.rs"]
+mod npy_adapter;
+
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -41,7 +45,7 @@ const LAYOUT: Bounds = Bounds {
     bytes: 256 << 20,
 };
 
-const TARGETS: [&str; 5] = ["csv", "json", "yaml", "state", "layout"];
+const TARGETS: [&str; 7] = ["csv", "json", "yaml", "state", "npy", "adapter", "layout"];
 
 /// The command line.
 struct Args {
@@ -92,6 +96,13 @@ fn shard(target: &str, run: Run) -> Summary {
         "csv" => targets::drive("csv", targets::csv_cases(), targets::check_csv, run),
         "json" => targets::drive("json", targets::json_cases(), targets::check_json, run),
         "yaml" => targets::drive("yaml", targets::yaml_cases(), targets::check_yaml, run),
+        "npy" => targets::drive("npy", npy_adapter::npy_cases(), npy_adapter::check_npy, run),
+        "adapter" => targets::drive(
+            "adapter",
+            npy_adapter::adapter_cases(),
+            npy_adapter::check_adapter,
+            run,
+        ),
         "state" => {
             let seeds = Arc::new(targets::state_seeds());
             targets::drive(

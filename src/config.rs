@@ -363,9 +363,15 @@ pub struct DatasetConfig {
     /// further arguments, in the order of their role names.
     #[serde(default)]
     pub command: Vec<String>,
-    /// `format: exec` only: seconds the command may run (default 60).
-    #[serde(default)]
+    /// `format: exec` only: seconds the command may run (default 60), more
+    /// than 0 and at most [`MAX_EXEC_TIMEOUT`] (checked as it is read, so the
+    /// error has its line).
+    #[serde(default, deserialize_with = "exec_timeout")]
     pub timeout: Option<f64>,
+    /// `format: exec` only: the most its adapter may print, in MiB
+    /// (`limits.max_adapter_mb`, else `limits.max_file_mb`). Not a dataset key.
+    #[serde(skip)]
+    pub max_adapter_mb: u64,
     /// The folder relative paths were resolved against (the config's), where
     /// an exec command runs.
     #[serde(skip)]
@@ -382,6 +388,50 @@ pub const EXEC_FORMAT: &str = "exec";
 
 /// How long an exec command may run when the config does not say.
 pub const DEFAULT_EXEC_TIMEOUT: f64 = 60.0;
+
+/// The longest `timeout:` an exec dataset may ask for: a day. An adapter
+/// that needs longer belongs in a scheduled job writing a file; and the
+/// bound keeps every timeout a valid [`std::time::Duration`].
+pub const MAX_EXEC_TIMEOUT: f64 = 86_400.0;
+
+/// `timeout:`, refused at its line when it is not a usable number of
+/// seconds (`1e20`, `-1`, `.nan` would overflow a `Duration` or mean nothing).
+fn exec_timeout<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    Ok(Option::<Seconds>::deserialize(d)?.map(|s| s.0))
+}
+
+/// A timeout in seconds, checked by the visitor itself: an error raised
+/// while the YAML scalar is read carries the scalar's line and column.
+struct Seconds(f64);
+
+impl<'de> Deserialize<'de> for Seconds {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = Seconds;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                write!(f, "seconds, more than 0 and at most {MAX_EXEC_TIMEOUT}")
+            }
+            fn visit_f64<E: serde::de::Error>(self, t: f64) -> Result<Seconds, E> {
+                if t > 0.0 && t <= MAX_EXEC_TIMEOUT {
+                    Ok(Seconds(t))
+                } else {
+                    Err(E::custom(format_args!(
+                        "{t:?} is out of range: the seconds an adapter may run are more than 0 \
+                         and at most {MAX_EXEC_TIMEOUT} (a day)"
+                    )))
+                }
+            }
+            fn visit_i64<E: serde::de::Error>(self, t: i64) -> Result<Seconds, E> {
+                self.visit_f64(t as f64)
+            }
+            fn visit_u64<E: serde::de::Error>(self, t: u64) -> Result<Seconds, E> {
+                self.visit_f64(t as f64)
+            }
+        }
+        d.deserialize_f64(Visitor)
+    }
+}
 
 /// One output file. In a config, either a map (`{path: out/a.png, scale:
 /// 2}`) or just the path (`out/a.svg`): `outputs: [out/a.svg, out/a.png]`.
@@ -467,11 +517,57 @@ struct RawConfig {
     #[serde(default)]
     render: RenderConfig,
     #[serde(default)]
-    limits: Limits,
+    limits: LimitsSection,
     #[serde(default)]
     state_dir: Option<PathBuf>,
     #[serde(default)]
     datasets: Vec<DatasetConfig>,
+}
+
+/// The `limits:` section as written: the readers' [`Limits`] (the same keys
+/// and defaults), plus `max_adapter_mb`, the cap on what an exec adapter
+/// prints, which only the adapter runner reads (the formats never see an
+/// adapter; `None`: `max_file_mb`). Its own struct rather than a wrapper
+/// around `Limits`' reader, so that unknown keys and bad values are refused
+/// at their line, with every key listed.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct LimitsSection {
+    max_nodes: usize,
+    max_depth: usize,
+    max_dimensions: usize,
+    max_file_mb: u64,
+    max_adapter_mb: Option<u64>,
+}
+
+impl Default for LimitsSection {
+    fn default() -> Self {
+        let l = Limits::default();
+        LimitsSection {
+            max_nodes: l.max_nodes,
+            max_depth: l.max_depth,
+            max_dimensions: l.max_dimensions,
+            max_file_mb: l.max_file_mb,
+            max_adapter_mb: None,
+        }
+    }
+}
+
+impl LimitsSection {
+    /// The limits of the formats' readers.
+    fn readers(&self) -> Limits {
+        Limits {
+            max_nodes: self.max_nodes,
+            max_depth: self.max_depth,
+            max_dimensions: self.max_dimensions,
+            max_file_mb: self.max_file_mb,
+        }
+    }
+
+    /// The cap on an adapter's output, in MiB.
+    fn max_adapter_mb(&self) -> u64 {
+        self.max_adapter_mb.unwrap_or(self.max_file_mb)
+    }
 }
 
 /// A configuration that cannot be used.
@@ -546,7 +642,7 @@ impl Config {
             RawConfig {
                 layout: LayoutConfig::default(),
                 render: RenderConfig::default(),
-                limits: Limits::default(),
+                limits: LimitsSection::default(),
                 state_dir: None,
                 datasets: Vec::new(),
             }
@@ -560,7 +656,8 @@ impl Config {
                 }
             })?
         };
-        if let Some(key) = raw.limits.zero_limit() {
+        let zero_adapter = (raw.limits.max_adapter_mb() == 0).then_some("max_adapter_mb");
+        if let Some(key) = raw.limits.readers().zero_limit().or(zero_adapter) {
             return Err(ConfigError::Value {
                 field: format!("limits.{key}"),
                 message: "must be at least 1".to_string(),
@@ -570,7 +667,8 @@ impl Config {
         let mut datasets = raw.datasets;
         let mut seen = std::collections::BTreeSet::new();
         for (i, d) in datasets.iter_mut().enumerate() {
-            d.fields.limits = raw.limits;
+            d.fields.limits = raw.limits.readers();
+            d.max_adapter_mb = raw.limits.max_adapter_mb();
             d.state_dir = state_dir.clone();
             if !seen.insert(d.name.clone()) {
                 return Err(ConfigError::Value {
@@ -609,7 +707,7 @@ impl Config {
         let config = Config {
             layout: raw.layout,
             render: raw.render,
-            limits: raw.limits,
+            limits: raw.limits.readers(),
             state_dir,
             datasets,
         };
@@ -717,6 +815,7 @@ impl DatasetConfig {
             outputs: Vec::new(),
             command: Vec::new(),
             timeout: None,
+            max_adapter_mb: Limits::default().max_file_mb,
             base: PathBuf::new(),
             state_dir: None,
         }
@@ -742,9 +841,7 @@ fn check_exec(d: &DatasetConfig, i: usize) -> Result<(), ConfigError> {
     if !exec && d.timeout.is_some() {
         return Err(wrong("timeout", "only format exec has a timeout"));
     }
-    if d.timeout.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
-        return Err(wrong("timeout", "must be a positive number of seconds"));
-    }
+    // Its range was checked as it was read (`exec_timeout`).
     Ok(())
 }
 
@@ -801,6 +898,7 @@ mod tests {
             outputs: Vec::new(),
             command: Vec::new(),
             timeout: None,
+            max_adapter_mb: 0,
             base: PathBuf::new(),
             state_dir: None,
         };
@@ -960,6 +1058,52 @@ mod tests {
     fn type_errors_name_their_position() {
         let err = parse("layout:\n  seed: many\n").expect_err("bad type");
         assert!(err.to_string().starts_with("line 2, column 9: "), "{err}");
+    }
+
+    #[test]
+    fn exec_timeouts_out_of_range_are_refused_at_their_line() {
+        let exec = |timeout: &str| {
+            parse(&format!(
+                "datasets:\n  - name: a\n    format: exec\n    command: [x]\n    files: {{}}\n    timeout: {timeout}\n"
+            ))
+        };
+        for bad in ["1e20", "-1", "0", ".nan", ".inf", "-.inf", "86400.5"] {
+            let err = exec(bad).expect_err(bad).to_string();
+            assert!(err.starts_with("line 6, column "), "{bad}: {err}");
+            assert!(err.contains("timeout"), "{bad}: {err}");
+            assert!(err.contains("at most 86400"), "{bad}: {err}");
+        }
+        for good in ["0.5", "60", "86400"] {
+            let c = exec(good).expect(good);
+            assert_eq!(c.datasets[0].timeout, Some(good.parse().expect("number")));
+        }
+    }
+
+    #[test]
+    fn the_adapter_cap_defaults_to_the_file_cap() {
+        let with = |limits: &str| {
+            parse(&format!(
+                "{limits}datasets:\n  - {{name: a, format: exec, command: [x], files: {{}}}}\n"
+            ))
+        };
+        let adapter = |limits: &str| with(limits).expect(limits).datasets[0].max_adapter_mb;
+        assert_eq!(adapter(""), Limits::default().max_file_mb);
+        assert_eq!(adapter("limits:\n"), Limits::default().max_file_mb);
+        assert_eq!(adapter("limits: {max_file_mb: 7}\n"), 7);
+        assert_eq!(adapter("limits: {max_adapter_mb: null, max_file_mb: 7}\n"), 7);
+        let c = with("limits: {max_adapter_mb: 3, max_nodes: 9}\n").expect("valid");
+        assert_eq!(c.datasets[0].max_adapter_mb, 3);
+        assert_eq!(c.limits.max_nodes, 9);
+        assert_eq!(c.limits.max_file_mb, Limits::default().max_file_mb);
+        let err = with("limits: {max_adapter_mb: 0}\n").expect_err("zero");
+        assert_eq!(err.to_string(), "limits.max_adapter_mb: must be at least 1");
+        // The other keys keep their own errors, at their line.
+        let err = with("limits:\n  max_adapter_mb: 3\n  max_nodez: 3\n").expect_err("typo");
+        let text = err.to_string();
+        assert!(text.starts_with("line 3, column "), "{text}");
+        assert!(text.contains("unknown field `max_nodez`"), "{text}");
+        let err = with("limits:\n  max_adapter_mb: lots\n").expect_err("type");
+        assert!(err.to_string().starts_with("line 2, column "), "{err}");
     }
 
     #[test]

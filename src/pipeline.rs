@@ -12,6 +12,7 @@ use std::time::Duration;
 
 use crate::config::{
     ConfigFileError, DatasetConfig, OutputConfig, OutputKind, DEFAULT_EXEC_TIMEOUT, EXEC_FORMAT,
+    MAX_EXEC_TIMEOUT,
 };
 use crate::exec::{self, ExecError};
 use crate::layout::{compute, Computed, LayoutError, Previous, Request};
@@ -298,10 +299,11 @@ pub fn read_inputs(d: &DatasetConfig) -> Result<Vec<InputFile>, BuildError> {
 
 /// `format: exec`: the command's stdout, as the `hierarchy` input of
 /// hierarchy JSON, named after the command. The declared files must exist
-/// (a missing one is reported as a missing file, as for any format).
+/// (a missing one is reported as a missing file, as for any format); the
+/// command gets their paths as they are valid in its folder, the config's,
+/// wherever nptreemap was started.
 fn run_exec(d: &DatasetConfig) -> Result<InputFile, BuildError> {
-    let files: Vec<PathBuf> = d.files.values().cloned().collect();
-    if let Some(missing) = files.iter().find(|f| !f.exists()) {
+    if let Some(missing) = d.files.values().find(|f| !f.exists()) {
         return Err(BuildError::File(FileError::Read {
             path: missing.clone(),
             source: std::io::Error::from(std::io::ErrorKind::NotFound),
@@ -312,16 +314,52 @@ fn run_exec(d: &DatasetConfig) -> Result<InputFile, BuildError> {
     } else {
         d.base.as_path()
     };
-    let timeout = Duration::from_secs_f64(d.timeout.unwrap_or(DEFAULT_EXEC_TIMEOUT));
-    let bytes = exec::run(&d.command, &files, dir, timeout).map_err(|source| BuildError::Exec {
+    let files: Vec<PathBuf> = d.files.values().map(|f| in_folder(f, &d.base)).collect();
+    // The config keeps the timeout within a day; a dataset made in code
+    // gets the longest rather than a panic.
+    let seconds = d.timeout.unwrap_or(DEFAULT_EXEC_TIMEOUT);
+    let bounds = exec::Bounds {
+        timeout: Duration::try_from_secs_f64(seconds.min(MAX_EXEC_TIMEOUT))
+            .unwrap_or(Duration::from_secs_f64(MAX_EXEC_TIMEOUT)),
+        max_mb: d.max_adapter_mb,
+    };
+    let bytes = exec::run(&d.command, &files, dir, bounds).map_err(|source| BuildError::Exec {
         dataset: d.name.clone(),
         source,
     })?;
-    Ok(InputFile {
+    Ok(adapter_input(d, bytes))
+}
+
+/// `path` (the config's folder `base` joined with what the config says) as
+/// it is valid inside `base`: what the config says when that was relative,
+/// so the adapter sees the names the user wrote; else the path itself. A
+/// name that would read as an option (`-x.csv`) gets `./` in front.
+fn in_folder(path: &Path, base: &Path) -> PathBuf {
+    match path.strip_prefix(base) {
+        Ok(inner) if inner.as_os_str().as_encoded_bytes().starts_with(b"-") => {
+            Path::new(".").join(inner)
+        }
+        Ok(inner) if !inner.as_os_str().is_empty() => inner.to_path_buf(),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// An adapter's stdout as the `hierarchy` input its dataset is parsed from.
+fn adapter_input(d: &DatasetConfig, stdout: Vec<u8>) -> InputFile {
+    let files: Vec<PathBuf> = d.files.values().map(|f| in_folder(f, &d.base)).collect();
+    InputFile {
         role: "hierarchy".to_string(),
-        path: PathBuf::from(format!("`{}` (stdout)", exec::display(&d.command))),
-        bytes,
-    })
+        path: PathBuf::from(format!("`{}` (stdout)", exec::display(&d.command, &files))),
+        bytes: stdout,
+    }
+}
+
+/// Parses what the adapter of `d` (a `format: exec` dataset) printed into
+/// its dataset, exactly as [`read_inputs`] and [`parse_inputs`] do after
+/// running it: the fuzz harness's target for "the adapter's output".
+#[cfg(any(test, feature = "internals"))]
+pub fn parse_adapter_output(d: &DatasetConfig, stdout: Vec<u8>) -> Result<Dataset, BuildError> {
+    parse_inputs(d, &[adapter_input(d, stdout)])
 }
 
 fn format_of(d: &DatasetConfig) -> Result<&'static dyn nptreemap_formats::Format, BuildError> {
@@ -428,7 +466,9 @@ pub fn render_outputs(
 
 /// The input warnings of a parsed dataset (a header without rows, a column
 /// named twice, a self pair, a pair repeated with another strength), one
-/// line each, `file: line L: message`.
+/// line each, `file: line L: message`; past the first few of a kind the
+/// dataset carries one `file: and N more ...` line instead
+/// ([`nptreemap_formats::Warnings`]), so a flood never reaches the journal.
 pub fn warnings(files: &[InputFile], dataset: &Dataset) -> Vec<String> {
     dataset
         .warnings()
@@ -676,7 +716,7 @@ pub fn check_outputs(reads: &[Named], writes: &[Named]) -> Result<(), BuildError
 pub fn remove_stale_temps(writes: &[Named]) {
     let paths: Vec<PathBuf> = writes.iter().map(|w| w.path.clone()).collect();
     for path in store::remove_stale_temps(&paths) {
-        tracing::info!(path = %path.display(), "removed a temp file left by an interrupted run");
+        tracing::info!(?path, "removed a temp file left by an interrupted run");
     }
 }
 
@@ -701,6 +741,41 @@ mod tests {
             b.add(NodeSpec::new(id).parent("root").weight(w));
         }
         compute(&b.build().expect("valid"), &Request::default()).expect("laid out")
+    }
+
+    /// The adapter's output is parsed as a `hierarchy-json` file of the
+    /// dataset would be, and its errors name the command line and the line.
+    #[test]
+    fn adapter_output_parses_as_hierarchy_json_naming_the_command() {
+        let config = crate::config::Config::from_str(
+            "datasets:\n  - {name: a, format: exec, command: [python3, t.py], files: {x: in.csv}}\n",
+            Path::new("/base"),
+        )
+        .expect("config");
+        let d = &config.datasets[0];
+        let tree = br#"{"name": "r", "children": [{"name": "a", "value": 1}, {"name": "b", "value": 3}]}"#;
+        let dataset = parse_adapter_output(d, tree.to_vec()).expect("a tree");
+        assert_eq!(dataset.leaves().count(), 2);
+        let e = parse_adapter_output(d, b"{\n  \"children\": 3}".to_vec()).expect_err("not a tree");
+        assert_eq!(e.fault(), Fault::Input);
+        let text = e.to_string();
+        assert!(text.starts_with("`python3 t.py in.csv` (stdout): line 2"), "{text}");
+    }
+
+    /// An adapter gets its files as the config wrote them (they are valid in
+    /// its folder, the config's), never as an option.
+    #[test]
+    fn adapter_files_are_valid_in_the_config_folder() {
+        let base = Path::new("examples/exec");
+        for (written, given) in [
+            ("sizes.du", "sizes.du"),
+            ("../data/x.csv", "../data/x.csv"),
+            ("-x.csv", "./-x.csv"),
+            ("/abs/x.csv", "/abs/x.csv"),
+        ] {
+            assert_eq!(in_folder(&base.join(written), base), Path::new(given));
+        }
+        assert_eq!(in_folder(Path::new("x.csv"), Path::new("")), Path::new("x.csv"));
     }
 
     /// Without the `png` feature a PNG output is the user's error naming the

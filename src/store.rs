@@ -1,19 +1,26 @@
 //! The one writer of files: every output (and every stored layout) goes to a
 //! temporary file in its own directory and is renamed into place, so readers
 //! never see a partly written file and a failed run leaves existing outputs
-//! untouched. Owns the temp files' naming, their safe creation (O_EXCL and a
-//! random name, through the `tempfile` crate, so a link planted at a
-//! predictable name is never followed), fsync of file and directory, and the
-//! removal of temp files a killed run left behind. Reading is
-//! [`crate::workspace`]'s.
+//! untouched. Owns the temp files' naming (short enough for any valid output
+//! name), their safe creation (O_EXCL and a random name, through the
+//! `tempfile` crate, so a link planted at a predictable name is never
+//! followed), the refusal to rename over what is not a regular file, fsync of
+//! file and directory, and the removal of temp files a killed run left
+//! behind. Reading is [`crate::workspace`]'s.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
-/// Every temp file's name ends so: `.NAME.PID.RANDOM.tmp` (and, from before
-/// the random part, `.NAME.PID.tmp`).
+/// Every temp file's name ends so: `.STEM.PID.RANDOM.tmp` (and, from before
+/// the random part, `.STEM.PID.tmp`), where STEM is the output's name, or
+/// for a long name its start and a hash ([`temp_stem`]).
 const TEMP_SUFFIX: &str = ".tmp";
+
+/// The longest output name a temp name repeats whole. A name is at most 255
+/// bytes; the temp name adds up to 22 (`.`, `.PID`, `.RANDOM`, `.tmp`), so a
+/// longer output name is cut to this many bytes and a hash (17 more).
+const STEM_KEEP: usize = 200;
 
 /// Held while a set of outputs is being written ([`writing`]), so that a
 /// forced exit (the daemon's answer to SIGTERM during a long rebuild) can wait
@@ -44,15 +51,74 @@ fn name_of(path: &Path) -> String {
         .unwrap_or_else(|| "output".to_string())
 }
 
+/// The part of an output's temp names that names the output: the name
+/// itself up to [`STEM_KEEP`] bytes (so a stray temp file says whose it
+/// is), else its first bytes up to that many (at a character boundary), `~`
+/// and a 64-bit FNV-1a hash of the whole name, so that the temp name stays
+/// within the 255 bytes of a valid name (a 250-byte output name failed
+/// with `File name too long`) and two long names sharing their start still
+/// have different temp names.
+fn temp_stem(name: &str) -> String {
+    if name.len() <= STEM_KEEP {
+        return name.to_string();
+    }
+    let mut cut = STEM_KEEP;
+    while !name.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    format!("{}~{hash:016x}", &name[..cut])
+}
+
+/// Refuses to replace what is at `path` when it is not a regular file (a
+/// FIFO, a device or a link to one, a directory): the rename would put a
+/// regular file in its place. `build` refuses such outputs before it starts
+/// (`pipeline::check_outputs`); this catches one that appeared since, such
+/// as an output replaced while `watch` runs.
+fn refuse_special(path: &Path) -> std::io::Result<()> {
+    let Some(kind) = std::fs::metadata(path)
+        .ok()
+        .and_then(|m| crate::workspace::special_kind(m.file_type()))
+    else {
+        return Ok(());
+    };
+    Err(std::io::Error::new(
+        std::io::ErrorKind::AlreadyExists,
+        format!("it exists and is not a regular file ({kind}); refusing to replace it"),
+    ))
+}
+
 /// Writes `bytes` to `path` atomically: a new temp file in the same directory
 /// (created exclusively under a random name, never through an existing file
 /// or link), written and fsynced, renamed over `path`, then the directory
 /// fsynced so the rename survives a power cut. Creates the directory if it is
-/// missing. On any failure the temp file is removed and `path` is untouched.
+/// missing. On any failure the temp file is removed and `path` is untouched;
+/// so is a `path` that holds something other than a regular file (see
+/// `refuse_special`).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    refuse_special(path)?;
+    write_via_temp(path, bytes).map_err(without_temp_path)
+}
+
+/// The error without the temp file's name, which `tempfile` adds to errors
+/// of its own calls (`No space left on device (os error 28) at path
+/// "/out/.a.svg.123.XyZ.tmp"`): the caller names the output, and a name
+/// that is random each time would make the same failure (a full disk,
+/// retried) read as a new one.
+fn without_temp_path(e: std::io::Error) -> std::io::Error {
+    let text = e.to_string();
+    match text.find(" at path ") {
+        Some(cut) => std::io::Error::new(e.kind(), text[..cut].to_string()),
+        None => e,
+    }
+}
+
+fn write_via_temp(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let dir = dir_of(path);
     std::fs::create_dir_all(&dir)?;
-    let prefix = format!(".{}.{}.", name_of(path), std::process::id());
+    let prefix = format!(".{}.{}.", temp_stem(&name_of(path)), std::process::id());
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(TEMP_SUFFIX);
     // Outputs are for others to read (a web server, a docs build): the
@@ -64,7 +130,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
     let mut tmp = builder.tempfile_in(&dir)?;
-    tmp.write_all(bytes)?;
+    tmp.as_file_mut().write_all(bytes)?;
     tmp.as_file().sync_all()?;
     // On failure the returned NamedTempFile is dropped, which deletes it.
     tmp.persist(path).map_err(|e| e.error)?;
@@ -104,11 +170,11 @@ pub fn write_if_changed(path: &Path, bytes: &[u8]) -> std::io::Result<bool> {
 }
 
 /// Whether `file` (a name in `dir`) is a temp file of ours for the output
-/// `output_name`, and if so the id of the process that made it.
-fn temp_owner(file: &str, output_name: &str) -> Option<u32> {
+/// whose [`temp_stem`] is `stem`, and if so the id of the process that made it.
+fn temp_owner(file: &str, stem: &str) -> Option<u32> {
     let rest = file
         .strip_prefix('.')?
-        .strip_prefix(output_name)?
+        .strip_prefix(stem)?
         .strip_prefix('.')?
         .strip_suffix(TEMP_SUFFIX)?;
     // `PID` (the old naming) or `PID.RANDOM` (tempfile's random part).
@@ -142,13 +208,16 @@ fn may_be_running(pid: u32, modified: Option<std::time::SystemTime>) -> bool {
 
 /// Removes the temp files that runs killed mid-write (`kill -9`, a power
 /// cut) left beside `outputs`: only names of our own pattern for those
-/// outputs (`.NAME.PID[.RANDOM].tmp`), only when process PID is gone. A
+/// outputs (`.STEM.PID[.RANDOM].tmp`), only when process PID is gone. A
 /// symlink of that name is removed itself, never followed. Returns the files
 /// removed; one that cannot be removed is skipped (the next run tries again).
 pub fn remove_stale_temps(outputs: &[PathBuf]) -> Vec<PathBuf> {
     let mut by_dir: std::collections::BTreeMap<PathBuf, Vec<String>> = Default::default();
     for out in outputs {
-        by_dir.entry(dir_of(out)).or_default().push(name_of(out));
+        by_dir
+            .entry(dir_of(out))
+            .or_default()
+            .push(temp_stem(&name_of(out)));
     }
     let mut removed = Vec::new();
     for (dir, names) in by_dir {
@@ -199,5 +268,101 @@ mod tests {
         }
         // A name that only starts like another output's is not that output's.
         assert_eq!(temp_owner(".a.svg.png.1.tmp", "a.svg"), None);
+    }
+
+    fn scratch(tag: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("nptreemap-store-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("scratch dir");
+        dir
+    }
+
+    /// Issue 21 item 9: a temp name fits in a name's 255 bytes whatever the
+    /// output's name, long names that share their start get different temp
+    /// names, and the stale temp files of a long name are still recognised
+    /// (a temp file of this naming, made by a process that is gone).
+    #[test]
+    fn long_output_names_have_short_temp_names() {
+        let long = |c: char| format!("{}{c}.svg", "é".repeat(124));
+        let (a, b) = (long('a'), long('b'));
+        assert!(a.len() == 253 && b.len() == 253);
+        let (sa, sb) = (temp_stem(&a), temp_stem(&b));
+        assert_ne!(sa, sb);
+        // The longest temp name: `.`, the stem, `.`, a 10-digit pid, `.`,
+        // tempfile's 6 random characters, `.tmp`.
+        assert!(1 + sa.len() + 1 + 10 + 1 + 6 + 4 <= 255, "{}", sa.len());
+        assert_eq!(temp_stem("a.svg"), "a.svg");
+
+        let dir = scratch("long");
+        let out = dir.join(&a);
+        write_atomic(&out, b"new").expect("a 253-byte name is written");
+        assert_eq!(std::fs::read(&out).expect("read"), b"new");
+        // What a killed run would have left (pid 4999999 belongs to no
+        // process), and one of a live process (ours), and another output's.
+        let stale = dir.join(format!(".{sa}.4999999.Ab12Cd.tmp"));
+        let live = dir.join(format!(".{sa}.{}.Ab12Cd.tmp", std::process::id()));
+        let other = dir.join(format!(".{sb}.4999999.Ab12Cd.tmp"));
+        for f in [&stale, &live, &other] {
+            std::fs::write(f, "x").expect("temp");
+        }
+        assert_eq!(remove_stale_temps(&[out]), vec![stale.clone()]);
+        assert!(!stale.exists() && live.exists() && other.exists());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A failed write names no temp file (whose random name would make the
+    /// same failure, retried, read as a new one each time), but keeps the
+    /// system's reason: here tempfile's own error for a folder that is gone.
+    #[test]
+    fn write_errors_do_not_name_the_temp_file() {
+        let dir = scratch("gone");
+        let _ = std::fs::remove_dir_all(&dir);
+        let raw = tempfile::Builder::new()
+            .prefix(".x.1.")
+            .tempfile_in(&dir)
+            .expect_err("no folder");
+        assert!(raw.to_string().contains(".x.1."), "{raw}");
+        let plain = without_temp_path(raw);
+        assert_eq!(
+            plain.to_string(),
+            std::io::Error::from_raw_os_error(libc::ENOENT).to_string()
+        );
+        assert_eq!(plain.kind(), std::io::ErrorKind::NotFound);
+        // What names no temp file is left as it is.
+        assert_eq!(without_temp_path(std::io::Error::other("x")).to_string(), "x");
+    }
+
+    /// Issue 21 item 9: what is not a regular file (a FIFO, a link to a
+    /// device, a directory) is never replaced by a write; a regular file,
+    /// a link to one (the link is replaced, as ever) and nothing are written.
+    #[cfg(unix)]
+    #[test]
+    fn special_files_are_not_replaced() {
+        let dir = scratch("special");
+        let fifo = dir.join("fifo.svg");
+        let name = std::ffi::CString::new(fifo.as_os_str().as_encoded_bytes()).expect("path");
+        // SAFETY: mkfifo(3) with a NUL-terminated path.
+        assert_eq!(unsafe { libc::mkfifo(name.as_ptr(), 0o644) }, 0, "mkfifo");
+        std::os::unix::fs::symlink("/dev/null", dir.join("null.png")).expect("link");
+        std::fs::create_dir_all(dir.join("dir.json")).expect("dir");
+        for (file, kind) in [
+            ("fifo.svg", "a FIFO"),
+            ("null.png", "a character device"),
+            ("dir.json", "a directory"),
+        ] {
+            let e = write_if_changed(&dir.join(file), b"x").expect_err(file);
+            assert!(e.to_string().contains(kind), "{file}: {e}");
+        }
+        use std::os::unix::fs::FileTypeExt;
+        let meta = |f: &str| std::fs::symlink_metadata(dir.join(f)).expect(f).file_type();
+        assert!(meta("fifo.svg").is_fifo());
+        assert!(meta("null.png").is_symlink());
+        assert!(meta("dir.json").is_dir());
+        std::fs::write(dir.join("real.svg"), "old").expect("real");
+        std::os::unix::fs::symlink(dir.join("real.svg"), dir.join("link.svg")).expect("link");
+        for file in ["plain.svg", "link.svg"] {
+            assert!(write_if_changed(&dir.join(file), b"new").expect(file));
+        }
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

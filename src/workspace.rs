@@ -102,8 +102,12 @@ fn open_nonblocking(path: &Path) -> std::io::Result<std::fs::File> {
     options.open(path)
 }
 
-/// Reads a regular file of at most `max_bytes` (and says which limit it is).
-fn read_guarded(path: &Path, max: Option<(u64, &Limits)>) -> Result<Vec<u8>, FileError> {
+/// Opens a regular file of at most `max` bytes (and says which limit it is)
+/// without blocking, returning the handle and the file's length.
+fn open_guarded(
+    path: &Path,
+    max: Option<(u64, &Limits)>,
+) -> Result<(std::fs::File, u64), FileError> {
     let read_error = |source| FileError::Read {
         path: path.to_path_buf(),
         source,
@@ -128,11 +132,20 @@ fn read_guarded(path: &Path, max: Option<(u64, &Limits)>) -> Result<Vec<u8>, Fil
     let file = open_nonblocking(path).map_err(read_error)?;
     let meta = file.metadata().map_err(read_error)?;
     check(&meta)?;
+    Ok((file, meta.len()))
+}
+
+/// Reads a regular file of at most `max_bytes` (and says which limit it is).
+fn read_guarded(path: &Path, max: Option<(u64, &Limits)>) -> Result<Vec<u8>, FileError> {
+    let (file, len) = open_guarded(path, max)?;
     let cap = max.map_or(u64::MAX, |(m, _)| m);
-    let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
+    let mut bytes = Vec::with_capacity(usize::try_from(len).unwrap_or(0));
     file.take(cap.saturating_add(1))
         .read_to_end(&mut bytes)
-        .map_err(read_error)?;
+        .map_err(|source| FileError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
     if let Some((max, limits)) = max {
         // The file grew while it was read.
         if bytes.len() as u64 > max {
@@ -140,6 +153,14 @@ fn read_guarded(path: &Path, max: Option<(u64, &Limits)>) -> Result<Vec<u8>, Fil
         }
     }
     Ok(bytes)
+}
+
+/// Opens an input within `limits.max_file_mb` for a reader that reads only
+/// part of it or streams it (`init`'s sampling): the same checks as
+/// [`read_input`] (a regular file, not too large, opened without blocking),
+/// returning the handle and the file's length.
+pub fn open_input(path: &Path, limits: &Limits) -> Result<(std::fs::File, u64), FileError> {
+    open_guarded(path, Some((limits.max_file_bytes(), limits)))
 }
 
 fn too_large(path: &Path, size: u64, limits: &Limits) -> FileError {

@@ -1,4 +1,4 @@
-//! The border-list format: a node table (see [`crate::table`]) plus a pair list
+//! The border-list format: a node table (see [`crate::node_table`]) plus a pair list
 //! saying which nodes are neighbours, e.g. countries that share a land border.
 //! Owns the pair-list columns and how pairs become symmetric relations.
 //!
@@ -20,8 +20,9 @@ use std::collections::HashMap;
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
-use crate::table::{node_tree, read_table, Table, TableTree, NODES_ROLE};
-use crate::warning::Warning;
+use crate::node_table::{node_tree, TableTree, NODES_ROLE};
+use crate::table::{read_table_bounded, FieldCap, Table};
+use crate::warning::{Warning, WarningKind};
 
 /// The border-list [`Format`] (name `border-list`, inputs `nodes` and `pairs`).
 #[derive(Clone, Copy, Debug, Default)]
@@ -51,8 +52,10 @@ impl Format for BorderList {
         let in_nodes = |error| InputError::new("nodes", error);
         let in_pairs = |error| InputError::new("pairs", error);
         let mut tree = node_tree(inputs, options)?;
-        let pair_table = read_table(pairs, options.delimiter).map_err(in_pairs)?;
-        tree.warnings.extend(pair_table.warnings_in("pairs"));
+        let columns = FieldCap::columns(options.limits);
+        let pair_table =
+            read_table_bounded(pairs, options.delimiter, None, Some(columns)).map_err(in_pairs)?;
+        tree.warnings.append(pair_table.warnings_in("pairs"));
         add_pairs(&mut tree, &pair_table, options).map_err(in_pairs)?;
         tree.build(Some(SimilarityHint::NeighborList))
             .map_err(in_nodes)
@@ -103,6 +106,7 @@ fn add_pairs(
                 });
             }
             tree.warnings.push(Warning::new(
+                WarningKind::UnknownId,
                 "pairs",
                 Some(row.line),
                 format!(
@@ -136,6 +140,7 @@ fn add_pairs(
         // A self pair is ignored (the model would drop it anyway).
         if first == second {
             tree.warnings.push(Warning::new(
+                WarningKind::SelfPair,
                 "pairs",
                 Some(row.line),
                 format!(
@@ -150,6 +155,7 @@ fn add_pairs(
             Some(&(line, before)) if before != given => {
                 let say = |s: Option<f64>| s.map_or_else(|| "none".to_owned(), |v| v.to_string());
                 tree.warnings.push(Warning::new(
+                    WarningKind::RepeatedPair,
                     "pairs",
                     Some(row.line),
                     format!(

@@ -7,7 +7,7 @@ use std::collections::HashMap;
 
 use crate::color::Rgb;
 use crate::limits::{Limit, LimitError, Limits};
-use crate::warning::Warning;
+use crate::warning::{Warning, Warnings};
 
 /// A validated hierarchy. Only [`DatasetBuilder::build`] makes one, so code that
 /// receives a `Dataset` can trust its invariants:
@@ -275,7 +275,9 @@ impl Dataset {
         self.similarity_hint
     }
 
-    /// What the reader found suspicious but read anyway, in input order.
+    /// What the reader found suspicious but read anyway, in input order: the
+    /// first [`Warnings::KEPT`] of each kind and input, then a line "and N
+    /// more ..." for each kind and input that had more.
     pub fn warnings(&self) -> &[Warning] {
         &self.warnings
     }
@@ -357,7 +359,7 @@ pub struct DatasetBuilder {
     similarity_hint: Option<SimilarityHint>,
     // `None`: no limits (the layout's own rebuild with virtual nodes, tests).
     limits: Option<Limits>,
-    warnings: Vec<Warning>,
+    warnings: Warnings,
 }
 
 impl DatasetBuilder {
@@ -395,9 +397,16 @@ impl DatasetBuilder {
         self
     }
 
-    /// Adds a warning for the dataset to carry.
+    /// Adds a warning for the dataset to carry (the first few of a kind are
+    /// kept, the rest counted: see [`Warnings`]).
     pub fn warn(&mut self, warning: Warning) -> &mut Self {
         self.warnings.push(warning);
+        self
+    }
+
+    /// Adds warnings a reader collected, with the ones it only counted.
+    pub fn warnings(&mut self, warnings: Warnings) -> &mut Self {
+        self.warnings.append(warnings);
         self
     }
 
@@ -415,6 +424,7 @@ impl DatasetBuilder {
             limits,
             warnings,
         } = self;
+        let warnings = warnings.into_vec();
         if specs.is_empty() {
             return Err(ModelError::Empty);
         }

@@ -1,4 +1,4 @@
-//! The embedding-matrix format: a node table (see [`crate::table`]) plus one feature
+//! The embedding-matrix format: a node table (see [`crate::node_table`]) plus one feature
 //! vector per leaf, compared by cosine similarity. Owns the vector file's layout,
 //! header detection and the checks that make cosine defined.
 //!
@@ -28,9 +28,10 @@ use crate::dataset::{ModelError, FEATURE_BOUND};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 use crate::limits::{Limit, Limits};
+use crate::node_table::{node_tree, TableTree, NODES_ROLE};
 use crate::npy::{is_npy, read_npy, Matrix};
-use crate::table::{node_tree, read_rows, read_rows_capped, Row, RowCap, TableTree, NODES_ROLE};
-use crate::warning::Warning;
+use crate::table::{read_rows_bounded, FieldCap, Row, RowCap};
+use crate::warning::{Warning, WarningKind};
 
 /// The embedding-matrix [`Format`] (name `embedding-matrix`, inputs `nodes` and
 /// `vectors`).
@@ -69,9 +70,9 @@ impl Format for EmbeddingMatrix {
         let in_vectors = |error| InputError::new("vectors", error);
         let mut tree = node_tree(inputs, options)?;
         if is_npy(vectors) {
-            let matrix = read_npy(vectors).map_err(in_vectors)?;
+            let matrix = read_npy(vectors, &options.limits).map_err(in_vectors)?;
             let owners = matrix_owners(&tree, &matrix, inputs.get("ids"), options)?;
-            add_matrix(&mut tree, &matrix, &owners).map_err(in_vectors)?;
+            add_matrix(&mut tree, matrix, &owners).map_err(in_vectors)?;
         } else {
             if inputs.get("ids").is_some() {
                 return Err(InputError::new(
@@ -85,10 +86,12 @@ impl Format for EmbeddingMatrix {
                     },
                 ));
             }
-            // One vector per node, plus an optional header row.
+            // One vector per node, plus an optional header row; an id and at
+            // most max_dimensions values per row.
             let cap = RowCap::new(options.limits, Limit::Nodes, 1, "vector rows");
-            let rows =
-                read_rows_capped(vectors, options.delimiter, Some(cap)).map_err(in_vectors)?;
+            let width = FieldCap::new(options.limits, Limit::Dimensions, 1, "values");
+            let rows = read_rows_bounded(vectors, options.delimiter, Some(cap), Some(width))
+                .map_err(in_vectors)?;
             add_vectors(&mut tree, &rows, &options.limits, options.on_unknown_id)
                 .map_err(in_vectors)?;
         }
@@ -164,6 +167,7 @@ fn add_vectors(
         let Some(index) = tree.find(id) else {
             if on_unknown == OnUnknownId::Warn {
                 tree.warnings.push(Warning::new(
+                    WarningKind::UnknownId,
                     "vectors",
                     Some(row.line),
                     format!(
@@ -244,7 +248,7 @@ fn zero_vector(line: Option<usize>, what: &str) -> FormatError {
 #[allow(clippy::result_large_err)] // InputError's shape is the Format API's
 fn matrix_owners(
     tree: &TableTree,
-    matrix: &Matrix,
+    matrix: &Matrix<'_>,
     ids: Option<&[u8]>,
     options: &FormatOptions,
 ) -> Result<Vec<usize>, InputError> {
@@ -272,7 +276,10 @@ fn matrix_owners(
         return Ok(rows);
     };
     let in_ids = |error| InputError::new("ids", error);
-    let rows = read_rows(ids, options.delimiter).map_err(in_ids)?;
+    // One id per matrix row, plus an optional header.
+    let cap = RowCap::new(options.limits, Limit::Nodes, 1, "ids");
+    let width = FieldCap::new(options.limits, Limit::Dimensions, 1, "fields after the id");
+    let rows = read_rows_bounded(ids, options.delimiter, Some(cap), Some(width)).map_err(in_ids)?;
     // A first line that names no node is a header (`id`); a typo there shows in
     // the count, and the message says it was taken for one.
     let header = rows
@@ -322,26 +329,45 @@ fn matrix_owners(
         .collect()
 }
 
-/// Sets row `i` of the matrix as the features of node `owners[i]`.
-fn add_matrix(tree: &mut TableTree, matrix: &Matrix, owners: &[usize]) -> Result<(), FormatError> {
-    for (i, &index) in owners.iter().enumerate() {
-        let row = matrix.row(i);
-        let what = format!("matrix row {} (node {:?})", i + 1, tree.specs[index].id);
+/// Sets row `i` of the matrix as the features of node `owners[i]`, with the
+/// checks of a CSV row (finite values within [`FEATURE_BOUND`], not all zero).
+/// The rows are decoded once, into the vectors the nodes keep.
+fn add_matrix(
+    tree: &mut TableTree,
+    matrix: Matrix<'_>,
+    owners: &[usize],
+) -> Result<(), FormatError> {
+    for (i, (row, &index)) in matrix.into_rows().into_iter().zip(owners).enumerate() {
+        let what = || format!("matrix row {} (node {:?})", i + 1, tree.specs[index].id);
         if let Some(j) = row.iter().position(|v| !v.is_finite()) {
             return Err(FormatError::Structure {
                 line: None,
                 column: None,
                 message: format!(
-                    "{what}, column {}: {}; every value must be a finite number",
+                    "{}, column {}: {}; every value must be a finite number",
+                    what(),
+                    j + 1,
+                    row[j]
+                ),
+            });
+        }
+        if let Some(j) = row.iter().position(|v| v.abs() > FEATURE_BOUND) {
+            return Err(FormatError::Structure {
+                line: None,
+                column: None,
+                message: format!(
+                    "{}, column {}: {:e}: vector values must lie within ±{FEATURE_BOUND:e} \
+                     (sums of their squares would overflow)",
+                    what(),
                     j + 1,
                     row[j]
                 ),
             });
         }
         if row.iter().all(|&v| v == 0.0) {
-            return Err(zero_vector(None, &what));
+            return Err(zero_vector(None, &what()));
         }
-        tree.specs[index].features = Some(row.to_vec());
+        tree.specs[index].features = Some(row);
     }
     Ok(())
 }

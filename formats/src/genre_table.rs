@@ -1,4 +1,4 @@
-//! The genre-table format: one node table (see [`crate::table`]) whose rows also list
+//! The genre-table format: one node table (see [`crate::node_table`]) whose rows also list
 //! genres, turned into 0/1 feature vectors compared by Jaccard similarity. Owns the
 //! two ways of writing genres (a multi-valued column or one-hot columns) and their
 //! encoding.
@@ -34,7 +34,8 @@ use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
 use crate::limits::Limits;
-use crate::table::{read_node_table, tree_from_table, Table, TableTree};
+use crate::node_table::{read_node_table, tree_from_table, TableTree};
+use crate::table::Table;
 
 /// The genre-table [`Format`] (name `genre-table`, one input `nodes`).
 #[derive(Clone, Copy, Debug, Default)]

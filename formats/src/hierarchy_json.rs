@@ -26,19 +26,21 @@
 //!
 //! The similarity hint comes from root flags: `useNeighborLeafs: true` gives
 //! [`SimilarityHint::NeighborList`]; else `similarityMeasure` (`cosine`, `jaccard`,
-//! `binary`); else cosine when any node has features. Other fields are ignored.
+//! `binary`); without either flag, neighbour lists that name nodes of the file give
+//! [`SimilarityHint::NeighborList`] (what an adapter printing them means); else
+//! cosine when any node has features. Neighbour lists left unused by a flag, or
+//! chosen over feature vectors, are a warning. Other fields are ignored.
 //!
 //! # Error positions
 //!
 //! The bytes are parsed once with `serde_json` into a `Value`, which has no positions.
 //! Syntax errors take serde_json's line and column. For any later error the reader
 //! knows the JSON path of the offending value (`children[2].children[0].Population`)
-//! and `locate` walks the raw bytes along that path to find its offset. The walk
+//! and `locate` (`json_path.rs`) walks the raw bytes along that path to find its offset. The walk
 //! runs only when an error is reported and only on text serde_json has accepted, so it
 //! can stay a small skip-scanner; if it ever gets lost it returns no position rather
 //! than a wrong one.
 
-use std::borrow::Cow;
 use std::collections::HashSet;
 
 use serde_json::{Map, Value};
@@ -49,7 +51,9 @@ use crate::dataset::{
 };
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
+use crate::json_path::{extend, line_column, locate, skip_whitespace, syntax_error, Step};
 use crate::limits::{Limit, Limits};
+use crate::warning::{Warning, WarningKind};
 
 /// Options for [`parse_hierarchy_json`]. The defaults honour the file's own flags.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -115,15 +119,21 @@ pub fn parse_hierarchy_json(
         })
         .collect();
 
-    let hint = match flags.hint {
-        Some(hint) => Some(hint),
-        None if specs.iter().any(|spec| spec.features.is_some()) => Some(SimilarityHint::Cosine),
-        None => None,
-    };
+    let listing = relations.iter().filter(|r| !r.is_empty()).count();
+    let has_features = specs.iter().any(|spec| spec.features.is_some());
+    let (hint, note) = similarity_hint(&flags, listing, has_features);
 
     let node_ids: Vec<String> = specs.iter().map(|spec| spec.id.clone()).collect();
     let mut builder = DatasetBuilder::new();
     builder.limits(options.limits);
+    if let Some(note) = note {
+        builder.warn(Warning::new(
+            WarningKind::Neighbors,
+            HIERARCHY_ROLES[0].name,
+            None,
+            note,
+        ));
+    }
     for (mut spec, relations) in specs.into_iter().zip(relations) {
         spec.relations = relations;
         builder.add(spec);
@@ -134,6 +144,47 @@ pub fn parse_hierarchy_json(
     builder
         .build()
         .map_err(|source| reader.model_error(source, &node_ids, &origins))
+}
+
+/// The similarity the file asks for, and a note when its neighbour lists
+/// (`listing` nodes have some that name nodes of the file) go unused or win
+/// over its feature vectors. An explicit flag decides; without one, neighbour
+/// lists are what an adapter that prints them means (issue 21: they were
+/// silently ignored without the paper's `useNeighborLeafs`), else vectors give
+/// cosine. The paper's files set the flag wherever they list neighbours.
+fn similarity_hint(
+    flags: &Flags,
+    listing: usize,
+    has_features: bool,
+) -> (Option<SimilarityHint>, Option<String>) {
+    let measure = flags.measure.map(|(hint, _)| hint);
+    match (flags.neighbor_lists, measure) {
+        (Some(true), _) => (Some(SimilarityHint::NeighborList), None),
+        (None, None) if listing > 0 => {
+            let note = has_features.then(|| {
+                "nodes carry both neighbor lists and feature vectors: the neighbor lists are \
+                 the similarity (\"useNeighborLeafs\": false, or a \"similarityMeasure\", on \
+                 the root uses the vectors instead)"
+                    .to_owned()
+            });
+            (Some(SimilarityHint::NeighborList), note)
+        }
+        (flag, _) => {
+            let hint = measure.or(has_features.then_some(SimilarityHint::Cosine));
+            let why = match (flag, flags.measure) {
+                (Some(false), _) => "\"useNeighborLeafs\" is false".to_owned(),
+                (_, Some((_, name))) => format!("\"similarityMeasure\" is {name:?}"),
+                _ => String::new(),
+            };
+            let note = (listing > 0).then(|| {
+                format!(
+                    "the neighbor lists of {listing} node(s) are not used: {why} on the root \
+                     (\"useNeighborLeafs\": true uses them)"
+                )
+            });
+            (hint, note)
+        }
+    }
 }
 
 /// How weights are read, decided once from the options and the root's flags.
@@ -152,7 +203,10 @@ enum WeightRule {
 struct Flags {
     weight: WeightRule,
     feature_field: String,
-    hint: Option<SimilarityHint>,
+    /// `useNeighborLeafs`, when given.
+    neighbor_lists: Option<bool>,
+    /// `similarityMeasure`, when given, with its name.
+    measure: Option<(SimilarityHint, &'static str)>,
 }
 
 /// Where a node sits: its parent's spec index and its index in the parent's
@@ -160,13 +214,6 @@ struct Flags {
 #[derive(Clone, Copy, Debug)]
 struct Origin {
     parent: Option<(usize, usize)>,
-}
-
-/// One step of a JSON path.
-#[derive(Clone, Debug)]
-enum Step<'a> {
-    Key(&'a str),
-    Index(usize),
 }
 
 /// The raw text, kept to turn JSON paths into positions.
@@ -226,9 +273,9 @@ impl Reader<'_> {
             .unwrap_or("embeddings")
             .to_owned();
 
-        let neighbor_list = match root.get("useNeighborLeafs") {
-            None | Some(Value::Null) => false,
-            Some(Value::Bool(b)) => *b,
+        let neighbor_lists = match root.get("useNeighborLeafs") {
+            None | Some(Value::Null) => None,
+            Some(Value::Bool(b)) => Some(*b),
             Some(other) => {
                 return Err(flag_error(
                     "useNeighborLeafs",
@@ -239,9 +286,9 @@ impl Reader<'_> {
         // Checked even when `useNeighborLeafs` wins, so a typo never goes unnoticed.
         let measure = match string_flag("similarityMeasure")? {
             None => None,
-            Some("cosine") => Some(SimilarityHint::Cosine),
-            Some("jaccard") => Some(SimilarityHint::Jaccard),
-            Some("binary") => Some(SimilarityHint::Binary),
+            Some("cosine") => Some((SimilarityHint::Cosine, "cosine")),
+            Some("jaccard") => Some((SimilarityHint::Jaccard, "jaccard")),
+            Some("binary") => Some((SimilarityHint::Binary, "binary")),
             Some(other) => {
                 return Err(flag_error(
                     "similarityMeasure",
@@ -249,16 +296,11 @@ impl Reader<'_> {
                 ))
             }
         };
-        let hint = if neighbor_list {
-            Some(SimilarityHint::NeighborList)
-        } else {
-            measure
-        };
-
         Ok(Flags {
             weight,
             feature_field,
-            hint,
+            neighbor_lists,
+            measure,
         })
     }
 
@@ -324,6 +366,8 @@ impl Reader<'_> {
 impl Walk<'_, '_> {
     /// Turns the node object `value` (and, depth-first, its subtree) into specs.
     /// `parent` is the parent's spec index and this node's index among its children.
+    /// The steps run in a fixed order (limits, identity, then the fields), so the
+    /// same input always reports the same error.
     fn visit(
         &mut self,
         value: &Value,
@@ -333,213 +377,30 @@ impl Walk<'_, '_> {
         let index = self.specs.len();
         self.origins.push(Origin { parent });
         let path = node_path(index, &self.origins);
-        let reader = self.reader;
-        let limits = self.limits;
-        let over = |limit: Limit, what: String| {
-            let (line, column) = reader.position(&path);
-            FormatError::Model {
-                line,
-                column,
-                source: ModelError::TooLarge(limits.exceeded(limit, what)),
-            }
-        };
-        if index >= limits.max_nodes {
-            return Err(over(
-                Limit::Nodes,
-                format!("more than {} nodes", limits.max_nodes),
-            ));
-        }
-        if depth > limits.max_depth {
-            return Err(over(Limit::Depth, format!("a node at depth {depth}")));
-        }
-
+        self.check_size(index, depth, &path)?;
         let Some(object) = value.as_object() else {
-            return Err(reader.structure_error(
+            return Err(self.reader.structure_error(
                 &path,
                 format!("expected a node object, found {}", kind(value)),
             ));
         };
-
         let parent_id = parent.map(|(p, _)| self.specs[p].id.clone());
-        let field_at = |field| extend(&path, Step::Key(field));
-
         // Identity first, so later errors can name the node.
-        let mut id = None;
-        for field in ["id", "name", "Name"] {
-            if let Some(text) = text_field(object, field)
-                .map_err(|found| reader.field_error(None, &field_at(field), field, found))?
-            {
-                id = Some(text);
-                break;
-            }
-        }
-        let id = match (id, &parent) {
-            (Some(id), _) => id,
-            (None, Some((_, child_index))) => {
-                format!("{}/{child_index}", parent_id.as_deref().unwrap_or(""))
-            }
-            (None, None) => "root".to_owned(),
-        };
-        let error = |field: &str, steps: &[Step<'_>], message: String| {
-            reader.field_error(Some(&id), steps, field, message)
-        };
-
-        let mut label = None;
-        for field in ["name", "Name"] {
-            if let Some(text) =
-                text_field(object, field).map_err(|found| error(field, &field_at(field), found))?
-            {
-                label = Some(text);
-                break;
-            }
-        }
-
-        let children = match object.get("children") {
-            None | Some(Value::Null) => &[][..],
-            Some(Value::Array(children)) => children.as_slice(),
-            Some(other) => {
-                return Err(error(
-                    "children",
-                    &field_at("children"),
-                    format!("expected an array of nodes, found {}", kind(other)),
-                ))
-            }
-        };
-        let is_leaf = children.is_empty();
-
-        let weight = match &self.flags.weight {
-            WeightRule::EveryNodeOne => Some(1.0),
-            WeightRule::LeafOne => is_leaf.then_some(1.0),
-            WeightRule::Field(field) => match object.get(field.as_str()) {
-                None | Some(Value::Null) if is_leaf => {
-                    return Err(error(
-                        field,
-                        &path,
-                        "missing; every leaf needs a weight".to_owned(),
-                    ))
-                }
-                None | Some(Value::Null) => None,
-                Some(Value::Number(number)) => {
-                    let weight = number.as_f64().unwrap_or(f64::NAN);
-                    if !is_valid_weight(weight) {
-                        let problem = if weight < 0.0 {
-                            "is negative"
-                        } else {
-                            "is not a finite number"
-                        };
-                        return Err(error(
-                            field,
-                            &field_at(field),
-                            format!("weight {number} {problem}"),
-                        ));
-                    }
-                    Some(weight)
-                }
-                Some(other) => {
-                    return Err(error(
-                        field,
-                        &field_at(field),
-                        format!("expected a number, found {}", kind(other)),
-                    ))
-                }
-            },
-        };
-
-        let feature_field = self.flags.feature_field.as_str();
-        let features = match object.get(feature_field) {
-            None | Some(Value::Null) => None,
-            Some(Value::Array(outer)) => {
-                let mut steps = field_at(feature_field);
-                // The prototype unwraps a one-element list holding a list (`[[..]]`).
-                let entries = match outer.as_slice() {
-                    [Value::Array(inner)] => {
-                        steps.push(Step::Index(0));
-                        inner
-                    }
-                    _ => outer,
-                };
-                if entries.len() > limits.max_dimensions {
-                    return Err(over(
-                        Limit::Dimensions,
-                        format!("node {id:?}: a feature vector of {} values", entries.len()),
-                    ));
-                }
-                let mut features = Vec::with_capacity(entries.len());
-                for (k, entry) in entries.iter().enumerate() {
-                    match entry.as_f64() {
-                        Some(x) => features.push(x),
-                        None => {
-                            let at = extend(&steps, Step::Index(k));
-                            return Err(error(
-                                feature_field,
-                                &at,
-                                format!("entry {k}: expected a number, found {}", kind(entry)),
-                            ));
-                        }
-                    }
-                }
-                Some(features)
-            }
-            Some(other) => {
-                return Err(error(
-                    feature_field,
-                    &field_at(feature_field),
-                    format!("expected an array of numbers, found {}", kind(other)),
-                ))
-            }
-        };
-
-        let relations = match object.get("neighbors") {
-            None | Some(Value::Null) => Vec::new(),
-            Some(Value::Array(entries)) => {
-                let mut relations = Vec::with_capacity(entries.len());
-                for (k, entry) in entries.iter().enumerate() {
-                    match id_text(entry) {
-                        Some(target) => relations.push(target),
-                        None => {
-                            let at = extend(&field_at("neighbors"), Step::Index(k));
-                            return Err(error(
-                                "neighbors",
-                                &at,
-                                format!("entry {k}: expected an id, found {}", kind(entry)),
-                            ));
-                        }
-                    }
-                }
-                relations
-            }
-            Some(other) => {
-                return Err(error(
-                    "neighbors",
-                    &field_at("neighbors"),
-                    format!("expected an array of ids, found {}", kind(other)),
-                ))
-            }
-        };
-
-        let color = match object.get("color") {
-            None | Some(Value::Null) => None,
-            Some(Value::String(text)) => match Rgb::from_hex(text) {
-                Some(color) => Some(color),
-                None => {
-                    return Err(error(
-                        "color",
-                        &field_at("color"),
-                        format!("{text:?} is not a hex color like #rgb or #rrggbb"),
-                    ))
-                }
-            },
-            Some(other) => {
-                return Err(error(
-                    "color",
-                    &field_at("color"),
-                    format!("expected a hex color string, found {}", kind(other)),
-                ))
-            }
-        };
-
-        self.specs.push(NodeSpec {
+        let id = node_id(self.reader, object, &path, parent_id.as_deref(), parent)?;
+        let node = NodeObject {
+            reader: self.reader,
+            object,
+            path,
             id,
+        };
+        let label = node.label()?;
+        let children = node.children()?;
+        let weight = node.weight(&self.flags.weight, children.is_empty())?;
+        let features = node.features(&self.flags.feature_field, &self.limits)?;
+        let relations = node.relations()?;
+        let color = node.color()?;
+        self.specs.push(NodeSpec {
+            id: node.id,
             label,
             parent: parent_id,
             weight,
@@ -551,6 +412,247 @@ impl Walk<'_, '_> {
             self.visit(child, Some((index, child_index)), depth + 1)?;
         }
         Ok(())
+    }
+
+    /// The node count and depth limits, checked before a node is read.
+    fn check_size(&self, index: usize, depth: usize, path: &[Step<'_>]) -> Result<(), FormatError> {
+        let limits = &self.limits;
+        if index >= limits.max_nodes {
+            return Err(over_limit(
+                self.reader,
+                path,
+                limits,
+                Limit::Nodes,
+                format!("more than {} nodes", limits.max_nodes),
+            ));
+        }
+        if depth > limits.max_depth {
+            return Err(over_limit(
+                self.reader,
+                path,
+                limits,
+                Limit::Depth,
+                format!("a node at depth {depth}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A refusal by `limit`, at the node `path` leads to.
+fn over_limit(
+    reader: &Reader<'_>,
+    path: &[Step<'_>],
+    limits: &Limits,
+    limit: Limit,
+    what: String,
+) -> FormatError {
+    let (line, column) = reader.position(path);
+    FormatError::Model {
+        line,
+        column,
+        source: ModelError::TooLarge(limits.exceeded(limit, what)),
+    }
+}
+
+/// A node's id: `id`, else `name`, else `Name`; else the parent's id + `/` +
+/// its index among the children; the root defaults to `root`.
+fn node_id(
+    reader: &Reader<'_>,
+    object: &Map<String, Value>,
+    path: &[Step<'static>],
+    parent_id: Option<&str>,
+    parent: Option<(usize, usize)>,
+) -> Result<String, FormatError> {
+    for field in ["id", "name", "Name"] {
+        let found = text_field(object, field).map_err(|found| {
+            reader.field_error(None, &extend(path, Step::Key(field)), field, found)
+        })?;
+        if let Some(text) = found {
+            return Ok(text);
+        }
+    }
+    Ok(match parent {
+        Some((_, child_index)) => format!("{}/{child_index}", parent_id.unwrap_or("")),
+        None => "root".to_owned(),
+    })
+}
+
+/// One node object being read, once its id is known: each field has its own
+/// step, and every error names the node and points at the field.
+struct NodeObject<'a, 't> {
+    reader: &'a Reader<'t>,
+    object: &'a Map<String, Value>,
+    path: Vec<Step<'static>>,
+    id: String,
+}
+
+impl<'a> NodeObject<'a, '_> {
+    /// The path to `field` of this node.
+    fn at<'f>(&self, field: &'f str) -> Vec<Step<'f>> {
+        extend(&self.path, Step::Key(field))
+    }
+
+    /// A field error of this node at `steps`.
+    fn error(&self, field: &str, steps: &[Step<'_>], message: String) -> FormatError {
+        self.reader
+            .field_error(Some(&self.id), steps, field, message)
+    }
+
+    /// `name`, else `Name` (else the id, later).
+    fn label(&self) -> Result<Option<String>, FormatError> {
+        for field in ["name", "Name"] {
+            let found = text_field(self.object, field)
+                .map_err(|found| self.error(field, &self.at(field), found))?;
+            if found.is_some() {
+                return Ok(found);
+            }
+        }
+        Ok(None)
+    }
+
+    /// The `children` array (absent or null: none).
+    fn children(&self) -> Result<&'a [Value], FormatError> {
+        match self.object.get("children") {
+            None | Some(Value::Null) => Ok(&[]),
+            Some(Value::Array(children)) => Ok(children.as_slice()),
+            Some(other) => Err(self.error(
+                "children",
+                &self.at("children"),
+                format!("expected an array of nodes, found {}", kind(other)),
+            )),
+        }
+    }
+
+    /// The node's own weight by `rule`; a leaf must have one.
+    fn weight(&self, rule: &WeightRule, is_leaf: bool) -> Result<Option<f64>, FormatError> {
+        let field = match rule {
+            WeightRule::EveryNodeOne => return Ok(Some(1.0)),
+            WeightRule::LeafOne => return Ok(is_leaf.then_some(1.0)),
+            WeightRule::Field(field) => field.as_str(),
+        };
+        match self.object.get(field) {
+            None | Some(Value::Null) if is_leaf => Err(self.error(
+                field,
+                &self.path,
+                "missing; every leaf needs a weight".to_owned(),
+            )),
+            None | Some(Value::Null) => Ok(None),
+            Some(Value::Number(number)) => {
+                let weight = number.as_f64().unwrap_or(f64::NAN);
+                if is_valid_weight(weight) {
+                    return Ok(Some(weight));
+                }
+                let problem = if weight < 0.0 {
+                    "is negative"
+                } else {
+                    "is not a finite number"
+                };
+                Err(self.error(field, &self.at(field), format!("weight {number} {problem}")))
+            }
+            Some(other) => Err(self.error(
+                field,
+                &self.at(field),
+                format!("expected a number, found {}", kind(other)),
+            )),
+        }
+    }
+
+    /// The feature vector in `field`: numbers, possibly wrapped once as `[[..]]`,
+    /// at most `limits.max_dimensions` of them.
+    fn features(&self, field: &str, limits: &Limits) -> Result<Option<Vec<f64>>, FormatError> {
+        let outer = match self.object.get(field) {
+            None | Some(Value::Null) => return Ok(None),
+            Some(Value::Array(outer)) => outer,
+            Some(other) => {
+                return Err(self.error(
+                    field,
+                    &self.at(field),
+                    format!("expected an array of numbers, found {}", kind(other)),
+                ))
+            }
+        };
+        let mut steps = self.at(field);
+        // The prototype unwraps a one-element list holding a list (`[[..]]`).
+        let entries = match outer.as_slice() {
+            [Value::Array(inner)] => {
+                steps.push(Step::Index(0));
+                inner
+            }
+            _ => outer,
+        };
+        if entries.len() > limits.max_dimensions {
+            return Err(over_limit(
+                self.reader,
+                &self.path,
+                limits,
+                Limit::Dimensions,
+                format!(
+                    "node {:?}: a feature vector of {} values",
+                    self.id,
+                    entries.len()
+                ),
+            ));
+        }
+        let mut features = Vec::with_capacity(entries.len());
+        for (k, entry) in entries.iter().enumerate() {
+            let Some(x) = entry.as_f64() else {
+                return Err(self.error(
+                    field,
+                    &extend(&steps, Step::Index(k)),
+                    format!("entry {k}: expected a number, found {}", kind(entry)),
+                ));
+            };
+            features.push(x);
+        }
+        Ok(Some(features))
+    }
+
+    /// The ids listed in `neighbors`.
+    fn relations(&self) -> Result<Vec<String>, FormatError> {
+        let entries = match self.object.get("neighbors") {
+            None | Some(Value::Null) => return Ok(Vec::new()),
+            Some(Value::Array(entries)) => entries,
+            Some(other) => {
+                return Err(self.error(
+                    "neighbors",
+                    &self.at("neighbors"),
+                    format!("expected an array of ids, found {}", kind(other)),
+                ))
+            }
+        };
+        entries
+            .iter()
+            .enumerate()
+            .map(|(k, entry)| {
+                id_text(entry).ok_or_else(|| {
+                    self.error(
+                        "neighbors",
+                        &extend(&self.at("neighbors"), Step::Index(k)),
+                        format!("entry {k}: expected an id, found {}", kind(entry)),
+                    )
+                })
+            })
+            .collect()
+    }
+
+    /// `color`, a `#rgb` or `#rrggbb` string.
+    fn color(&self) -> Result<Option<Rgb>, FormatError> {
+        match self.object.get("color") {
+            None | Some(Value::Null) => Ok(None),
+            Some(Value::String(text)) => Rgb::from_hex(text).map(Some).ok_or_else(|| {
+                self.error(
+                    "color",
+                    &self.at("color"),
+                    format!("{text:?} is not a hex color like #rgb or #rrggbb"),
+                )
+            }),
+            Some(other) => Err(self.error(
+                "color",
+                &self.at("color"),
+                format!("expected a hex color string, found {}", kind(other)),
+            )),
+        }
     }
 }
 
@@ -565,14 +667,6 @@ fn node_path(index: usize, origins: &[Origin]) -> Vec<Step<'static>> {
         current = origins.get(parent).and_then(|origin| origin.parent);
     }
     steps.reverse();
-    steps
-}
-
-/// `path` followed by one more step.
-fn extend<'a>(path: &[Step<'a>], step: Step<'a>) -> Vec<Step<'a>> {
-    let mut steps = Vec::with_capacity(path.len() + 1);
-    steps.extend_from_slice(path);
-    steps.push(step);
     steps
 }
 
@@ -620,31 +714,6 @@ fn kind(value: &Value) -> &'static str {
     }
 }
 
-/// Turns a serde_json error into [`FormatError::Syntax`], converting its byte column
-/// into a character column.
-fn syntax_error(text: &[u8], error: &serde_json::Error) -> FormatError {
-    let line = error.line();
-    let byte_column = error.column();
-    // serde_json's Display appends " at line L column C"; the position has its own fields.
-    let full = error.to_string();
-    let suffix = format!(" at line {line} column {byte_column}");
-    let message = full.strip_suffix(&suffix).unwrap_or(&full).to_owned();
-    let line_start = text
-        .split_inclusive(|&b| b == b'\n')
-        .take(line.saturating_sub(1))
-        .map(<[u8]>::len)
-        .sum::<usize>();
-    let line_end = line_start.saturating_add(byte_column).min(text.len());
-    let column = text
-        .get(line_start..line_end)
-        .map_or(byte_column, count_chars);
-    FormatError::Syntax {
-        line,
-        column,
-        message,
-    }
-}
-
 /// The error for JSON nested deeper than serde_json reads (128 levels: a node
 /// is an object and its `children` an array, so nodes down to depth 63). With
 /// a smaller `limits.max_depth` the limit is what the user can change.
@@ -674,149 +743,6 @@ fn too_deep(text: &[u8], error: &serde_json::Error, limits: &Limits) -> FormatEr
 
 /// The deepest node serde_json's nesting limit of 128 lets through.
 const JSON_MAX_NODE_DEPTH: usize = 63;
-
-/// Number of UTF-8 characters in `bytes` (continuation bytes are not counted).
-fn count_chars(bytes: &[u8]) -> usize {
-    bytes.iter().filter(|&&b| b & 0xC0 != 0x80).count()
-}
-
-/// 1-based line and character column of byte `offset`.
-fn line_column(text: &[u8], offset: usize) -> (usize, usize) {
-    let before = &text[..offset.min(text.len())];
-    let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
-    let line_start = before
-        .iter()
-        .rposition(|&b| b == b'\n')
-        .map_or(0, |i| i + 1);
-    (line, 1 + count_chars(&before[line_start..]))
-}
-
-/// Byte offset of the value reached by following `path` from the top-level value.
-/// Expects text that serde_json has accepted; returns `None` instead of guessing if
-/// the path is absent. When an object repeats a key, the last one counts, as in
-/// serde_json's `Value`.
-fn locate(text: &[u8], path: &[Step<'_>]) -> Option<usize> {
-    let mut pos = skip_whitespace(text, 0);
-    for step in path {
-        match step {
-            Step::Key(key) => {
-                if text.get(pos) != Some(&b'{') {
-                    return None;
-                }
-                pos = skip_whitespace(text, pos + 1);
-                let mut found = None;
-                while text.get(pos) == Some(&b'"') {
-                    let key_end = skip_string(text, pos)?;
-                    let name = key_text(text.get(pos..key_end)?)?;
-                    pos = skip_whitespace(text, key_end);
-                    if text.get(pos) != Some(&b':') {
-                        return None;
-                    }
-                    pos = skip_whitespace(text, pos + 1);
-                    if name == *key {
-                        found = Some(pos);
-                    }
-                    pos = skip_whitespace(text, skip_value(text, pos)?);
-                    if text.get(pos) == Some(&b',') {
-                        pos = skip_whitespace(text, pos + 1);
-                    }
-                }
-                pos = found?;
-            }
-            Step::Index(index) => {
-                if text.get(pos) != Some(&b'[') {
-                    return None;
-                }
-                pos = skip_whitespace(text, pos + 1);
-                for _ in 0..*index {
-                    if text.get(pos) == Some(&b']') {
-                        return None;
-                    }
-                    pos = skip_whitespace(text, skip_value(text, pos)?);
-                    if text.get(pos) != Some(&b',') {
-                        return None;
-                    }
-                    pos = skip_whitespace(text, pos + 1);
-                }
-                if matches!(text.get(pos), None | Some(&b']')) {
-                    return None;
-                }
-            }
-        }
-    }
-    Some(pos)
-}
-
-/// The first non-whitespace offset at or after `pos`.
-fn skip_whitespace(text: &[u8], mut pos: usize) -> usize {
-    while matches!(text.get(pos), Some(b' ' | b'\t' | b'\n' | b'\r')) {
-        pos += 1;
-    }
-    pos
-}
-
-/// The offset just past the string starting at `pos` (which holds its opening quote).
-fn skip_string(text: &[u8], pos: usize) -> Option<usize> {
-    let mut i = pos + 1;
-    loop {
-        match text.get(i)? {
-            b'\\' => i += 2,
-            b'"' => return Some(i + 1),
-            _ => i += 1,
-        }
-    }
-}
-
-/// The offset just past the value starting at `pos`.
-fn skip_value(text: &[u8], pos: usize) -> Option<usize> {
-    match text.get(pos)? {
-        b'"' => skip_string(text, pos),
-        b'{' | b'[' => {
-            let mut depth = 0usize;
-            let mut i = pos;
-            loop {
-                match text.get(i)? {
-                    b'"' => {
-                        i = skip_string(text, i)?;
-                        continue;
-                    }
-                    b'{' | b'[' => depth += 1,
-                    b'}' | b']' => {
-                        depth = depth.checked_sub(1)?;
-                        if depth == 0 {
-                            return Some(i + 1);
-                        }
-                    }
-                    _ => {}
-                }
-                i += 1;
-            }
-        }
-        // Numbers, true, false, null: run to the next delimiter.
-        _ => {
-            let mut i = pos;
-            while !matches!(
-                text.get(i),
-                None | Some(b',' | b']' | b'}' | b' ' | b'\t' | b'\n' | b'\r')
-            ) {
-                i += 1;
-            }
-            Some(i)
-        }
-    }
-}
-
-/// The text of a quoted key, unescaping only when it holds escapes.
-fn key_text(quoted: &[u8]) -> Option<Cow<'_, str>> {
-    if quoted.contains(&b'\\') {
-        serde_json::from_slice::<String>(quoted)
-            .ok()
-            .map(Cow::Owned)
-    } else {
-        let inner = quoted.get(1..quoted.len().checked_sub(1)?)?;
-        std::str::from_utf8(inner).ok().map(Cow::Borrowed)
-    }
-}
 
 /// The hierarchy JSON [`Format`] (name `hierarchy-json`, one input `hierarchy`):
 /// [`parse_hierarchy_json`] with [`FormatOptions::weight`] as the weight field.
@@ -854,39 +780,6 @@ impl Format for HierarchyJson {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn position_of(text: &str, path: &[Step<'_>]) -> Option<(usize, usize)> {
-        locate(text.as_bytes(), path).map(|offset| line_column(text.as_bytes(), offset))
-    }
-
-    #[test]
-    fn locate_follows_keys_and_indices() {
-        let text = "{\"a\": 1,\n \"k\\\"ey\": {\"x\": [10, {\"y\": \"]}\"}, 30]},\n \"children\": [ {\"id\": \"é\"}, {\"id\": 2} ]}";
-        assert_eq!(position_of(text, &[]), Some((1, 1)));
-        assert_eq!(position_of(text, &[Step::Key("a")]), Some((1, 7)));
-        assert_eq!(
-            position_of(text, &[Step::Key("k\"ey"), Step::Key("x"), Step::Index(2)]),
-            Some((2, 35))
-        );
-        assert_eq!(
-            position_of(
-                text,
-                &[Step::Key("children"), Step::Index(1), Step::Key("id")]
-            ),
-            Some((3, 36))
-        );
-        assert_eq!(position_of(text, &[Step::Key("missing")]), None);
-        assert_eq!(
-            position_of(text, &[Step::Key("children"), Step::Index(2)]),
-            None
-        );
-    }
-
-    #[test]
-    fn locate_takes_the_last_of_repeated_keys() {
-        let text = r#"{"w": 1, "w": 2}"#;
-        assert_eq!(position_of(text, &[Step::Key("w")]), Some((1, 15)));
-    }
 
     #[test]
     fn node_paths_are_rebuilt_from_origins() {

@@ -40,15 +40,19 @@ pub mod format;
 pub mod genre_table;
 /// The paper's hierarchy JSON and d3-hierarchy style JSON.
 pub mod hierarchy_json;
+/// Positions in JSON text, for the hierarchy JSON reader's errors.
+mod json_path;
 /// [`Limits`]: how large an input the readers accept.
 pub mod limits;
+/// Node tables → hierarchies (grouping, path or parent columns).
+pub mod node_table;
 /// NumPy `.npy` matrices (embedding vectors saved by `numpy.save`).
 pub mod npy;
 /// The list of formats, looked up by name.
 pub mod registry;
 /// "Did you mean" hints for misspelt names.
 pub mod suggest;
-/// CSV/TSV rows with positions, and node tables → hierarchies.
+/// CSV/TSV rows with positions, and tables with a header.
 pub mod table;
 /// Time series: a node table plus values by date, compared by Pearson correlation.
 pub mod time_series;
@@ -65,4 +69,4 @@ pub use genre_table::GenreTable;
 pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};
 pub use limits::{Limit, LimitError, Limits};
 pub use time_series::TimeSeries;
-pub use warning::Warning;
+pub use warning::{Warning, WarningKind, Warnings};

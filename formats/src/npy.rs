@@ -1,9 +1,16 @@
 //! NumPy `.npy` matrices (the file `numpy.save` writes, which embedding pipelines
 //! save their vectors as): the magic bytes, a version 1, 2 or 3 preamble, the
-//! Python-dict header (`descr`, `fortran_order`, `shape`) and the raw values, read
-//! into a row-major [`Matrix`](crate::npy::Matrix) of `f64`. Float32 and float64 in either byte order
-//! and either memory order are read; anything else is an error saying what the
-//! file holds and what to save instead.
+//! Python-dict header (`descr`, `fortran_order`, `shape`) and the raw values, seen
+//! as a [`Matrix`](crate::npy::Matrix) whose rows decode to `f64`. Float32 and
+//! float64 in either byte order and either memory order are read; anything else is
+//! an error saying what the file holds and what to save instead.
+//!
+//! Every step is bounded before it costs anything: the header's length
+//! ([`MAX_HEADER_BYTES`](crate::npy::MAX_HEADER_BYTES)) and nesting
+//! ([`MAX_HEADER_NESTING`](crate::npy::MAX_HEADER_NESTING)), the declared shape
+//! against [`Limits`](crate::Limits) (rows against `max_nodes`, columns against
+//! `max_dimensions`, as for a CSV of vectors) and against the bytes present; only
+//! then are values decoded, straight into the vectors the caller keeps.
 //!
 //! Written by hand rather than with a crate: the format is a ten-byte preamble, a
 //! header with three keys and a block of floats (numpy's `format.py` documents it
@@ -12,36 +19,124 @@
 //! `num-bigint` and `num-complex`): a larger dependency tree than this file, for
 //! the three keys we read.
 
+use std::fmt;
+
+use crate::dataset::ModelError;
 use crate::error::FormatError;
+use crate::limits::{Limit, Limits};
 
 /// The first six bytes of every `.npy` file.
 pub const MAGIC: &[u8] = b"\x93NUMPY";
+
+/// The longest header read, in bytes: numpy's own `numpy.load` refuses longer
+/// ones (its `max_header_size`), and a float matrix's header is under 128.
+/// Checked before the header is decoded, so a hostile length costs nothing.
+pub const MAX_HEADER_BYTES: usize = 10_000;
+
+/// The deepest nesting of brackets, braces and parentheses in a header: the
+/// dict and its shape tuple are two levels, numpy's structured dtypes (refused
+/// anyway, with their own message) a few more. The header reader is recursive,
+/// so this bound is what keeps 30,000 `[` from overflowing the stack.
+pub const MAX_HEADER_NESTING: usize = 16;
 
 /// True when `bytes` start like a `.npy` file.
 pub fn is_npy(bytes: &[u8]) -> bool {
     bytes.starts_with(MAGIC)
 }
 
-/// A 2-D matrix read from a `.npy` file, row-major.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Matrix {
+/// A 2-D float matrix in a `.npy` file: its shape and its data, decoded to
+/// `f64` only when asked, so reading a matrix costs the `f64`s the caller
+/// keeps and nothing more (no copy of the whole file).
+#[derive(Clone, Copy)]
+pub struct Matrix<'a> {
     /// Number of rows (the first dimension of the shape).
     pub rows: usize,
     /// Number of columns (the second dimension).
     pub cols: usize,
-    /// `rows * cols` values, row after row.
-    values: Vec<f64>,
+    float: Float,
+    big_endian: bool,
+    fortran_order: bool,
+    /// Exactly `rows * cols` values of `float`, in the file's order.
+    data: &'a [u8],
 }
 
-impl Matrix {
-    /// Row `i` (0-based).
-    pub fn row(&self, i: usize) -> &[f64] {
-        &self.values[i * self.cols..(i + 1) * self.cols]
+impl Matrix<'_> {
+    /// Element (`i`, `j`), 0-based; both must be in range.
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        // Column-major (Fortran order): element (i, j) is the (j * rows + i)-th.
+        let k = if self.fortran_order {
+            j * self.rows + i
+        } else {
+            i * self.cols + j
+        };
+        let size = self.float.size();
+        self.decode(&self.data[k * size..(k + 1) * size])
     }
 
-    /// The file's dtype and shape as numpy prints them, for messages.
+    /// Row `i` (0-based) as `f64`s.
+    pub fn row(&self, i: usize) -> Vec<f64> {
+        (0..self.cols).map(|j| self.get(i, j)).collect()
+    }
+
+    /// Every row as `f64`s: the one allocation of the values a reader keeps.
+    /// The file's data is read in its own order (a column-major file column by
+    /// column), so a large matrix streams through the cache once.
+    pub fn into_rows(self) -> Vec<Vec<f64>> {
+        let size = self.float.size();
+        let values = self.data.chunks_exact(size).map(|chunk| self.decode(chunk));
+        if !self.fortran_order {
+            let mut values = values;
+            return (0..self.rows)
+                .map(|_| values.by_ref().take(self.cols).collect())
+                .collect();
+        }
+        let mut rows: Vec<Vec<f64>> = (0..self.rows)
+            .map(|_| Vec::with_capacity(self.cols))
+            .collect();
+        for (k, value) in values.enumerate() {
+            rows[k % self.rows].push(value);
+        }
+        rows
+    }
+
+    fn decode(&self, chunk: &[u8]) -> f64 {
+        match (self.float, self.big_endian) {
+            (Float::F32, false) => f64::from(f32::from_le_bytes(array(chunk))),
+            (Float::F32, true) => f64::from(f32::from_be_bytes(array(chunk))),
+            (Float::F64, false) => f64::from_le_bytes(array(chunk)),
+            (Float::F64, true) => f64::from_be_bytes(array(chunk)),
+        }
+    }
+
+    /// The shape as numpy prints it, for messages.
     fn describe(rows: usize, cols: usize) -> String {
         format!("shape ({rows}, {cols})")
+    }
+}
+
+/// Two matrices are equal when they hold the same values, whatever their
+/// dtype, byte order or memory order.
+impl PartialEq for Matrix<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        (self.rows, self.cols) == (other.rows, other.cols)
+            && (0..self.rows).all(|i| (0..self.cols).all(|j| self.get(i, j) == other.get(i, j)))
+    }
+}
+
+impl fmt::Debug for Matrix<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "Matrix({}, {}{}{})",
+            Matrix::describe(self.rows, self.cols),
+            dtype_name(self.float),
+            if self.big_endian { ", big-endian" } else { "" },
+            if self.fortran_order {
+                ", Fortran order"
+            } else {
+                ""
+            }
+        )
     }
 }
 
@@ -78,8 +173,11 @@ fn bad(message: impl Into<String>) -> FormatError {
     }
 }
 
-/// Reads a `.npy` file holding a 2-D float32 or float64 matrix.
-pub fn read_npy(bytes: &[u8]) -> Result<Matrix, FormatError> {
+/// Reads a `.npy` file holding a 2-D float32 or float64 matrix of at most
+/// `limits.max_nodes` rows and `limits.max_dimensions` columns. The header is
+/// checked whole (length, nesting, keys, shape against the limits, data size)
+/// before any value is decoded.
+pub fn read_npy<'a>(bytes: &'a [u8], limits: &Limits) -> Result<Matrix<'a>, FormatError> {
     if !is_npy(bytes) {
         return Err(bad(
             "not a .npy file: it does not start with the magic bytes \\x93NUMPY",
@@ -100,6 +198,25 @@ pub fn read_npy(bytes: &[u8]) -> Result<Matrix, FormatError> {
             Matrix::describe(rows, cols)
         )));
     }
+    // The same limits as a CSV of vectors, from the declared shape: one row
+    // per node, one column per dimension.
+    let too_large = |source| FormatError::Model {
+        line: None,
+        column: None,
+        source: ModelError::TooLarge(source),
+    };
+    if rows > limits.max_nodes {
+        return Err(too_large(limits.exceeded(
+            Limit::Nodes,
+            format_args!(
+                "the .npy matrix has {rows} rows ({}), one per node",
+                Matrix::describe(rows, cols)
+            ),
+        )));
+    }
+    limits
+        .check_dimensions(cols, "the vectors")
+        .map_err(too_large)?;
     let size = header.float.size();
     let expected = rows
         .checked_mul(cols)
@@ -115,25 +232,14 @@ pub fn read_npy(bytes: &[u8]) -> Result<Matrix, FormatError> {
             dtype_name(header.float),
         )));
     }
-    let read = |chunk: &[u8]| -> f64 {
-        match (header.float, header.big_endian) {
-            (Float::F32, false) => f64::from(f32::from_le_bytes(array(chunk))),
-            (Float::F32, true) => f64::from(f32::from_be_bytes(array(chunk))),
-            (Float::F64, false) => f64::from_le_bytes(array(chunk)),
-            (Float::F64, true) => f64::from_be_bytes(array(chunk)),
-        }
-    };
-    let stored: Vec<f64> = data.chunks_exact(size).map(read).collect();
-    let values = if header.fortran_order {
-        // Column-major: element (i, j) is at j * rows + i.
-        (0..rows)
-            .flat_map(|i| (0..cols).map(move |j| (i, j)))
-            .map(|(i, j)| stored[j * rows + i])
-            .collect()
-    } else {
-        stored
-    };
-    Ok(Matrix { rows, cols, values })
+    Ok(Matrix {
+        rows,
+        cols,
+        float: header.float,
+        big_endian: header.big_endian,
+        fortran_order: header.fortran_order,
+        data,
+    })
 }
 
 /// The first `N` bytes of `chunk` as an array (chunks are exactly `N` long).
@@ -198,6 +304,13 @@ fn split_header(bytes: &[u8]) -> Result<(String, &[u8]), FormatError> {
     };
     let end = start.checked_add(length).ok_or_else(short)?;
     let raw = bytes.get(start..end).ok_or_else(short)?;
+    if length > MAX_HEADER_BYTES {
+        return Err(bad(format!(
+            "the .npy header of {length} bytes is too long: headers are read up to \
+             {MAX_HEADER_BYTES} bytes (numpy.load's own limit; a float matrix's header is \
+             under 128)"
+        )));
+    }
     let text = if version[0] == 3 {
         String::from_utf8(raw.to_vec())
             .map_err(|_| bad("the .npy header (version 3.0) is not UTF-8"))?
@@ -224,6 +337,7 @@ fn parse_header(text: &str) -> Result<Header, FormatError> {
     let mut parser = Parser {
         chars: text.chars().collect(),
         at: 0,
+        depth: 0,
     };
     let literal = parser.value()?;
     parser.skip_space();
@@ -313,10 +427,13 @@ fn dtype_words(kind: &str) -> &'static str {
     }
 }
 
-/// A recursive-descent reader of the header literal.
+/// A recursive-descent reader of the header literal, at most
+/// [`MAX_HEADER_NESTING`] levels deep.
 struct Parser {
     chars: Vec<char>,
     at: usize,
+    /// Open brackets, braces and parentheses around the current position.
+    depth: usize,
 }
 
 impl Parser {
@@ -379,11 +496,20 @@ impl Parser {
         close: char,
         mut item: impl FnMut(&mut Self) -> Result<T, FormatError>,
     ) -> Result<Vec<T>, FormatError> {
+        if self.depth >= MAX_HEADER_NESTING {
+            return Err(bad(format!(
+                "the .npy header nests deeper than {MAX_HEADER_NESTING} levels of brackets at \
+                 character {} (a float matrix's header nests 2)",
+                self.at + 1
+            )));
+        }
+        self.depth += 1;
         self.at += 1;
         let mut out = Vec::new();
         loop {
             if self.peek() == Some(close) {
                 self.at += 1;
+                self.depth -= 1;
                 return Ok(out);
             }
             out.push(item(self)?);
@@ -470,7 +596,7 @@ mod tests {
             "{'descr': '<f8', 'fortran_order': False, 'shape': (2, 3), }",
             &floats(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]),
         );
-        let m = read_npy(&c).expect("valid");
+        let m = read_npy(&c, &Limits::default()).expect("valid");
         assert_eq!((m.rows, m.cols), (2, 3));
         assert_eq!(m.row(1), [4.0, 5.0, 6.0]);
         // The same matrix stored column by column.
@@ -478,7 +604,7 @@ mod tests {
             "{'descr': '<f8', 'fortran_order': True, 'shape': (2, 3), }",
             &floats(&[1.0, 4.0, 2.0, 5.0, 3.0, 6.0]),
         );
-        assert_eq!(read_npy(&f).expect("valid"), m);
+        assert_eq!(read_npy(&f, &Limits::default()).expect("valid"), m);
     }
 
     #[test]
@@ -488,7 +614,10 @@ mod tests {
             "{\"descr\": \"<f8\", \"shape\": (1L, 2L), \"fortran_order\": False}",
             &floats(&[1.0, 2.0]),
         );
-        assert_eq!(read_npy(&c).expect("valid").row(0), [1.0, 2.0]);
+        assert_eq!(
+            read_npy(&c, &Limits::default()).expect("valid").row(0),
+            [1.0, 2.0]
+        );
     }
 
     #[test]
@@ -528,14 +657,30 @@ mod tests {
             ),
             (
                 file(
-                    "{'descr': '<f8', 'fortran_order': False, 'shape': (99999999999, 99999999999), }",
+                    "{'descr': '<f8', 'fortran_order': False, 'shape': (99999999999, 2), }",
                     &[],
                 ),
-                "cut short",
+                "99999999999 rows",
             ),
         ] {
-            let error = read_npy(&bytes).expect_err(wanted).to_string();
+            let error = read_npy(&bytes, &Limits::default())
+                .expect_err(wanted)
+                .to_string();
             assert!(error.contains(wanted), "{wanted}: {error}");
         }
+        // Without limits in the way, a shape whose size overflows is cut short.
+        let unlimited = Limits {
+            max_nodes: usize::MAX,
+            max_dimensions: usize::MAX,
+            ..Limits::default()
+        };
+        let huge = file(
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (99999999999, 99999999999), }",
+            &[],
+        );
+        let error = read_npy(&huge, &unlimited)
+            .expect_err("overflow")
+            .to_string();
+        assert!(error.contains("cut short"), "{error}");
     }
 }

@@ -1,4 +1,4 @@
-//! The time-series format: a node table (see [`crate::table`]) plus a table of values
+//! The time-series format: a node table (see [`crate::node_table`]) plus a table of values
 //! by date and id, compared by Pearson correlation (the paper's stock example). Owns
 //! the series table's layout, missing values and the checks that make correlation
 //! defined.
@@ -27,8 +27,9 @@ use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 use crate::limits::Limit;
-use crate::table::{node_tree, read_table_capped, RowCap, Table, TableTree, NODES_ROLE};
-use crate::warning::Warning;
+use crate::node_table::{node_tree, TableTree, NODES_ROLE};
+use crate::table::{read_table_capped, RowCap, Table};
+use crate::warning::{Warning, WarningKind};
 
 /// The time-series [`Format`] (name `time-series`, inputs `nodes` and `series`).
 #[derive(Clone, Copy, Debug, Default)]
@@ -64,7 +65,7 @@ impl Format for TimeSeries {
         // One row per date, and the dates are each node's dimensions.
         let cap = RowCap::new(options.limits, Limit::Dimensions, 0, "dates");
         let series = read_table_capped(series, options.delimiter, Some(cap)).map_err(in_series)?;
-        tree.warnings.extend(series.warnings_in("series"));
+        tree.warnings.append(series.warnings_in("series"));
         add_series(
             &mut tree,
             &series,
@@ -121,6 +122,7 @@ fn add_series(
         let Some(index) = tree.find(id) else {
             if on_unknown == OnUnknownId::Warn {
                 tree.warnings.push(Warning::new(
+                    WarningKind::UnknownId,
                     "series",
                     Some(series.header_line),
                     format!(

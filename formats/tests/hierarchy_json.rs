@@ -719,3 +719,69 @@ fn hierarchy_json_as_a_format() {
         "{error}"
     );
 }
+
+/// Issue 21 papercut: neighbour lists (what an `exec` adapter prints) were
+/// ignored without the paper's `"useNeighborLeafs": true`, and the build drew
+/// a plain treemap without a word. Lists that name nodes now give the
+/// neighbour-list similarity unless a flag chooses another, and a flag that
+/// leaves them unused says so.
+#[test]
+fn neighbor_lists_are_used_without_the_paper_flag() {
+    let tree = |flags: &str, a_features: &str| {
+        format!(
+            r#"{{{flags} "children": [
+                {{"id": "a", "value": 1, "neighbors": ["b", "elsewhere"]{a_features}}},
+                {{"id": "b", "value": 2{a_features}}},
+                {{"id": "c", "value": 3{a_features}}}
+            ]}}"#
+        )
+    };
+    let hint_and_warnings = |text: String| {
+        let dataset = parse(text.as_bytes()).expect("valid");
+        let a = dataset.node(dataset.find("a").expect("a"));
+        assert_eq!(
+            a.relations,
+            [dataset.find("b").expect("b")],
+            "the lists are kept"
+        );
+        let warnings: Vec<String> = dataset.warnings().iter().map(|w| w.to_string()).collect();
+        (dataset.similarity_hint(), warnings)
+    };
+    // No flags: the lists are the similarity, silently (nothing else is there).
+    let (hint, warnings) = hint_and_warnings(tree("", ""));
+    assert_eq!(hint, Some(SimilarityHint::NeighborList));
+    assert!(warnings.is_empty(), "{warnings:?}");
+    // Vectors too: the explicit lists win, and the warning says how to choose.
+    let (hint, warnings) = hint_and_warnings(tree("", r#", "embeddings": [1, 2]"#));
+    assert_eq!(hint, Some(SimilarityHint::NeighborList));
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(
+        warnings[0].contains("\"useNeighborLeafs\": false"),
+        "{warnings:?}"
+    );
+    // A flag that chooses another similarity keeps it, with a warning.
+    for (flags, why) in [
+        (
+            r#""useNeighborLeafs": false,"#,
+            "\"useNeighborLeafs\" is false",
+        ),
+        (
+            r#""similarityMeasure": "cosine","#,
+            "\"similarityMeasure\" is \"cosine\"",
+        ),
+    ] {
+        let (hint, warnings) = hint_and_warnings(tree(flags, r#", "embeddings": [1, 2]"#));
+        assert_eq!(hint, Some(SimilarityHint::Cosine), "{flags}");
+        assert_eq!(warnings.len(), 1, "{flags}: {warnings:?}");
+        assert!(
+            warnings[0].contains("the neighbor lists of 1 node(s) are not used")
+                && warnings[0].contains(why),
+            "{flags}: {warnings:?}"
+        );
+    }
+    // Lists that name no node of the file change nothing.
+    let dataset =
+        parse(br#"{"children": [{"id": "a", "neighbors": ["x"]}, {"id": "b"}]}"#).expect("valid");
+    assert_eq!(dataset.similarity_hint(), None);
+    assert!(dataset.warnings().is_empty());
+}

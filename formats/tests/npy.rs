@@ -8,7 +8,9 @@
 #![allow(clippy::result_large_err)]
 
 use nptreemap_formats::npy::read_npy;
-use nptreemap_formats::{Dataset, EmbeddingMatrix, Format, FormatOptions, InputError, Inputs};
+use nptreemap_formats::{
+    Dataset, EmbeddingMatrix, Format, FormatOptions, InputError, Inputs, Limits,
+};
 
 const FOODS: &[u8] = include_bytes!("data/foods.csv");
 const VECTORS: &[u8] = include_bytes!("data/foods_vectors.tsv");
@@ -82,7 +84,8 @@ fn every_layout_numpy_writes_gives_the_tsv_dataset() {
 
 #[test]
 fn the_matrix_alone_reads_numpys_values() {
-    let m = read_npy(&npy("foods_fortran.npy")).expect("valid");
+    let bytes = npy("foods_fortran.npy");
+    let m = read_npy(&bytes, &Limits::default()).expect("valid");
     assert_eq!((m.rows, m.cols), (20, 4));
     // walnut is row 17 of foods.csv: 4 g water, 14 carbs, 15 protein, 65 fat.
     assert_eq!(m.row(16), [4.0, 14.0, 15.0, 65.0]);

@@ -5,7 +5,8 @@
 //! `data/countries.csv` holds 31 real countries (2023 populations, rounded) on four
 //! continents; the expected counts below were counted by hand from the file.
 
-use nptreemap_formats::table::{read_rows, read_table, tree_from_table};
+use nptreemap_formats::node_table::tree_from_table;
+use nptreemap_formats::table::{read_rows, read_table};
 use nptreemap_formats::{Dataset, FormatError, FormatOptions};
 
 const COUNTRIES: &[u8] = include_bytes!("data/countries.csv");
@@ -414,4 +415,45 @@ fn the_delimiter_is_sniffed_from_the_header() {
     let t = read_table(b"id;name;population\nfr;France;68\n", None).expect("semicolons");
     assert_eq!(t.header, ["id", "name", "population"]);
     assert_eq!(t.rows[0].fields, ["fr", "France", "68"]);
+}
+
+/// Issue 21, item 8: a row whose id is the id a grouping value generates
+/// (`group:Asia`) took the group's place when listed first (China and India
+/// were drawn inside Europe, no error) and, listed after, was reported as a
+/// duplicate of China's line. Both orders are an error at the row with the id,
+/// naming the line of the group's first row.
+#[test]
+fn a_row_id_that_is_a_generated_group_id_is_an_error_in_either_order() {
+    let options = FormatOptions {
+        weight: Some("weight".into()),
+        groups: vec!["continent".into()],
+        ..FormatOptions::default()
+    };
+    let before = b"id,continent,weight\nFrance,Europe,67\ngroup:Asia,Europe,10\n\
+                   China,Asia,1400\nIndia,Asia,1380\n";
+    let after = b"id,continent,weight\nFrance,Europe,67\nChina,Asia,1400\n\
+                  India,Asia,1380\ngroup:Asia,Europe,10\n";
+    for (bytes, row_line, group_line) in [(&before[..], 3, 4), (&after[..], 5, 3)] {
+        let (error, text) = error_text(bytes, &options);
+        assert_eq!(error.line(), Some(row_line), "{text}");
+        assert!(
+            text.contains(&format!(
+                "node \"group:Asia\": field \"id\": the id of the group \"Asia\" generated \
+                 from line {group_line}"
+            )),
+            "{text}"
+        );
+    }
+    // The same through a path column: the row `group:Asia` (a path of one
+    // segment) and the group of `Asia/China`.
+    let path = FormatOptions {
+        path: Some("path".into()),
+        ..FormatOptions::default()
+    };
+    let (error, text) = error_text(b"path\ngroup:Asia\nAsia/China\n", &path);
+    assert_eq!(error.line(), Some(2), "{text}");
+    assert!(text.contains("from line 3"), "{text}");
+    // Ids that only look alike are fine: `group:asia` is not `group:Asia`.
+    let fine = b"id,continent,weight\ngroup:asia,Europe,10\nChina,Asia,1400\n";
+    assert_eq!(dataset(fine, &options).expect("distinct ids").len(), 5);
 }

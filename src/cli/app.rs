@@ -3,7 +3,7 @@
 
 use std::process::ExitCode;
 
-use clap::{CommandFactory, Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Neighborhood-preserving Voronoi treemaps.
 #[derive(Debug, Parser)]
@@ -34,6 +34,10 @@ enum Command {
     /// table and a pairs, vectors or series table, or a genres column.
     Init(super::init::InitArgs),
     /// Validate a YAML config and its data without writing anything.
+    ///
+    /// Reading the data runs the `command:` of every `format: exec` dataset,
+    /// as `build` does: check only configs you trust (without CONFIG, the
+    /// nearest nptreemap.yaml from the working directory upward is used).
     Check(super::build::CheckArgs),
     /// Lay out one hierarchy file and write JSON, SVG, PNG and/or HTML.
     Layout(super::layout::LayoutArgs),
@@ -42,15 +46,63 @@ enum Command {
     Eval(super::eval::EvalArgs),
     /// Time the layout of one file (parsing excluded) and print one JSON line.
     Bench(super::bench::BenchArgs),
+    /// Print the documented defaults of every config key (`--defaults`).
+    Config(super::defaults::ConfigArgs),
     /// Print a shell completion script.
     Completions(super::shell::CompletionsArgs),
-    /// Print the man page (roff).
-    Man,
+    /// Print the man page (roff), or a subcommand's (`nptreemap man build`).
+    Man(super::man::ManArgs),
+}
+
+/// Whether log lines may carry colour codes: only on a terminal, and not when
+/// `NO_COLOR` is set to anything but the empty string (no-color.org). A log
+/// read from a file, a pipe or the journal gets plain text.
+fn colour() -> bool {
+    use std::io::IsTerminal;
+    let no_color = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
+    !no_color && std::io::stderr().is_terminal()
+}
+
+/// SIGINT and SIGTERM still end the process as they would, but first kill
+/// the exec adapters it runs: each runs in a process group of its own, which
+/// neither a signal to nptreemap nor the terminal's Ctrl-C reaches. (`watch`
+/// stops its daemon, and its adapters, itself.)
+fn stop_adapters_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        tracing::warn!(
+            "cannot handle SIGINT and SIGTERM: a stop signal may leave an adapter running"
+        );
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            crate::exec::shut_down();
+            let _ = signal_hook::low_level::emulate_default_handler(signal);
+            std::process::exit(128 + signal);
+        }
+    });
+}
+
+/// The command line's definition, with what derive cannot say: `man`'s
+/// SUBCOMMAND takes the names of the other subcommands (so completion
+/// scripts offer them).
+fn command() -> clap::Command {
+    let cli = Cli::command();
+    let pages: Vec<String> = cli
+        .get_subcommands()
+        .map(|s| s.get_name().to_owned())
+        .collect();
+    cli.mut_subcommand("man", |man| {
+        man.mut_arg(super::man::SUBCOMMAND_ARG, |arg| {
+            arg.value_parser(clap::builder::PossibleValuesParser::new(pages))
+        })
+    })
 }
 
 /// Runs the command line on the process's arguments.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::from_arg_matches(&command().get_matches()).unwrap_or_else(|e| e.exit());
     super::set_quiet(cli.quiet);
     let level = match (cli.quiet, cli.verbose) {
         (true, _) => "error",
@@ -63,7 +115,15 @@ pub fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
+        .with_ansi(colour())
         .init();
+    #[cfg(feature = "watch")]
+    let stops_itself = matches!(cli.command, Command::Watch(_));
+    #[cfg(not(feature = "watch"))]
+    let stops_itself = false;
+    if !stops_itself {
+        stop_adapters_on_signals();
+    }
     let result = match cli.command {
         Command::Build(args) => super::build::build(&args),
         Command::Check(args) => super::build::check(&args),
@@ -73,8 +133,9 @@ pub fn main() -> ExitCode {
         Command::Layout(args) => super::layout::run(&args),
         Command::Eval(args) => super::eval::run(&args),
         Command::Bench(args) => super::bench::run(&args),
-        Command::Completions(args) => super::shell::completions(&args, Cli::command()),
-        Command::Man => super::shell::man(Cli::command()),
+        Command::Config(args) => super::defaults::run(&args),
+        Command::Completions(args) => super::shell::completions(&args, command()),
+        Command::Man(args) => super::man::man(&args, command()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -25,7 +25,7 @@ pub(crate) struct EvalArgs {
     options: LayoutOptions,
     /// Layout method, or `all` for one row per method (default: neighbor when
     /// the data has a similarity, else plain).
-    #[arg(long, value_parser = parse_methods, value_name = "METHOD|all")]
+    #[arg(long, value_parser = methods_parser(), value_name = "METHOD|all")]
     method: Option<Methods>,
     /// Print JSON lines instead of a table.
     #[arg(long)]
@@ -42,6 +42,14 @@ enum Methods {
     One(Method),
     /// Every method, one row each.
     All,
+}
+
+/// `--method`'s parser: every method's name and `all` as possible values,
+/// so that completions offer them.
+fn methods_parser() -> impl clap::builder::TypedValueParser<Value = Methods> {
+    use clap::builder::TypedValueParser as _;
+    let names = Method::ALL.map(Method::name).into_iter().chain(["all"]);
+    clap::builder::PossibleValuesParser::new(names).try_map(|name: String| parse_methods(&name))
 }
 
 fn parse_methods(name: &str) -> Result<Methods, String> {

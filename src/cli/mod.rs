@@ -12,9 +12,11 @@ pub use app::main;
 pub(crate) mod bench;
 pub(crate) mod build;
 mod config_file;
+pub(crate) mod defaults;
 pub(crate) mod eval;
 pub(crate) mod init;
 pub(crate) mod layout;
+pub(crate) mod man;
 mod progress;
 pub(crate) mod shell;
 #[cfg(feature = "watch")]
@@ -30,6 +32,7 @@ use crate::neighborhood::SimilarityKind;
 use crate::pipeline::{self, BuildError, Fault, Named};
 use crate::render::Style;
 use crate::Dataset;
+use clap::builder::TypedValueParser as _;
 use clap::Args;
 
 /// Where a single-dataset command's data comes from, and the layout flags.
@@ -60,7 +63,13 @@ pub(crate) struct LayoutOptions {
     #[arg(long)]
     pub(crate) seed: Option<u64>,
     /// Shape of the root cell: rect, circle or ngon [default: rect].
-    #[arg(long, value_name = "SHAPE")]
+    #[arg(
+        long,
+        value_name = "SHAPE",
+        // Possible values, so that completions offer them (not file names).
+        value_parser = clap::builder::PossibleValuesParser::new(["rect", "circle", "ngon"])
+            .try_map(|name: String| name.parse::<Outline>())
+    )]
     pub(crate) outline: Option<Outline>,
     /// Per-diagram area-error target Σ|A − A*| / A(parent) [default: 0.01].
     #[arg(long)]

@@ -1,6 +1,7 @@
-//! `nptreemap completions SHELL` and `nptreemap man`: shell completion scripts
-//! (clap_complete) and the man page (clap_mangen, roff), both generated from
-//! the same clap definition as the parser, printed on stdout.
+//! `nptreemap completions SHELL`: shell completion scripts (clap_complete),
+//! generated from the same clap definition as the parser, printed on stdout.
+//! Flags that take one of a few names declare them as possible values, so
+//! the scripts complete them (the man pages are `man.rs`).
 
 use clap::Args;
 use clap_complete::Shell;
@@ -18,12 +19,5 @@ pub(crate) fn completions(args: &CompletionsArgs, mut cli: clap::Command) -> any
     let name = cli.get_name().to_string();
     let mut out = Vec::new();
     clap_complete::generate(args.shell, &mut cli, name, &mut out);
-    super::write_stdout(&out)
-}
-
-/// Prints the man page, `nptreemap.1` (`nptreemap man > nptreemap.1; man ./nptreemap.1`).
-pub(crate) fn man(cli: clap::Command) -> anyhow::Result<()> {
-    let mut out = Vec::new();
-    clap_mangen::Man::new(cli).render(&mut out)?;
     super::write_stdout(&out)
 }

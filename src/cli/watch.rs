@@ -54,6 +54,8 @@ pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
                     continue;
                 }
                 let again = stop.swap(true, Ordering::SeqCst);
+                // Adapters run in process groups of their own: stop them too.
+                crate::exec::shut_down();
                 let _ = tx.send(Message::Stop);
                 if again {
                     // A second stop signal: no more waiting.
@@ -80,9 +82,12 @@ pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
 }
 
 /// Ends the process with exit code 0 once no set of outputs is being written
-/// (see the module docs for why this is safe).
+/// (see the module docs for why this is safe, and [`daemon::shutdown`]).
 fn exit_now() -> ! {
-    let _writing = crate::store::writing();
-    super::say("stopped (a rebuild under way was abandoned; it is redone at the next start)");
+    daemon::shutdown();
+    super::say(daemon::status::Line::now(daemon::status::Status::Note {
+        subject: "stopped".to_string(),
+        message: "a rebuild under way was abandoned; it is redone at the next start".to_string(),
+    }));
     std::process::exit(0);
 }

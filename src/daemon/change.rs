@@ -26,6 +26,8 @@ pub enum Reason {
     /// SIGHUP: everything read again (a dataset whose inputs did not change
     /// is not rebuilt).
     Reload,
+    /// Outputs that could not be written are written again (issue 21 item 9).
+    Retry,
 }
 
 impl std::fmt::Display for Reason {
@@ -37,6 +39,7 @@ impl std::fmt::Display for Reason {
             Reason::Render => f.write_str("config: render"),
             Reason::Added => f.write_str("config: new dataset"),
             Reason::Reload => f.write_str("reload"),
+            Reason::Retry => f.write_str("retry of failed writes"),
         }
     }
 }
@@ -132,7 +135,8 @@ pub fn diff(old: &Config, new: &Config) -> ChangeSet {
                     || before.fields != d.fields
                     || before.similarity != d.similarity
                     || before.command != d.command
-                    || before.timeout != d.timeout;
+                    || before.timeout != d.timeout
+                    || before.max_adapter_mb != d.max_adapter_mb;
                 if layout_changed || inputs_changed {
                     set.relayout.insert(d.name.clone(), Reason::Layout);
                 } else if render_changed || before.title != d.title || before.outputs != d.outputs {

@@ -1,22 +1,28 @@
 //! `nptreemap watch`: the long-running loop that keeps a config's pictures
 //! current (issue 6). Orchestration only: wait for a batch of file events
-//! ([`watcher`]), sort it into work ([`change`]), run the [`pipeline`] for
-//! each affected dataset, report one [`status`] line each, go on. A bad edit
-//! is a reported problem that keeps the last good config and outputs; only a
-//! failure to start (no usable config, no watcher) ends the loop with an error.
-//!
-//! [`pipeline`]: crate::pipeline
+//! ([`watcher`]; links followed to the files they name, [`links`]), sort it
+//! into work ([`change`]), queue it per dataset ([`queue`]), hand each
+//! dataset's next task to that dataset's own [`worker`] thread, and report
+//! one [`status`] line per outcome as it comes back. No dataset waits for
+//! another, and the loop never waits for a rebuild (issue 21 item 3). A bad
+//! edit is a reported problem that keeps the last good config and outputs;
+//! a panic in a rebuild is that dataset's failure; only a failure to start
+//! (no usable config, no watcher) ends the loop with an error.
 
 /// What a batch of changed paths means: relayout, re-render, added, removed.
 pub mod change;
+/// Inputs behind symbolic links.
+pub mod links;
+/// Work waiting per dataset, and retries of failed writes.
+pub mod queue;
 /// The status lines.
 pub mod status;
 /// notify over directories, and batching of its events.
 pub mod watcher;
+/// One dataset's rebuilds on a thread of its own.
+pub mod worker;
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::hash::{Hash, Hasher};
-use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender};
@@ -24,11 +30,14 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::config::{Config, ConfigFileError, DatasetConfig};
-use crate::layout::{Computed, LayoutError, ProgressSink, Start};
-use crate::pipeline::{self, BuildError, Fault, Rendered};
+use crate::layout::ProgressSink;
+use crate::pipeline::{self, BuildError, Fault};
 use change::{ChangeSet, Reason};
-use status::{LayoutKind, Status};
+use links::Aliases;
+use queue::Queue;
+use status::{Line, Status};
 use watcher::{Batch, DirWatcher, Message, Timing};
+use worker::{Done, Job, Outcome, Shared, Worker};
 
 /// How the daemon runs.
 #[derive(Clone, Debug, Default)]
@@ -41,8 +50,8 @@ pub struct Options {
     pub timing: Timing,
     /// Set (by a signal handler) when the daemon should stop: checked between
     /// the stages of a rebuild, so a rebuild under way writes nothing more
-    /// and the loop ends. The [`Message::Stop`] that goes with it wakes an
-    /// idle loop.
+    /// and the loop ends. The [`Message::Stop`] that goes with it wakes the
+    /// loop. The daemon sets it too when it ends otherwise.
     pub stop: Option<Arc<AtomicBool>>,
     /// Gives each dataset's first build (the one at start, which may be a
     /// long cold layout) a progress reporter, such as the binary's terminal
@@ -99,24 +108,25 @@ impl DaemonError {
     }
 }
 
-/// What the daemon remembers of a dataset between rebuilds.
-#[derive(Default)]
-struct DatasetState {
-    /// The last good layout: the source of render-only rebuilds, and (as
-    /// [`Computed::previous`]) the warm start of the next layout.
-    computed: Option<Computed>,
-    /// Fingerprint of the input bytes last built (or last failed on), so an
-    /// event that changed nothing (a touch, a save without edits) costs nothing.
-    fingerprint: Option<u64>,
-}
-
-/// The daemon's state: the last good config and each dataset's last build.
+/// The daemon's state: the last good config, each dataset's worker, and
+/// what has been reported.
 struct Daemon<'a> {
     config_path: PathBuf,
     config: Config,
-    options: Options,
-    states: BTreeMap<String, DatasetState>,
-    report: &'a mut dyn FnMut(Status),
+    timing: Timing,
+    stop: Arc<AtomicBool>,
+    report: &'a mut dyn FnMut(Line),
+    /// What the workers share; its `done` end is `done`.
+    shared: Arc<Shared>,
+    done: Receiver<Done>,
+    /// Each dataset's worker, started at its first task.
+    workers: BTreeMap<String, Worker>,
+    /// The work waiting for each dataset's worker.
+    queue: Queue,
+    /// Every path the daemon reacts to, with the links leading from them.
+    aliases: Aliases,
+    /// The folders watched (or waited for), as last given to the watcher.
+    dirs: BTreeSet<PathBuf>,
     /// Parse failures not reported yet, by dataset, with when they happened:
     /// a file read while a writer is still at it (editors and scripts writing
     /// in place truncate first) fails to parse, and the write's own events
@@ -125,10 +135,13 @@ struct Daemon<'a> {
     pending: BTreeMap<String, (Status, Instant)>,
     /// When the last relevant event arrived (for [`SETTLE`]).
     last_event: Instant,
-    /// The last problem reported per subject (a dataset or `config`), until
-    /// it is fixed: the same problem is not reported twice in a row, and the
-    /// fix is announced ("ok again").
-    troubled: BTreeMap<String, String>,
+    /// The problems last reported per subject (a dataset or `config`), until
+    /// they are fixed: the same problems are not reported twice in a row,
+    /// and the fix is announced ("ok again").
+    troubled: BTreeMap<String, BTreeSet<String>>,
+    /// The input warnings last reported per dataset: a warning is printed
+    /// again only when it was gone in between (issue 21 item 4).
+    warned: BTreeMap<String, BTreeSet<String>>,
 }
 
 /// How long the inputs must stay unchanged after a parse failure before it
@@ -136,9 +149,14 @@ struct Daemon<'a> {
 /// mid-write on a busy machine, short for a person fixing a typo.
 const SETTLE: Duration = Duration::from_millis(1000);
 
-/// How often watched folders are looked at between events: a folder deleted
-/// and made again, or one missing at start, is watched again within this.
+/// How often watched folders (and the links to inputs) are looked at
+/// between events: a folder deleted and made again, one missing at start,
+/// or a link pointed elsewhere is watched again within this.
 const POLL: Duration = Duration::from_millis(500);
+
+/// The most input warnings printed for one rebuild; more are summed up in
+/// one line (a million repeated pairs must not flood the journal).
+const MAX_WARNINGS: usize = 50;
 
 /// A channel for [`run`]: give the sender to whatever should stop the daemon
 /// (a signal handler sends [`Message::Stop`]) or reload it ([`Message::Reload`]).
@@ -146,17 +164,34 @@ pub fn channel() -> (Sender<Message>, Receiver<Message>) {
     std::sync::mpsc::channel()
 }
 
+/// Ends the daemon's part in the process, once: whatever calls it first
+/// (the loop's end, or the binary's forced exit after a stop signal's grace
+/// period) waits until no set of outputs is being written, and from then
+/// on no set is written in this process (the lock is never given back), so
+/// that the process can exit without leaving a dataset's SVG new and its
+/// PNG old. Later calls return at once. This is also the place for whatever
+/// else must not outlive the daemon.
+pub fn shutdown() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // Whatever must end with the daemon ends here, first (what the
+        // workers started: adapters' processes), then the writes.
+        crate::exec::terminate_all();
+        std::mem::forget(crate::store::writing());
+    });
+}
+
 /// Runs the daemon on `config_path` until a [`Message::Stop`] arrives on
-/// `rx` (whose sender `tx` also feeds the file watcher). Builds everything
-/// once, then rebuilds what each batch of changes affects; a
-/// [`Message::Reload`] reads the config and every input again. Every line of
-/// output goes to `report`.
+/// `rx` (whose sender `tx` also feeds the file watcher and the workers).
+/// Builds everything once, then rebuilds what each batch of changes
+/// affects; a [`Message::Reload`] reads the config and every input again.
+/// Every line of output goes to `report`.
 pub fn run(
     config_path: &Path,
     options: Options,
     tx: Sender<Message>,
     rx: &Receiver<Message>,
-    report: &mut dyn FnMut(Status),
+    report: &mut dyn FnMut(Line),
 ) -> Result<(), DaemonError> {
     let config_path = std::path::absolute(config_path).map_err(|source| DaemonError::Path {
         path: config_path.to_path_buf(),
@@ -166,102 +201,130 @@ pub fn run(
     let (reads, writes) = pipeline::files_of(&config_path, &config.datasets);
     pipeline::check_outputs(&reads, &writes).map_err(DaemonError::Outputs)?;
     pipeline::remove_stale_temps(&writes);
-    let mut watcher = DirWatcher::new(tx)?;
+    let mut watcher = DirWatcher::new(tx.clone())?;
+    let stop = options.stop.clone().unwrap_or_default();
+    let (done_tx, done) = std::sync::mpsc::channel();
+    let shared = Arc::new(Shared {
+        done: done_tx,
+        wake: tx,
+        stop: stop.clone(),
+        cold: options.cold,
+        progress: options.first_build_progress.clone(),
+        bar: AtomicBool::new(false),
+    });
     let mut daemon = Daemon {
         config_path,
         config,
-        options,
-        states: BTreeMap::new(),
+        timing: options.timing,
+        stop,
         report,
+        shared,
+        done,
+        workers: BTreeMap::new(),
+        queue: Queue::default(),
+        aliases: Aliases::default(),
+        dirs: BTreeSet::new(),
         pending: BTreeMap::new(),
         last_event: Instant::now(),
         troubled: BTreeMap::new(),
+        warned: BTreeMap::new(),
     };
     daemon.sync_watches(&mut watcher);
-    (daemon.report)(Status::Watching {
+    daemon.say(Status::Watching {
         config: daemon.config_path.clone(),
         datasets: daemon.config.datasets.len(),
         dirs: watcher.watched().len(),
     });
-    let start: Vec<String> = daemon
-        .config
-        .datasets
-        .iter()
-        .map(|d| d.name.clone())
-        .collect();
-    for name in start {
-        if daemon.stopping() {
-            break;
-        }
-        daemon.rebuild(&name, Reason::Start);
+    let names: Vec<String> = daemon.names();
+    for name in names {
+        daemon.queue.build(&name, Reason::Start);
     }
-    while !daemon.stopping() {
-        let inputs = change::inputs_of(&daemon.config, &daemon.config_path);
-        let batch = watcher::next_batch(
-            rx,
-            daemon.options.timing,
-            &|p: &Path| inputs.contains(p),
-            Some(daemon.wait()),
-        );
-        let (mut paths, reload) = match batch {
-            Batch::Stop => break,
-            Batch::Idle => (BTreeSet::new(), false),
-            Batch::Paths(paths) => (paths, false),
-            Batch::Reload(paths) => (paths, true),
-        };
-        // Folders deleted and made again (or appeared) since the last look:
-        // their files may have changed without an event.
-        for dir in watcher.check() {
-            paths.extend(inputs.iter().filter(|p| p.parent() == Some(&dir)).cloned());
-        }
-        if !paths.is_empty() {
-            daemon.last_event = Instant::now();
-            tracing::debug!(?paths, "batch");
-        }
-        let mut work = ChangeSet::default();
-        if reload || paths.contains(&daemon.config_path) {
-            if let Some(set) = daemon.reload_config(reload) {
-                work = set;
-                daemon.sync_watches(&mut watcher);
-            }
-        }
-        for (name, reason) in change::touched(&daemon.config, &paths).relayout {
-            work.relayout.entry(name).or_insert(reason);
-        }
-        if reload {
-            for d in &daemon.config.datasets {
-                work.relayout
-                    .entry(d.name.clone())
-                    .or_insert(Reason::Reload);
-            }
-        }
-        daemon.apply(work);
-        daemon.report_settled();
-    }
-    (daemon.report)(Status::Stopped);
+    daemon.dispatch();
+    daemon.watch(&mut watcher, rx);
+    daemon.stop.store(true, Ordering::SeqCst);
+    shutdown();
+    daemon.say(Status::Stopped);
     Ok(())
 }
 
 impl Daemon<'_> {
+    /// The loop: wait for events (or an outcome, or the next due time),
+    /// turn them into work, hand it out, report, until a stop.
+    fn watch(&mut self, watcher: &mut DirWatcher, rx: &Receiver<Message>) {
+        while !self.stopping() {
+            let aliases = self.aliases.clone();
+            let batch = watcher::next_batch(
+                rx,
+                self.timing,
+                &|p: &Path| aliases.contains(p),
+                Some(self.wait()),
+            );
+            let (events, reload) = match batch {
+                Batch::Stop => break,
+                Batch::Idle => (BTreeSet::new(), false),
+                Batch::Paths(paths) => (paths, false),
+                Batch::Reload(paths) => (paths, true),
+            };
+            // Events on a link's target stand for the configured path.
+            let mut paths = aliases.watched_of(&events);
+            // Folders deleted and made again (or appeared) since the last
+            // look: their files may have changed without an event.
+            for dir in watcher.check() {
+                paths.extend(aliases.watched_in(&dir));
+            }
+            if !paths.is_empty() {
+                self.last_event = Instant::now();
+                tracing::debug!(?paths, "batch");
+            }
+            let mut work = ChangeSet::default();
+            if reload || paths.contains(&self.config_path) {
+                if let Some(set) = self.reload_config(reload) {
+                    work = set;
+                }
+            }
+            // A link pointed elsewhere, a new input: watch where they lead.
+            self.sync_watches(watcher);
+            for (name, reason) in change::touched(&self.config, &paths).relayout {
+                work.relayout.entry(name).or_insert(reason);
+            }
+            if reload {
+                for d in &self.config.datasets {
+                    work.relayout.entry(d.name.clone()).or_insert(Reason::Reload);
+                }
+            }
+            self.schedule(work);
+            self.collect();
+            self.dispatch();
+            self.report_settled();
+        }
+    }
+
     fn dataset(&self, name: &str) -> Option<&DatasetConfig> {
         self.config.datasets.iter().find(|d| d.name == name)
     }
 
+    fn names(&self) -> Vec<String> {
+        self.config.datasets.iter().map(|d| d.name.clone()).collect()
+    }
+
     /// Whether a stop was asked for (see [`Options::stop`]).
     fn stopping(&self) -> bool {
-        self.options
-            .stop
-            .as_ref()
-            .is_some_and(|s| s.load(Ordering::Relaxed))
+        self.stop.load(Ordering::Relaxed)
+    }
+
+    /// Reports one line, with its time of day.
+    fn say(&mut self, status: Status) {
+        (self.report)(Line::now(status));
     }
 
     /// How long the loop may wait for events: until the next pending problem
-    /// is due, and at most [`POLL`].
+    /// or retry is due, and at most [`POLL`].
     fn wait(&self) -> Duration {
         let now = Instant::now();
         self.pending
             .values()
             .map(|(_, at)| (*at).max(self.last_event) + SETTLE)
+            .chain(self.queue.next_due())
             .map(|due| due.saturating_duration_since(now))
             .fold(POLL, Duration::min)
     }
@@ -277,34 +340,51 @@ impl Daemon<'_> {
             .collect();
         for name in due {
             if let Some((problem, _)) = self.pending.remove(&name) {
-                self.problem(&name, problem);
+                self.problems(&name, vec![problem]);
             }
         }
     }
 
-    /// Reports a problem about `subject`, unless it is the one reported last.
-    fn problem(&mut self, subject: &str, problem: Status) {
-        let text = problem.to_string();
-        if self.troubled.get(subject) == Some(&text) {
-            return;
+    /// Reports the problems of one outcome about `subject`, except those
+    /// reported for it last time (a retry failing as before says nothing
+    /// new; a problem gone and back is reported again).
+    fn problems(&mut self, subject: &str, problems: Vec<Status>) {
+        let key = |p: &Status| match p {
+            // The error, not the consequence: the same failure is the same
+            // problem whatever became of the other outputs meanwhile.
+            Status::Problem { message, .. } => message.clone(),
+            other => other.to_string(),
+        };
+        let before = self.troubled.remove(subject).unwrap_or_default();
+        let now: BTreeSet<String> = problems.iter().map(key).collect();
+        for problem in problems {
+            if !before.contains(&key(&problem)) {
+                self.say(problem);
+            }
         }
-        self.troubled.insert(subject.to_string(), text);
-        (self.report)(problem);
+        self.troubled.insert(subject.to_string(), now);
     }
 
-    /// Forgets `subject`'s problem; true when there was one (it is ok again).
+    /// Forgets `subject`'s problems; true when there were some (it is ok again).
     fn fixed(&mut self, subject: &str) -> bool {
         self.troubled.remove(subject).is_some()
     }
 
-    /// Watches the folders of the config and of every input; reports folders
-    /// that cannot be watched (missing ones are polled until they exist).
+    /// Watches the folders of the config and of every input, and of the
+    /// files their links lead to; reports folders that cannot be watched
+    /// (missing ones are polled until they exist).
     fn sync_watches(&mut self, watcher: &mut DirWatcher) {
-        let dirs = change::dirs_of(&change::inputs_of(&self.config, &self.config_path));
+        self.aliases = Aliases::resolve(&change::inputs_of(&self.config, &self.config_path));
+        let dirs = change::dirs_of(&self.aliases.paths());
+        if dirs == self.dirs {
+            return;
+        }
         for (dir, e) in watcher.sync(&dirs) {
             let subject = dir.display().to_string();
-            (self.report)(Status::problem(subject, &e, "watched as soon as it exists"));
+            let line = Status::problem(subject, &e, "watched as soon as it exists");
+            self.say(line);
         }
+        self.dirs = dirs;
     }
 
     /// Reads the config again (it changed, or `forced` by SIGHUP). One that
@@ -314,19 +394,15 @@ impl Daemon<'_> {
         let new = match Config::from_path(&self.config_path) {
             Ok(new) => new,
             Err(e) => {
-                self.problem(
-                    "config",
-                    Status::problem("config", &e, "previous config kept"),
-                );
+                let problem = Status::problem("config", &e, "previous config kept");
+                self.problems("config", vec![problem]);
                 return None;
             }
         };
         let (reads, writes) = pipeline::files_of(&self.config_path, &new.datasets);
         if let Err(e) = pipeline::check_outputs(&reads, &writes) {
-            self.problem(
-                "config",
-                Status::problem("config", &e, "previous config kept"),
-            );
+            let problem = Status::problem("config", &e, "previous config kept");
+            self.problems("config", vec![problem]);
             return None;
         }
         pipeline::remove_stale_temps(&writes);
@@ -340,7 +416,7 @@ impl Daemon<'_> {
             (false, false) => "",
         };
         if !message.is_empty() {
-            (self.report)(Status::Note {
+            self.say(Status::Note {
                 subject: "config".to_string(),
                 message: message.to_string(),
             });
@@ -348,219 +424,152 @@ impl Daemon<'_> {
         Some(set)
     }
 
-    fn apply(&mut self, work: ChangeSet) {
+    /// Queues the work of a batch; a dataset that left the config is
+    /// forgotten (its worker ends once idle).
+    fn schedule(&mut self, work: ChangeSet) {
         for name in &work.removed {
-            self.states.remove(name);
+            self.queue.forget(name);
             self.pending.remove(name);
             self.troubled.remove(name);
-            (self.report)(Status::Note {
+            self.warned.remove(name);
+            self.say(Status::Note {
                 subject: name.clone(),
                 message: "no longer in the config; its outputs are left as they are".to_string(),
             });
         }
         for (name, reason) in work.relayout {
-            if self.stopping() {
-                return;
-            }
-            self.rebuild(&name, reason);
+            self.queue.build(&name, reason);
         }
         for name in work.rerender {
-            if self.stopping() {
-                return;
-            }
-            self.rerender(&name);
+            self.queue.render(&name);
         }
     }
 
-    /// What happens to a failed dataset's outputs, truthfully: kept when
-    /// there are some, else none yet.
-    fn kept(d: &DatasetConfig, missing_input: bool) -> &'static str {
-        let any = d.outputs.iter().any(|o| o.path.is_file());
-        match (any, missing_input) {
-            (true, true) => "last outputs kept; rebuilt when the file is back",
-            (true, false) => "last good outputs kept",
-            (false, true) => "no outputs yet; built when the file is back",
-            (false, false) => "no outputs yet",
-        }
-    }
-
-    /// Reads, lays out (warm when a previous layout exists), renders and
-    /// writes one dataset; reports one line (and its warnings). A stop asked
-    /// for meanwhile ends it between stages, writing nothing.
-    fn rebuild(&mut self, name: &str, reason: Reason) {
-        let Some(d) = self.dataset(name).cloned() else {
-            return;
-        };
-        let started = Instant::now();
-        let files = match pipeline::read_inputs(&d) {
-            Ok(files) => files,
-            Err(e) => {
-                let consequence = Self::kept(&d, e.missing_file().is_some());
-                self.states.entry(name.to_string()).or_default().fingerprint = None;
-                self.problem(name, Status::problem(name, &e, consequence));
-                return;
-            }
-        };
-        let fingerprint = fingerprint(&files);
-        let troubled = self.troubled.contains_key(name);
-        let state = self.states.entry(name.to_string()).or_default();
-        let data_only = matches!(reason, Reason::Data(_) | Reason::Reload);
-        if data_only
-            && state.fingerprint == Some(fingerprint)
-            && state.computed.is_some()
-            && !troubled
-        {
-            tracing::debug!(dataset = name, "inputs unchanged; nothing to do");
+    /// Hands each idle worker its dataset's next task; ends the workers of
+    /// datasets that left the config once they are idle.
+    fn dispatch(&mut self) {
+        if self.stopping() {
             return;
         }
-        state.fingerprint = Some(fingerprint);
-        // Warm from the last good layout in memory; at start, from the one
-        // stored beside the outputs (unless --cold).
-        let mut request = self.config.request(&d);
-        let mut warnings = Vec::new();
-        request.previous = match &state.computed {
-            Some(computed) => Some(Arc::new(computed.previous())),
-            None if reason == Reason::Start && self.options.cold => None,
-            None => {
-                let stored = pipeline::stored_layout(&d);
-                warnings.extend(stored.warning);
-                stored.previous
+        let now = Instant::now();
+        for name in self.queue.ready(now) {
+            if self.workers.get(&name).is_some_and(|w| w.busy) {
+                continue;
             }
-        };
-        let style = self.config.style(&d);
-        let read_ms = ms_since(started);
-        let stop = self.options.stop.clone();
-        let stopping = || stop.as_ref().is_some_and(|s| s.load(Ordering::Relaxed));
-        // A SIGTERM ends a running layout at its next progress report
-        // (between ticks and diagrams), well inside the signal handler's
-        // grace period; the abandoned rebuild writes nothing.
-        // The first build also feeds the caller's reporter (a terminal bar).
-        let shown = match (&self.options.first_build_progress, &reason) {
-            (Some(make), Reason::Start) => (make.0)(name),
-            _ => None,
-        };
-        if stop.is_some() || shown.is_some() {
-            let flag = stop.clone();
-            request.progress = Some(ProgressSink::new(move |p| {
-                if flag.as_ref().is_some_and(|f| f.load(Ordering::Relaxed)) {
-                    return ControlFlow::Break(());
-                }
-                match &shown {
-                    Some(sink) => (sink.0)(p),
-                    None => ControlFlow::Continue(()),
-                }
-            }));
-        }
-        let result = pipeline::parse_inputs(&d, &files).and_then(|dataset| {
-            let parsed = Instant::now();
-            warnings.extend(pipeline::warnings(&files, &dataset));
-            if stopping() {
-                return Ok(None);
-            }
-            // A SIGTERM ends the layout itself (see `request.progress`).
-            let computed = match pipeline::lay_out(&d, &dataset, &request) {
-                Err(BuildError::Layout {
-                    source: LayoutError::Cancelled,
-                    ..
-                }) => return Ok(None),
-                other => other?,
+            let Some(d) = self.dataset(&name).cloned() else {
+                self.queue.forget(&name);
+                continue;
             };
-            // Done with the reporter: a terminal bar clears before the
-            // status line prints.
-            request.progress = None;
-            let laid_out = Instant::now();
-            if stopping() {
-                return Ok(None);
-            }
-            let outputs = pipeline::render_outputs(&computed, &style, &d.outputs)?;
-            tracing::debug!(
-                dataset = name,
-                read_ms,
-                parse_ms = ms_between(started, parsed) - read_ms,
-                layout_ms = ms_between(parsed, laid_out),
-                render_ms = ms_since(laid_out),
-                "rebuilt in memory"
-            );
-            Ok(Some((computed, outputs)))
-        });
-        match result {
-            Ok(None) => tracing::debug!(dataset = name, "stopping; rebuild abandoned"),
-            Ok(Some((computed, outputs))) => {
-                if self.stopping() {
+            let Some(next) = self.queue.take(&name, now) else {
+                continue;
+            };
+            let job = Job {
+                next,
+                request: self.config.request(&d),
+                style: self.config.style(&d),
+                force: self.troubled.contains_key(&name),
+                dataset: d,
+            };
+            self.send(&name, job);
+        }
+        let gone: Vec<String> = self
+            .workers
+            .iter()
+            .filter(|(name, w)| !w.busy && self.dataset(name).is_none())
+            .map(|(name, _)| name.clone())
+            .collect();
+        for name in gone {
+            // Dropping its end of the channel ends the thread.
+            self.workers.remove(&name);
+        }
+    }
+
+    /// Sends `job` to `name`'s worker, starting one if needed.
+    fn send(&mut self, name: &str, job: Job) {
+        if !self.workers.contains_key(name) {
+            match Worker::spawn(name, self.shared.clone()) {
+                Ok(worker) => {
+                    self.workers.insert(name.to_string(), worker);
+                }
+                Err(e) => {
+                    let problem = Status::problem(name, &e, "tried again at the next change");
+                    self.problems(name, vec![problem]);
                     return;
                 }
-                for message in warnings {
-                    (self.report)(Status::Warning {
-                        subject: name.to_string(),
-                        message,
-                    });
-                }
-                let layout = match computed.start {
-                    Start::Warm { .. } => LayoutKind::Warm,
-                    Start::Cold | Start::Refused(_) => LayoutKind::Cold,
-                };
-                self.finish(name, reason, layout, started, computed, outputs);
             }
-            Err(e) if e.fault() == Fault::Input => {
-                tracing::debug!(dataset = name, error = %e, "input refused; reported unless the input changes again");
-                self.pending.insert(
-                    name.to_string(),
-                    (
-                        Status::problem(name, &e, Self::kept(&d, false)),
-                        Instant::now(),
+        }
+        let sent = self.workers.get_mut(name).is_some_and(|w| w.send(job));
+        if !sent {
+            // The thread is gone (it cannot panic: tasks run under
+            // catch_unwind); start another at the next change.
+            self.workers.remove(name);
+        }
+    }
+
+    /// Reports the outcomes the workers sent back.
+    fn collect(&mut self) {
+        while let Ok(done) = self.done.try_recv() {
+            if let Some(worker) = self.workers.get_mut(&done.name) {
+                worker.busy = false;
+            }
+            if self.stopping() {
+                continue;
+            }
+            self.outcome(done);
+        }
+    }
+
+    /// Reports one outcome.
+    fn outcome(&mut self, Done { name, outcome }: Done) {
+        // A dataset that left the config meanwhile: nothing to say.
+        let Some(d) = self.dataset(&name).cloned() else {
+            return;
+        };
+        match outcome {
+            Outcome::Unchanged => {}
+            Outcome::Abandoned => tracing::debug!(dataset = name, "stopping; rebuild abandoned"),
+            Outcome::Unreadable(e, consequence) => {
+                self.problems(&name, vec![Status::problem(&name, &e, consequence)]);
+            }
+            Outcome::Failed(e, consequence) if e.fault() == Fault::Input => {
+                tracing::debug!(dataset = name, error = ?e.to_string(), "input refused; reported unless the input changes again");
+                let problem = Status::problem(&name, &e, consequence);
+                self.pending.insert(name, (problem, Instant::now()));
+            }
+            Outcome::Failed(e, consequence) => {
+                self.problems(&name, vec![Status::problem(&name, &e, consequence)]);
+            }
+            Outcome::Panicked(message) => {
+                let problem = Status::Problem {
+                    subject: name.clone(),
+                    message: format!(
+                        "internal error (a bug; please report it with this line): {message}"
                     ),
-                );
+                    consequence: worker::kept(&d, false).to_string(),
+                };
+                self.problems(&name, vec![problem]);
             }
-            Err(e) => {
-                let consequence = Self::kept(&d, false);
-                self.problem(name, Status::problem(name, &e, consequence));
-            }
+            Outcome::Built(built) => self.built(&name, built),
         }
     }
 
-    /// Renders a dataset's stored layout again (a render-only config change).
-    fn rerender(&mut self, name: &str) {
-        let Some(d) = self.dataset(name).cloned() else {
-            return;
-        };
-        let Some(computed) = self.states.get_mut(name).and_then(|s| s.computed.take()) else {
-            // No good layout yet (its last build failed): a full build.
-            self.rebuild(name, Reason::Render);
-            return;
-        };
-        let started = Instant::now();
-        match pipeline::render_outputs(&computed, &self.config.style(&d), &d.outputs) {
-            Ok(outputs) => self.finish(
-                name,
-                Reason::Render,
-                LayoutKind::Reused,
-                started,
-                computed,
-                outputs,
-            ),
-            Err(e) => {
-                let consequence = Self::kept(&d, false);
-                self.problem(name, Status::problem(name, &e, consequence));
-                if let Some(state) = self.states.get_mut(name) {
-                    state.computed = Some(computed);
-                }
-            }
+    /// Reports a rebuild that wrote its outputs (or tried): its new warnings,
+    /// each output that failed, then its line; schedules a retry of what was
+    /// not written.
+    fn built(&mut self, name: &str, built: worker::Built) {
+        let worker::Built {
+            reason,
+            layout,
+            ms,
+            written,
+            warnings,
+            unsaved,
+        } = built;
+        self.pending.remove(name);
+        let retry = reason == Reason::Retry;
+        if !retry {
+            self.warn(name, warnings);
         }
-    }
-
-    /// Writes the outputs that changed (atomically), stores the layout, and
-    /// reports the rebuild: failed outputs one line each, saying truly what
-    /// happened to the others, then the rebuild's line.
-    fn finish(
-        &mut self,
-        name: &str,
-        reason: Reason,
-        layout: LayoutKind,
-        started: Instant,
-        computed: Computed,
-        outputs: Vec<Rendered>,
-    ) {
-        let written = pipeline::write_outputs(&outputs);
         let failed = written.failed.len();
         let others = match (written.written.len(), written.unchanged.len()) {
             (0, 0) => "no output written".to_string(),
@@ -568,53 +577,65 @@ impl Daemon<'_> {
             (w, 0) => format!("{w} other output(s) written"),
             (w, u) => format!("{w} other output(s) written, {u} unchanged"),
         };
-        self.pending.remove(name);
+        if let Some(e) = &unsaved {
+            tracing::warn!(dataset = name, error = ?e.to_string(), "cannot store the layout for warm starts; retried");
+        }
         let recovered = if failed == 0 {
             self.fixed(name)
         } else {
-            for e in &written.failed {
-                (self.report)(Status::problem(name, e, others.clone()));
-            }
-            self.troubled
-                .insert(name.to_string(), "outputs not written".to_string());
+            let consequence = format!("{others}; written again as soon as it can be");
+            let problems = written
+                .failed
+                .iter()
+                .map(|e| Status::problem(name, e, consequence.clone()))
+                .collect();
+            self.problems(name, problems);
             false
         };
-        (self.report)(Status::Built {
+        if failed > 0 || unsaved.is_some() {
+            let wait = self.queue.failed(name, Instant::now());
+            tracing::debug!(dataset = name, ?wait, "writes retried");
+        } else {
+            self.queue.written(name);
+        }
+        // A retry says something only when it made a difference: the
+        // outputs are all written now after a reported failure.
+        if retry && !recovered {
+            return;
+        }
+        self.say(Status::Built {
             dataset: name.to_string(),
             reason,
             layout,
-            ms: started.elapsed().as_secs_f64() * 1000.0,
+            ms,
             written: written.written,
             unchanged: written.unchanged.len(),
             failed,
             recovered,
         });
-        // The pictures are out; what only the next rebuild or a restart needs
-        // comes after the status line.
-        if let Some(d) = self.dataset(name) {
-            if let Err(e) = pipeline::store_layout(d, &computed) {
-                tracing::warn!(dataset = name, error = %e, "cannot store the layout for warm starts");
-            }
+    }
+
+    /// Reports the warnings of a rebuild that were not reported for the
+    /// dataset's last one, at most [`MAX_WARNINGS`] of them.
+    fn warn(&mut self, name: &str, warnings: Vec<String>) {
+        let before = self.warned.remove(name).unwrap_or_default();
+        let fresh: Vec<&String> = warnings.iter().filter(|w| !before.contains(*w)).collect();
+        for message in fresh.iter().take(MAX_WARNINGS) {
+            self.say(Status::Warning {
+                subject: name.to_string(),
+                message: (*message).clone(),
+            });
         }
-        self.states.entry(name.to_string()).or_default().computed = Some(computed);
+        if fresh.len() > MAX_WARNINGS {
+            self.say(Status::Warning {
+                subject: name.to_string(),
+                message: format!(
+                    "and {} more warning(s) (`nptreemap check` lists them all)",
+                    fresh.len() - MAX_WARNINGS
+                ),
+            });
+        }
+        self.warned
+            .insert(name.to_string(), warnings.into_iter().collect());
     }
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1000.0
-}
-
-fn ms_between(a: Instant, b: Instant) -> f64 {
-    b.duration_since(a).as_secs_f64() * 1000.0
-}
-
-/// A fingerprint of a dataset's input bytes (roles, paths and contents).
-fn fingerprint(files: &[pipeline::InputFile]) -> u64 {
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    for f in files {
-        f.role.hash(&mut h);
-        f.path.hash(&mut h);
-        f.bytes.hash(&mut h);
-    }
-    h.finish()
 }

@@ -1,10 +1,16 @@
 //! The daemon's status lines: one per rebuild (dataset, what changed, how it
 //! was laid out, milliseconds, outputs written) and one per problem, with the
-//! whole error chain on one line. Owns their wording; may not print (the
-//! caller decides where lines go).
+//! whole error chain on one line, each after its time of day ([`Line`]).
+//! Owns their wording, and that a line is one line: control characters in
+//! names, paths and quoted messages are printed escaped ([`escape`]), so a
+//! file named with a newline cannot forge a line (log injection) nor an
+//! escape sequence colour the terminal. May not print (the caller decides
+//! where lines go).
 
+use std::borrow::Cow;
 use std::fmt;
 use std::path::PathBuf;
+use std::time::SystemTime;
 
 use super::change::Reason;
 
@@ -17,6 +23,9 @@ pub enum LayoutKind {
     Warm,
     /// The stored layout was reused (render-only change).
     Reused,
+    /// Nothing was laid out or drawn: outputs that could not be written
+    /// before were written again.
+    Kept,
 }
 
 /// One line of daemon output.
@@ -113,7 +122,85 @@ fn file_name(p: &std::path::Path) -> String {
 }
 
 impl fmt::Display for Status {
+    /// The line, its control characters escaped.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&escape(&self.raw()))
+    }
+}
+
+/// `text` with every control character (C0, DEL, C1, the Unicode line and
+/// paragraph separators, and the bidirectional overrides that reorder what
+/// a terminal shows) written as Rust writes it in a string literal (`\n`,
+/// `\t`, `\u{1b}`), so that it stays one line and cannot drive a terminal.
+/// Everything else, backslashes included, is left as it is, so ordinary
+/// paths read as before.
+pub fn escape(text: &str) -> Cow<'_, str> {
+    let special = |c: char| {
+        c.is_control()
+            || matches!(c, '\u{2028}' | '\u{2029}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+    };
+    if !text.contains(special) {
+        return Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        if special(c) {
+            out.extend(c.escape_debug());
+        } else {
+            out.push(c);
+        }
+    }
+    Cow::Owned(out)
+}
+
+/// A status line as printed: the time of day it was made, in UTC
+/// (`HH:MM:SS`, as journald and most log collectors keep the date and the
+/// zone themselves), then the [`Status`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Line {
+    /// When it was made.
+    pub at: SystemTime,
+    /// What it says.
+    pub status: Status,
+}
+
+impl Line {
+    /// `status`, made now.
+    pub fn now(status: Status) -> Self {
+        Line {
+            at: SystemTime::now(),
+            status,
+        }
+    }
+}
+
+/// The UTC time of day of `at`, `HH:MM:SS` (a clock before 1970 shows
+/// 00:00:00).
+pub fn time_of_day(at: SystemTime) -> String {
+    let secs = at
+        .duration_since(SystemTime::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let day = secs % 86_400;
+    format!("{:02}:{:02}:{:02}", day / 3600, day % 3600 / 60, day % 60)
+}
+
+impl fmt::Display for Line {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} {}", time_of_day(self.at), self.status)
+    }
+}
+
+impl Status {
+    /// The line before escaping.
+    fn raw(&self) -> String {
+        let mut f = String::new();
+        // Writing to a String cannot fail.
+        let _ = self.write_raw(&mut f);
+        f
+    }
+
+    fn write_raw(&self, f: &mut String) -> fmt::Result {
+        use fmt::Write as _;
         match self {
             Status::Watching {
                 config,
@@ -138,6 +225,7 @@ impl fmt::Display for Status {
                     LayoutKind::Cold => "laid out",
                     LayoutKind::Warm => "laid out warm",
                     LayoutKind::Reused => "re-rendered",
+                    LayoutKind::Kept => "written again",
                 };
                 let again = if *recovered { "ok again, " } else { "" };
                 write!(f, "{dataset}: {again}{reason}; {how} in {ms:.0} ms; ")?;
@@ -221,6 +309,72 @@ mod tests {
         assert_eq!(
             built(vec![PathBuf::from("o/a.svg")], 1, true),
             "c: ok again, start; laid out in 5 ms; wrote a.svg (1 not written)"
+        );
+    }
+
+    /// Issue 21 item 9: a name with a newline, a carriage return or an
+    /// escape sequence stays on its line and prints no control character.
+    #[test]
+    fn control_characters_are_escaped_in_every_line() {
+        let evil = "a\nfake: line\r\u{1b}[31mred\u{2028}\u{202e}x";
+        let lines = [
+            Status::Built {
+                dataset: evil.to_string(),
+                reason: Reason::Data(vec![evil.to_string()]),
+                layout: LayoutKind::Cold,
+                ms: 1.0,
+                written: vec![PathBuf::from(format!("out/{evil}.svg"))],
+                unchanged: 0,
+                failed: 0,
+                recovered: false,
+            },
+            Status::Problem {
+                subject: evil.to_string(),
+                message: evil.to_string(),
+                consequence: evil.to_string(),
+            },
+            Status::Warning {
+                subject: evil.to_string(),
+                message: evil.to_string(),
+            },
+            Status::Note {
+                subject: evil.to_string(),
+                message: evil.to_string(),
+            },
+            Status::Watching {
+                config: PathBuf::from(evil),
+                datasets: 1,
+                dirs: 1,
+            },
+        ];
+        for status in lines {
+            let line = status.to_string();
+            assert!(
+                !line.chars().any(|c| c.is_control()
+                    || matches!(c, '\u{2028}' | '\u{202e}')),
+                "{line:?}"
+            );
+            assert!(
+                line.contains("a\\nfake: line\\r\\u{1b}[31mred\\u{2028}\\u{202e}x"),
+                "{line:?}"
+            );
+        }
+        // Ordinary text, backslashes and non-ASCII letters included, is as it was.
+        assert_eq!(escape("C:\\data\\日本.csv"), "C:\\data\\日本.csv");
+    }
+
+    /// Issue 22 item 4: each line starts with its time of day, in UTC.
+    #[test]
+    fn lines_start_with_the_time_of_day() {
+        let at = SystemTime::UNIX_EPOCH + std::time::Duration::from_secs(19_999 * 86_400 + 3_723);
+        let line = Line {
+            at,
+            status: Status::Stopped,
+        };
+        assert_eq!(line.to_string(), "01:02:03 stopped");
+        assert_eq!(
+            time_of_day(SystemTime::UNIX_EPOCH + std::time::Duration::from_secs(86_399)),
+            "23:59:59"
         );
     }
 

@@ -159,7 +159,11 @@ pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutE
     let (layout, report) = if let Some(previous) = warm_from {
         let sim = |a: usize, b: usize| similarity(kind, &prepared, a, b);
         layout_warm_with(&prepared, &request.params, previous, Some(&sim), &monitor)?
-    } else if method == Method::Plain {
+    } else if method == Method::Plain
+        // Nothing to preserve, nothing to pay (issue 23): what the method
+        // would give level by level without constraints, minus the projection.
+        || (constraints.is_empty() && method == Method::Neighbor && !request.neighbor.prototype)
+    {
         treemap::layout_with(&prepared, &request.params, &monitor)?
     } else {
         let projection = projection_of(&prepared, |a, b| similarity(kind, &prepared, a, b));

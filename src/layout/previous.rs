@@ -41,7 +41,70 @@ impl PreviousNode {
     pub fn centroid(&self) -> Point {
         self.polygon.centroid()
     }
+
+    /// Whether this node's values are ones a layout of `canvas` can have:
+    /// a finite, non-negative target weight, a site and cell within the
+    /// canvas (give or take `OUTSIDE_SHARE` of its diagonal), and a power
+    /// weight within [`POWER_WEIGHT_BOUND`] squared diagonals. On failure,
+    /// the field and what is wrong with it. The one home of these rules: the
+    /// layout-JSON reader names the offending field with them, and
+    /// [`Previous::fits`] refuses a previous layout built in code with them.
+    pub fn check(&self, canvas: Canvas) -> Result<(), (&'static str, String)> {
+        let diagonal = Point::new(canvas.width, canvas.height).length();
+        if !(self.weight.is_finite() && self.weight >= 0.0) {
+            return Err((
+                "weight",
+                format!("is {}; a weight is a finite number >= 0", self.weight),
+            ));
+        }
+        let margin = OUTSIDE_SHARE * diagonal;
+        let inside = |p: Point| {
+            p.is_finite()
+                && (-margin..=canvas.width + margin).contains(&p.x)
+                && (-margin..=canvas.height + margin).contains(&p.y)
+        };
+        let size = format!("the {}×{} canvas", canvas.width, canvas.height);
+        if !inside(self.site) {
+            return Err((
+                "site",
+                format!("[{}, {}] lies outside {size}", self.site.x, self.site.y),
+            ));
+        }
+        if let Some(p) = self.polygon.points().iter().find(|p| !inside(**p)) {
+            return Err((
+                "polygon",
+                format!("has the vertex [{}, {}] outside {size}", p.x, p.y),
+            ));
+        }
+        let bound = POWER_WEIGHT_BOUND * diagonal * diagonal;
+        if let Some(w) = self.power_weight.filter(|w| w.is_nan() || w.abs() > bound) {
+            return Err((
+                "power_weight",
+                format!(
+                    "is {w:e}, beyond what a layout of {size} has (at most ±{bound:.2e}, \
+                     {POWER_WEIGHT_BOUND} squared diagonals); cells started from it collapse"
+                ),
+            ));
+        }
+        Ok(())
+    }
 }
+
+/// Largest power weight, in squared canvas diagonals, that [`PreviousNode::check`]
+/// accepts. Finished layouts stay below about 2 (the paper prototype's
+/// schedule on the paper's datasets reaches 2.3, ours 0.2): a cell empties
+/// once its weight falls a squared distance below a neighbour's, so weights
+/// spread over at most a squared diagonal, and the optimiser's steps add no
+/// drift. A thousand leaves room for any of that and still keeps the squared
+/// distances the power diagram adds to the weights (down to 10⁻⁸ of the
+/// canvas for the smallest cells) above their rounding; 1e308 (issue 21)
+/// loses every one of them.
+pub const POWER_WEIGHT_BOUND: f64 = 1000.0;
+
+/// How far outside the canvas, as a share of its diagonal, a previous site
+/// or cell vertex may lie ([`PreviousNode::check`]): layouts keep them inside
+/// the outline; this only forgives the rounding of a file's coordinates.
+const OUTSIDE_SHARE: f64 = 1e-3;
 
 /// A previous layout: per node id its site, power weight, cell, target weight
 /// and parent, the canvas, and which constraints were realised.
@@ -75,6 +138,18 @@ pub enum WarmRefusal {
     /// The root outline changed (say a rectangle before, a circle now).
     #[error("the previous layout has another outline")]
     Outline,
+    /// A node holds a value no layout of its canvas can have (a power weight
+    /// of 1e308, a site far outside the canvas): a warm start from it would
+    /// give a degenerate picture (issue 21).
+    #[error("node {id:?}: `{field}` {reason}")]
+    Unsound {
+        /// The node's id.
+        id: String,
+        /// The field: `power_weight`, `site`, `weight` or `polygon`.
+        field: &'static str,
+        /// What is wrong with it.
+        reason: String,
+    },
     /// The hierarchy changed too much for old positions to mean anything.
     #[error("only {survivors} of {nodes} nodes survive from the previous layout")]
     TooFewSurvivors {
@@ -213,7 +288,8 @@ impl Previous {
     }
 
     /// Whether a run with `params` on `dataset` may start from this layout:
-    /// the same canvas and outline, and at least half of the nodes surviving.
+    /// the same canvas and outline, every node's values ones a layout can
+    /// have ([`PreviousNode::check`]), and at least half of the nodes surviving.
     /// A previous layout for another canvas or outline is not rescaled: it is
     /// simply not used, and the layout starts cold.
     pub fn fits(&self, dataset: &Dataset, params: &Params) -> Result<(), WarmRefusal> {
@@ -229,6 +305,14 @@ impl Previous {
         match params.outline.polygon(params.canvas) {
             Ok(outline) if same_polygon(&outline, &root.polygon, tol) => {}
             _ => return Err(WarmRefusal::Outline),
+        }
+        for n in &self.nodes {
+            n.check(self.canvas)
+                .map_err(|(field, reason)| WarmRefusal::Unsound {
+                    id: n.id.clone(),
+                    field,
+                    reason,
+                })?;
         }
         let nodes = dataset.len().saturating_sub(1);
         let survivors = self.survivors(dataset);
@@ -331,5 +415,34 @@ mod tests {
             empty.fits(&ds, &Params::default()),
             Err(WarmRefusal::NoRoot)
         );
+    }
+    /// A previous layout built in code (not read from a file, which the
+    /// reader checks) with values no layout can have is refused, naming the
+    /// node and the field: the run starts cold (issue 21, item 8).
+    #[test]
+    fn values_no_layout_can_have_are_refused() {
+        let ds = tree(&[("A", "a1", 1.0), ("A", "a2", 2.0), ("B", "b1", 3.0)]);
+        let (l, _) = layout(&ds, &Params::default()).expect("layout");
+        let prev = Previous::from_layout(&ds, &l);
+        let hostile = |change: &dyn Fn(&mut PreviousNode)| {
+            let mut nodes = prev.nodes().to_vec();
+            let i = nodes.iter().position(|n| n.id == "a2").expect("a2");
+            change(&mut nodes[i]);
+            Previous::new(prev.canvas(), nodes, Vec::new()).fits(&ds, &Params::default())
+        };
+        let refused = |r: Result<(), WarmRefusal>, field: &str| match r {
+            Err(WarmRefusal::Unsound { id, field: f, .. }) => {
+                assert_eq!((id.as_str(), f), ("a2", field));
+            }
+            other => panic!("{field}: {other:?}"),
+        };
+        refused(hostile(&|n| n.power_weight = Some(1e308)), "power_weight");
+        refused(
+            hostile(&|n| n.power_weight = Some(f64::NAN)),
+            "power_weight",
+        );
+        refused(hostile(&|n| n.site = Point::new(-1e6, 3.0)), "site");
+        refused(hostile(&|n| n.weight = f64::INFINITY), "weight");
+        assert_eq!(hostile(&|n| n.power_weight = None), Ok(()));
     }
 }

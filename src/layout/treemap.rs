@@ -154,7 +154,7 @@ pub(super) fn top_down(
 }
 
 /// An only child takes its parent's cell unchanged.
-fn single_child(child: usize, polygon: ConvexPolygon) -> Division {
+pub(super) fn single_child(child: usize, polygon: ConvexPolygon) -> Division {
     let cell = LayoutCell {
         site: polygon.centroid(),
         power_weight: 0.0,

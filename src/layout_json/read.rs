@@ -38,7 +38,9 @@ pub enum ReadError {
 /// its `a`, `b` and `realized` are read.
 ///
 /// A layout made for another canvas or outline reads fine; it is then not
-/// used, and the layout starts cold ([`Previous::fits`]).
+/// used, and the layout starts cold ([`Previous::fits`]). Values no layout of
+/// the document's canvas can have (a power weight of 1e308, a site far
+/// outside the canvas: [`PreviousNode::check`]) are an error naming the field.
 pub fn previous(text: &str) -> Result<Previous, ReadError> {
     let doc: Value = serde_json::from_str(text)?;
     let top = object(&doc, "the document")?;
@@ -65,6 +67,10 @@ pub fn previous(text: &str) -> Result<Previous, ReadError> {
         .map(|(i, v)| node(v, &format!("nodes[{i}]")))
         .collect::<Result<Vec<_>, _>>()?;
     check_tree(&nodes)?;
+    for (i, n) in nodes.iter().enumerate() {
+        n.check(canvas)
+            .map_err(|(key, reason)| bad(format!("nodes[{i}].{key}"), reason))?;
+    }
     let realized = match top.get("constraints") {
         None | Some(Value::Null) => Vec::new(),
         Some(v) => realized_pairs(v)?,
@@ -328,5 +334,44 @@ mod tests {
         let prev = previous(&v.to_string()).expect("reads");
         assert!(prev.nodes().iter().all(|n| n.power_weight.is_none()));
         prev.fits(&ds, &Params::default()).expect("fits");
+    }
+    /// Issue 21, item 8: a stored layout whose power weights were 1e308 gave
+    /// a degenerate picture (continents of zero area) with no word. Values no
+    /// layout of the canvas can have are refused, naming the field, so the
+    /// caller warns and starts cold.
+    #[test]
+    fn values_no_layout_can_have_are_refused_naming_the_field() {
+        let (_, text) = sample_text();
+        let doc: Value = serde_json::from_str(&text).expect("json");
+        let with = |i: usize, key: &str, value: Value| {
+            let mut d = doc.clone();
+            d["nodes"][i][key] = value;
+            d.to_string()
+        };
+        for w in [1e308, -1e308, 1e12] {
+            error_names(
+                &with(3, "power_weight", serde_json::json!(w)),
+                "nodes[3].power_weight",
+            );
+        }
+        for site in [[-50.0, 10.0], [10.0, 1e9], [1e300, 1e300]] {
+            error_names(&with(2, "site", serde_json::json!(site)), "nodes[2].site");
+        }
+        error_names(
+            &with(4, "weight", serde_json::json!(-1.0)),
+            "nodes[4].weight",
+        );
+        error_names(
+            &with(
+                5,
+                "polygon",
+                serde_json::json!([[0.0, 0.0], [5e6, 0.0], [0.0, 5e6]]),
+            ),
+            "nodes[5].polygon",
+        );
+        // What layouts do have still reads: weights of a few squared canvas
+        // diagonals (the prototype's reach 2.3), sites on the border.
+        previous(&with(3, "power_weight", serde_json::json!(-5e6))).expect("reads");
+        previous(&with(2, "site", serde_json::json!([0.0, 1000.0]))).expect("reads");
     }
 }

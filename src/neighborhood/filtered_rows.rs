@@ -441,7 +441,7 @@ mod tests {
     /// cosines with the first one fall exactly on score steps and on either side
     /// of them, exact duplicates (ties broken by level order) and scaled copies,
     /// a crowd of 40 identical vectors (pruning among ties), a zero vector and
-    /// one of norm 1e-150 (both exact-only), then pseudo-random vectors so that
+    /// one of norm 1e-150 (the zero vector exact-only, the tiny one rescaled), then pseudo-random vectors so that
     /// every score holds far more than a head.
     fn hard_vectors(random: usize) -> Vec<Vec<f64>> {
         let mut vectors = vec![vec![1.0, 0.0]];
@@ -502,9 +502,12 @@ mod tests {
                     .collect();
                 let filter = Filter::new(kind, &features).expect("a filter for this level");
                 let rows: Vec<usize> = (0..level.len()).filter(|&i| !filter.is_exact(i)).collect();
+                // The zero vector takes the exact path; the tiny one is
+                // rescaled before its norm (issue 21) and is filtered like
+                // any other.
                 assert!(
-                    rows.len() + 2 <= level.len(),
-                    "{kind:?}: the zero and tiny vectors are exact"
+                    rows.len() < level.len(),
+                    "{kind:?}: the zero vector is exact"
                 );
                 let mut state = Vec::new();
                 // Tiles of 5 rows (groups of the 4-row kernel and a remainder):

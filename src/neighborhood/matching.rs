@@ -211,7 +211,9 @@ fn hungarian(cost: &[f64], rows: usize, cols: usize) -> Vec<usize> {
         let mut j0 = 0;
         minv.fill(f64::INFINITY);
         used.fill(false);
-        loop {
+        // Each round marks one more column used (`j1` is always an unused
+        // one), so a free column is reached within `cols` rounds.
+        for _ in 0..=cols {
             used[j0] = true;
             let i0 = owner[j0];
             let row = &cost[(i0 - 1) * cols..i0 * cols];

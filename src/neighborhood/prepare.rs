@@ -103,14 +103,12 @@ pub fn prepare(dataset: &Dataset) -> Dataset {
 /// Records the result as taken.
 fn unique_id(candidate: String, taken: &mut HashSet<String>) -> String {
     let id = if taken.contains(&candidate) {
-        let mut k = 2usize;
-        loop {
-            let attempt = format!("{candidate}~{k}");
-            if !taken.contains(&attempt) {
-                break attempt;
-            }
-            k += 1;
-        }
+        // Among `taken.len() + 1` suffixes one is free (pigeonhole), so the
+        // search ends there at the latest.
+        (2..taken.len() + 3)
+            .map(|k| format!("{candidate}~{k}"))
+            .find(|attempt| !taken.contains(attempt))
+            .unwrap_or_else(|| format!("{candidate}~{}", taken.len() + 3))
     } else {
         candidate
     };

@@ -282,7 +282,8 @@ fn landmark_mds_2d(dissimilarity: &impl Fn(usize, usize) -> f64, n: usize, k: us
     // rows[a][j]: |dissimilarity| between landmark a and point j, NaN when unknown.
     let mut rows: Vec<Vec<f64>> = Vec::with_capacity(k);
     let mut nearest = vec![f64::INFINITY; n];
-    loop {
+    // One landmark row per round, `k` rounds at most.
+    for _ in 0..k {
         let l = landmarks[rows.len()];
         let row: Vec<f64> = (0..n).map(|j| pair(l, j)).collect();
         for (m, &v) in nearest.iter_mut().zip(&row) {

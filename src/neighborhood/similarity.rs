@@ -128,6 +128,32 @@ fn squared_norm(values: &[f64]) -> f64 {
     sum
 }
 
+/// Largest components a vector keeps as it is (2⁻²⁰⁰ to 2²⁰⁰): their squares,
+/// sums of up to a million of them and products of two norms stay far from
+/// f64's underflow (2⁻¹⁰²²) and overflow (2¹⁰²⁴), so cosine and Pearson come
+/// out as the literal formula gives them, bit for bit (§1.4).
+const PLAIN_SCALE: std::ops::RangeInclusive<f64> = 6.223_015_277_861_142e-61..=1.606_938_044_258_990_3e60;
+
+/// `values` times the power of two that brings its largest component into
+/// [0.5, 1), when that component lies outside [`PLAIN_SCALE`]; `None` when
+/// the vector is fine as it is (or all zeros, which has no direction at any
+/// scale). Cosine and Pearson do not depend on a vector's scale, and a power
+/// of two changes no bit of a value, so this gives the similarities of the
+/// unscaled vectors; without it the squared norm of a vector of 1e-200s
+/// underflowed to 0 and the vector counted as a zero vector (issue 21).
+fn rescaled(values: &[f64]) -> Option<Vec<f64>> {
+    let largest = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if largest == 0.0 || !largest.is_finite() || PLAIN_SCALE.contains(&largest) {
+        return None;
+    }
+    // Two factors, each a power of two within f64's range: the one factor for
+    // the smallest subnormals (2⁻¹⁰⁷⁴) would overflow.
+    let exponent = largest.log2().floor() as i32 + 1;
+    let first = -exponent / 2;
+    let (a, b) = (2f64.powi(first), 2f64.powi(-exponent - first));
+    Some(values.iter().map(|v| v * a * b).collect())
+}
+
 impl<'a> NodeFeatures<'a> {
     /// Precomputes what `kind` needs from node `index`.
     pub(crate) fn new(kind: SimilarityKind, dataset: &'a Dataset, index: usize) -> Self {
@@ -144,8 +170,12 @@ impl<'a> NodeFeatures<'a> {
         };
         match kind {
             SimilarityKind::Cosine => {
-                result.norm = squared_norm(values).sqrt();
-                result.values = Some(Cow::Borrowed(values));
+                let values = match rescaled(values) {
+                    Some(scaled) => Cow::Owned(scaled),
+                    None => Cow::Borrowed(values),
+                };
+                result.norm = squared_norm(values.as_slice()).sqrt();
+                result.values = Some(values);
             }
             SimilarityKind::Jaccard => {
                 result.support = values
@@ -169,6 +199,7 @@ impl<'a> NodeFeatures<'a> {
                     sum / values.len() as f64
                 };
                 let centered: Vec<f64> = values.iter().map(|&v| v - mean).collect();
+                let centered = rescaled(&centered).unwrap_or(centered);
                 result.norm = squared_norm(&centered).sqrt();
                 result.values = Some(Cow::Owned(centered));
             }
@@ -518,5 +549,69 @@ mod tests {
             SimilarityKind::for_dataset(&dataset(&[])),
             SimilarityKind::Cosine
         );
+    }
+    /// Issue 21, item 8: vectors scaled by 1e-200 lost every constraint (66 to
+    /// 0 on the probe's data) because their squared norms underflowed to 0,
+    /// which the zero-vector rule then took for "no direction". Cosine and
+    /// Pearson do not depend on the scale: every scale gives the constraints
+    /// of the unscaled vectors (a power of two bit for bit, any other up to
+    /// the last bits of the similarities), and a true zero vector stays
+    /// unrelated.
+    #[test]
+    fn constraints_do_not_depend_on_the_scale_of_the_vectors() {
+        use crate::neighborhood::{build_constraints, prepare};
+        let mut rng = crate::rng::Rng::new(21);
+        let base: Vec<Vec<f64>> = (0..40)
+            .map(|i| {
+                if i == 7 {
+                    vec![0.0; 6]
+                } else {
+                    (0..6).map(|_| rng.next_f64() - 0.3).collect()
+                }
+            })
+            .collect();
+        let tree = |scale: f64| {
+            let mut b = DatasetBuilder::new();
+            b.add(NodeSpec::new("r"));
+            for g in 0..4 {
+                b.add(NodeSpec::new(format!("g{g}")).parent("r"));
+            }
+            for (i, v) in base.iter().enumerate() {
+                let spec = NodeSpec::new(format!("n{i}"))
+                    .parent(format!("g{}", i % 4))
+                    .weight(1.0 + i as f64)
+                    .features(v.iter().map(|x| x * scale).collect());
+                b.add(spec);
+            }
+            b.build().expect("valid")
+        };
+        for kind in [SimilarityKind::Cosine, SimilarityKind::Pearson] {
+            let of = |scale: f64| build_constraints(&prepare(&tree(scale)), kind);
+            let reference = of(1.0);
+            assert!(reference.len() > 20, "{kind:?}: {}", reference.len());
+            let n7 = prepare(&tree(1.0)).find("n7").expect("n7");
+            let zero = reference.iter().filter(|c| c.a == n7 || c.b == n7);
+            assert!(
+                zero.clone().all(|c| c.similarity == 0.0),
+                "{kind:?}: the zero vector is unrelated"
+            );
+            let exact = 2f64.powi(-664);
+            for scale in [exact, 1e-200, 1e-300, 1e90, 3.7] {
+                let scaled = of(scale);
+                let key = |c: &crate::neighborhood::Constraint| (c.a, c.b, c.score, c.strength);
+                assert_eq!(
+                    scaled.iter().map(key).collect::<Vec<_>>(),
+                    reference.iter().map(key).collect::<Vec<_>>(),
+                    "{kind:?} at scale {scale:e}"
+                );
+                for (s, r) in scaled.iter().zip(&reference) {
+                    if scale == exact {
+                        assert_eq!(s.similarity.to_bits(), r.similarity.to_bits());
+                    } else {
+                        assert!((s.similarity - r.similarity).abs() < 1e-12);
+                    }
+                }
+            }
+        }
     }
 }

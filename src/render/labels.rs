@@ -224,13 +224,17 @@ pub(crate) fn fit_scale(polygon: &ConvexPolygon, center: Point, half: Point) -> 
 /// The anchor and scale at which a box of half extents `half` (per unit of
 /// scale) fits `polygon` best: a compass search from the centroid, which for
 /// the convex cells here finds the optimum to a hundredth of the cell's size.
+/// At most [`COMPASS_ROUNDS`] rounds, then the best found so far.
 fn best_fit(polygon: &ConvexPolygon, half: Point) -> (Point, f64) {
     let mut at = polygon.centroid();
     let mut best = fit_scale(polygon, at, half);
     let (lo, hi) = polygon.bbox();
     let mut step = 0.25 * (hi.x - lo.x).min(hi.y - lo.y);
     let floor = 0.01 * (hi.x - lo.x).min(hi.y - lo.y);
-    while step > floor {
+    for _ in 0..COMPASS_ROUNDS {
+        if step.is_nan() || step <= floor {
+            break;
+        }
         let mut moved = false;
         for d in [
             Point::new(step, 0.0),
@@ -252,6 +256,15 @@ fn best_fit(polygon: &ConvexPolygon, half: Point) -> (Point, f64) {
     }
     (at, best)
 }
+
+/// Most rounds of [`best_fit`]'s compass search. The step halves from a
+/// quarter to a hundredth of the cell's smaller extent (five halvings), and
+/// at each step the anchor can move at most about a cell's width, four steps
+/// of a quarter, 100 of a hundredth, before leaving the cell (where the fit
+/// is 0): some 200 rounds in all. A move needs a strictly better fit, so the
+/// search cannot cycle, but a fit that creeps up by rounding could keep it
+/// moving; past this many rounds the best anchor so far is kept.
+const COMPASS_ROUNDS: usize = 400;
 
 /// Fits `block` into `polygon` with padding; returns the anchor and font size.
 fn fit_block(polygon: &ConvexPolygon, block: &Block) -> (Point, f64) {

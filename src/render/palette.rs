@@ -95,8 +95,10 @@ impl PaletteKind {
 }
 
 /// The colours `groups` top-level groups choose from: for [`PaletteKind::Tableau`]
-/// at least `groups` distinct colours; for [`PaletteKind::Colorblind`] always
-/// Okabe–Ito.
+/// Tableau 10 or 20, or as many distinct generated colours as `groups` up to
+/// what the generated palette holds ([`generated`]), after which [`assign`]
+/// reuses colours, keeping touching groups apart; for
+/// [`PaletteKind::Colorblind`] always Okabe–Ito.
 pub fn group_palette(kind: PaletteKind, groups: usize) -> Vec<Rgb> {
     match kind {
         PaletteKind::Colorblind => OKABE_ITO.to_vec(),
@@ -106,31 +108,51 @@ pub fn group_palette(kind: PaletteKind, groups: usize) -> Vec<Rgb> {
     }
 }
 
-/// Lightness levels of the generated palette, cycled with the hue: mid-tones
-/// on which dark labels with a white halo read, and whose lighter child
-/// shades stay off white.
-const GENERATED_L: [f64; 3] = [0.72, 0.60, 0.82];
-/// Chroma of the generated palette: about Tableau's, muted enough for large areas.
-const GENERATED_C: f64 = 0.11;
+/// Rings of the generated palette: per ring, three lightness levels cycled
+/// with the hue and a chroma. Mid-tones throughout, on which dark labels with
+/// a white halo read and whose lighter child shades stay off white. The
+/// first ring is the palette's original one (so maps of up to about 1,800
+/// groups keep their colours); each further ring sits between the earlier
+/// ones in lightness and chroma, so its colours round to new 8-bit values.
+const RINGS: [([f64; 3], f64); 4] = [
+    ([0.72, 0.60, 0.82], 0.11),
+    ([0.66, 0.78, 0.56], 0.08),
+    ([0.69, 0.57, 0.79], 0.14),
+    ([0.75, 0.63, 0.84], 0.06),
+];
+/// Candidates tried per ring: the bound of [`generated`]'s search. One ring's
+/// hues by the golden angle, rounded to 8 bits, stop giving new colours (the
+/// first ring has only 2,370 in all; searching for a 2,371st never ended:
+/// issue 21); 4,096 candidates give about 1,800 of a ring's colours, and the
+/// four rings together about 6,600, more than anyone tells apart on one map.
+const RING_CANDIDATES: usize = 4096;
 /// Hue step of the generated palette, degrees: the golden angle, so any run
 /// of consecutive colours spreads round the hue circle.
 const GOLDEN_ANGLE: f64 = 137.507_764;
 
-/// `n` distinct colours spread over OKLCH: hues by the golden angle, three
-/// lightness levels, constant chroma (reduced where sRGB cannot show it).
-/// Deterministic; every colour differs from every other.
+/// Up to `n` distinct colours spread over OKLCH: within each of the `RINGS`,
+/// hues by the golden angle, lightness cycling through the ring's three
+/// levels, the ring's chroma (reduced where sRGB cannot show it). A fixed,
+/// bounded search (`RING_CANDIDATES` per ring): past the colours it finds,
+/// the palette is shorter than `n` and [`assign`] reuses colours.
+/// Deterministic; a shorter palette is a prefix of a longer one.
 pub fn generated(n: usize) -> Vec<Rgb> {
-    let mut out: Vec<Rgb> = Vec::with_capacity(n);
-    let mut k = 0usize;
-    while out.len() < n {
-        let h = (k as f64 * GOLDEN_ANGLE).rem_euclid(360.0);
-        let l = GENERATED_L[k % GENERATED_L.len()];
-        let c = from_oklch(l, GENERATED_C, h);
-        // Rounding to 8 bits can make two close entries equal at large n.
-        if !out.contains(&c) {
-            out.push(c);
+    let mut out: Vec<Rgb> = Vec::with_capacity(n.min(RINGS.len() * RING_CANDIDATES));
+    let mut seen = std::collections::HashSet::new();
+    for (ring, (levels, chroma)) in RINGS.iter().enumerate() {
+        // Each ring starts half a step round from the previous one.
+        let offset = ring as f64 * 0.5 * GOLDEN_ANGLE;
+        for k in 0..RING_CANDIDATES {
+            if out.len() >= n {
+                return out;
+            }
+            let h = (k as f64 * GOLDEN_ANGLE + offset).rem_euclid(360.0);
+            let c = from_oklch(levels[k % levels.len()], *chroma, h);
+            // Rounding to 8 bits makes close candidates equal.
+            if seen.insert(c) {
+                out.push(c);
+            }
         }
-        k += 1;
     }
     out
 }
@@ -143,11 +165,13 @@ pub const ALIKE: f64 = 0.1;
 /// Colours for groups `0..count` from `palette`, so that groups that touch
 /// (`adjacent` pairs) get colours at least [`ALIKE`] apart whenever the
 /// palette allows, and every group its own colour while the palette has
-/// enough. `order` lists the groups by priority (heaviest first): earlier
-/// groups get earlier palette colours. `fixed[g]` is a group's own colour,
-/// kept as given. Deterministic greedy: each group takes the first colour in
-/// palette order that is unused (or least used) and far enough from its
-/// coloured neighbours, else the one farthest from them.
+/// enough (past that, colours are reused evenly). `order` lists the groups by
+/// priority (heaviest first): earlier groups get earlier palette colours.
+/// `fixed[g]` is a group's own colour, kept as given. Deterministic greedy:
+/// each group takes, among the first `WINDOW` least-used colours in palette
+/// order, the first far enough from its coloured neighbours, else the one
+/// farthest from them; then `improve` repairs what is left. Near-linear in
+/// the groups: a flat table is a map of up to `max_nodes` top-level groups.
 pub fn assign(
     palette: &[Rgb],
     order: &[usize],
@@ -164,11 +188,16 @@ pub fn assign(
         }
     }
     let lab: Vec<[f64; 3]> = palette.iter().map(|c| group_lab(*c)).collect();
+    let index: std::collections::HashMap<Rgb, usize> =
+        palette.iter().enumerate().map(|(k, &c)| (c, k)).collect();
     let mut colors: Vec<Option<Rgb>> = fixed.to_vec();
     let mut used = vec![0usize; palette.len()];
-    for (k, c) in palette.iter().enumerate() {
-        used[k] = fixed.iter().filter(|f| **f == Some(*c)).count();
+    for c in fixed.iter().flatten() {
+        if let Some(&k) = index.get(c) {
+            used[k] += 1;
+        }
     }
+    let mut least = LeastUsed::new(&used);
     for &g in order.iter().filter(|&&g| g < count) {
         if colors[g].is_some() {
             continue;
@@ -182,27 +211,21 @@ pub fn assign(
                 .map(|n| distance_lab(lab[k], *n))
                 .fold(f64::INFINITY, f64::min)
         };
-        let least = used.iter().copied().min().unwrap_or(0);
-        // While the palette has a colour for every group, never reuse one.
-        let fresh = |k: usize| used[k] == least;
-        let pick = (0..palette.len())
-            .find(|&k| fresh(k) && gap(k) >= ALIKE)
+        let window: Vec<usize> = least.first(WINDOW);
+        let pick = window
+            .iter()
+            .copied()
+            .find(|&k| gap(k) >= ALIKE)
             .or_else(|| {
-                (palette.len() >= count)
-                    .then(|| {
-                        (0..palette.len())
-                            .filter(|&k| fresh(k))
-                            .max_by(|&a, &b| gap(a).total_cmp(&gap(b)).then(b.cmp(&a)))
-                    })
-                    .flatten()
-            })
-            .or_else(|| (0..palette.len()).find(|&k| gap(k) >= ALIKE))
-            .or_else(|| {
-                (0..palette.len()).max_by(|&a, &b| gap(a).total_cmp(&gap(b)).then(b.cmp(&a)))
+                window
+                    .iter()
+                    .copied()
+                    .max_by(|&a, &b| gap(a).total_cmp(&gap(b)).then(b.cmp(&a)))
             });
         colors[g] = Some(match pick {
             Some(k) => {
                 used[k] += 1;
+                least.take(k, &used);
                 palette[k]
             }
             None => fallback,
@@ -213,12 +236,51 @@ pub fn assign(
     colors
 }
 
+/// Least-used colours a group may take at once: enough that every hue of a
+/// generated palette is among them (its consecutive colours step round the
+/// hue circle by the golden angle), few enough that a group's choice stays
+/// cheap. Also the bound of that choice's search.
+const WINDOW: usize = 64;
+
+/// The palette colours used least so far, in palette order: the only ones a
+/// group may take, so no colour is used twice while another is unused, and
+/// past that colours are reused evenly.
+struct LeastUsed {
+    /// Palette indices used least so far.
+    at_level: std::collections::BTreeSet<usize>,
+}
+
+impl LeastUsed {
+    fn new(used: &[usize]) -> Self {
+        let level = used.iter().copied().min().unwrap_or(0);
+        Self {
+            at_level: (0..used.len()).filter(|&k| used[k] == level).collect(),
+        }
+    }
+
+    /// The first `n` least-used colours in palette order.
+    fn first(&self, n: usize) -> Vec<usize> {
+        self.at_level.iter().copied().take(n).collect()
+    }
+
+    /// Colour `k` was used once more (`used` already counts it). When every
+    /// colour of the level is taken the next level starts, which happens at
+    /// most once per palette length of groups.
+    fn take(&mut self, k: usize, used: &[usize]) {
+        self.at_level.remove(&k);
+        if self.at_level.is_empty() {
+            *self = Self::new(used);
+        }
+    }
+}
+
 /// Local search after the greedy pass: each group in an alike adjacent pair
-/// tries every swap with another group and every unused palette colour (any
-/// palette colour when the palette is shorter than the groups), and takes the
-/// first change that lowers the alike pairs among the edges it touches, or
-/// keeps their count and widens their closest pair. Sweeps until a sweep
-/// changes nothing (at most [`SWEEPS`]). Deterministic.
+/// tries swaps with other groups and unused palette colours (any palette
+/// colour when the palette is shorter than the groups), and takes the first
+/// change that lowers the alike pairs among the edges it touches, or keeps
+/// their count and widens their closest pair. Sweeps until a sweep changes
+/// nothing, at most [`SWEEPS`] sweeps and [`TRIALS`] trials in all.
+/// Deterministic.
 ///
 /// Every trial is judged on the edges of the one or two groups it changes,
 /// with each colour's OKLab computed once: judging trials on the whole map
@@ -247,9 +309,13 @@ fn improve(colors: &mut [Rgb], palette: &[Rgb], neighbors: &[Vec<usize>], fixed:
     let better = |after: (usize, f64), before: (usize, f64)| {
         after.0 < before.0 || (after.0 == before.0 && after.1 > before.1 + 1e-12)
     };
+    let mut trials = 0usize;
     for _sweep in 0..SWEEPS {
         let mut changed = false;
         for g in (0..colors.len()).filter(|&g| fixed[g].is_none()) {
+            if trials >= TRIALS {
+                return;
+            }
             let alike = neighbors[g]
                 .iter()
                 .any(|&n| distance_lab(lab[g], lab[n]) < ALIKE);
@@ -257,14 +323,26 @@ fn improve(colors: &mut [Rgb], palette: &[Rgb], neighbors: &[Vec<usize>], fixed:
                 continue;
             }
             // Swaps: the edge between g and h (if any) keeps its two colours.
-            let swap = (0..colors.len())
-                .filter(|&h| h != g && fixed[h].is_none() && colors[h] != colors[g])
-                .find(|&h| {
-                    let before = join(side(&lab, g, lab[g], h), side(&lab, h, lab[h], g));
-                    let after = join(side(&lab, g, lab[h], h), side(&lab, h, lab[g], g));
-                    better(after, before)
-                });
-            if let Some(h) = swap {
+            let swap = |trials: &mut usize, lab: &[[f64; 3]], colors: &[Rgb]| {
+                (0..colors.len())
+                    .filter(|&h| h != g && fixed[h].is_none() && colors[h] != colors[g])
+                    .take(TRIALS.saturating_sub(*trials))
+                    .find(|&h| {
+                        *trials += 1;
+                        let before = join(side(lab, g, lab[g], h), side(lab, h, lab[h], g));
+                        let after = join(side(lab, g, lab[h], h), side(lab, h, lab[g], g));
+                        better(after, before)
+                    })
+            };
+            // While every group has its own colour, a swap keeps it so and is
+            // tried first; past that, any colour may be reused, and a new one
+            // (a few thousand candidates, against every group for a swap) is.
+            let swapped = if unique {
+                swap(&mut trials, &lab, colors)
+            } else {
+                None
+            };
+            if let Some(h) = swapped {
                 colors.swap(g, h);
                 lab.swap(g, h);
                 changed = true;
@@ -274,7 +352,11 @@ fn improve(colors: &mut [Rgb], palette: &[Rgb], neighbors: &[Vec<usize>], fixed:
             let recolour = (0..palette.len())
                 .filter(|&k| palette[k] != colors[g])
                 .filter(|&k| !unique || used.get(&palette[k]).is_none_or(|&u| u == 0))
-                .find(|&k| better(side(&lab, g, palette_lab[k], usize::MAX), before));
+                .take(TRIALS.saturating_sub(trials))
+                .find(|&k| {
+                    trials += 1;
+                    better(side(&lab, g, palette_lab[k], usize::MAX), before)
+                });
             if let Some(k) = recolour {
                 if let Some(u) = used.get_mut(&colors[g]) {
                     *u -= 1;
@@ -283,6 +365,14 @@ fn improve(colors: &mut [Rgb], palette: &[Rgb], neighbors: &[Vec<usize>], fixed:
                 colors[g] = palette[k];
                 lab[g] = palette_lab[k];
                 changed = true;
+                continue;
+            }
+            if !unique {
+                if let Some(h) = swap(&mut trials, &lab, colors) {
+                    colors.swap(g, h);
+                    lab.swap(g, h);
+                    changed = true;
+                }
             }
         }
         if !changed {
@@ -293,6 +383,12 @@ fn improve(colors: &mut [Rgb], palette: &[Rgb], neighbors: &[Vec<usize>], fixed:
 
 /// Most sweeps of [`improve`]; each either changes a colour or ends the search.
 const SWEEPS: usize = 16;
+/// Most trials (a swap or a recolouring judged) of [`improve`] in all: its
+/// swaps try every other group, so without a bound a map of 100,000 groups
+/// with a few alike pairs would cost 10¹⁰ trials. Each trial reads two
+/// groups' edges, a few dozen distances; 4 million stay around a second in
+/// a debug build. What is still alike after it stays alike.
+const TRIALS: usize = 4_000_000;
 
 /// sRGB (8 bits per channel) to OKLab `[L, a, b]`.
 pub fn oklab(c: Rgb) -> [f64; 3] {
@@ -328,27 +424,42 @@ fn oklab_to_linear([l, a, b]: [f64; 3]) -> [f64; 3] {
 }
 
 /// The colour of OKLCH lightness `l`, chroma `c` and hue `h` (degrees), with
-/// the chroma reduced until sRGB can show it.
+/// the chroma reduced until sRGB can show it. A chroma beyond any sRGB
+/// colour's (about 0.32) or not finite counts as that most; the reduction
+/// runs in steps of `CHROMA_STEP`, so it ends after at most
+/// `MAX_CHROMA / CHROMA_STEP` steps with chroma 0 (a grey, always shown).
 pub fn from_oklch(l: f64, c: f64, h: f64) -> Rgb {
     let (sin, cos) = h.to_radians().sin_cos();
-    let mut chroma = c;
-    loop {
-        let rgb = oklab_to_linear([l, chroma * cos, chroma * sin]);
+    let mut chroma = if c.is_nan() {
+        0.0
+    } else {
+        c.clamp(0.0, MAX_CHROMA)
+    };
+    let enc = |v: f64| {
+        let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+        let s = if v <= 0.003_130_8 {
+            12.92 * v
+        } else {
+            1.055 * v.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0).round().clamp(0.0, 255.0) as u8
+    };
+    let steps = (MAX_CHROMA / CHROMA_STEP).ceil() as usize + 1;
+    let mut rgb = oklab_to_linear([l, 0.0, 0.0]);
+    for _ in 0..=steps {
+        rgb = oklab_to_linear([l, chroma * cos, chroma * sin]);
         if rgb.iter().all(|v| (-1e-9..=1.0 + 1e-9).contains(v)) || chroma <= 0.0 {
-            let enc = |v: f64| {
-                let v = v.clamp(0.0, 1.0);
-                let s = if v <= 0.003_130_8 {
-                    12.92 * v
-                } else {
-                    1.055 * v.powf(1.0 / 2.4) - 0.055
-                };
-                (s * 255.0).round().clamp(0.0, 255.0) as u8
-            };
-            return Rgb::new(enc(rgb[0]), enc(rgb[1]), enc(rgb[2]));
+            break;
         }
-        chroma = (chroma - 0.005).max(0.0);
+        chroma = (chroma - CHROMA_STEP).max(0.0);
     }
+    Rgb::new(enc(rgb[0]), enc(rgb[1]), enc(rgb[2]))
 }
+
+/// Largest OKLCH chroma [`from_oklch`] starts from: above every sRGB colour's.
+const MAX_CHROMA: f64 = 0.4;
+/// Chroma given up per step of [`from_oklch`]'s search for a showable colour.
+const CHROMA_STEP: f64 = 0.005;
 
 /// How much lightness counts when two groups' colours are compared: a
 /// group's children are shaded across about half the lightness range
@@ -483,6 +594,34 @@ pub fn child_shade(parent: Rgb, index: usize, count: usize) -> Rgb {
     lighten(parent, SHADE_DARKEST + t * (SHADE_LIGHTEST - SHADE_DARKEST))
 }
 
+/// The colour of child `index` of `count` siblings under a parent of colour
+/// `parent` whose main child (the heaviest) is `main`: as [`child_shade`],
+/// except that the main child keeps the parent's colour exactly, taking the
+/// lightness step nearest the parent's (the child that step was for takes
+/// the main child's). So the parent's colour, the one its legend swatch
+/// shows, is on the map too, on its largest cell (down the hierarchy, its
+/// heaviest leaf): issue 21, a legend swatch `#8cd17d` whose largest cell was
+/// `#65c151`.
+pub fn sibling_shade(parent: Rgb, index: usize, count: usize, main: usize) -> Rgb {
+    if count <= 1 || index == main {
+        return parent;
+    }
+    let index = index.min(count - 1);
+    let half = count.div_ceil(2);
+    let step = |i: usize| if i % 2 == 0 { i / 2 } else { half + i / 2 };
+    let offset =
+        |s: usize| SHADE_DARKEST + s as f64 / (count - 1) as f64 * (SHADE_LIGHTEST - SHADE_DARKEST);
+    let nearest = (0..count)
+        .min_by(|&a, &b| offset(a).abs().total_cmp(&offset(b).abs()))
+        .unwrap_or(0);
+    let own = if step(index) == nearest && main < count {
+        step(main)
+    } else {
+        step(index)
+    };
+    lighten(parent, offset(own))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -610,20 +749,7 @@ mod tests {
     #[test]
     fn thousands_of_groups_are_coloured_apart() {
         let (w, h) = (50, 40);
-        let mut adjacent = Vec::new();
-        for y in 0..h {
-            for x in 0..w {
-                let g = y * w + x;
-                for (dx, dy) in [(1, 0), (0, 1), (1, 1)] {
-                    if x + dx < w && y + dy < h {
-                        adjacent.push((g, (y + dy) * w + x + dx));
-                    }
-                }
-                if x > 0 && y + 1 < h {
-                    adjacent.push((g, (y + 1) * w + x - 1));
-                }
-            }
-        }
+        let adjacent = grid(w, h);
         let n = w * h;
         let palette = group_palette(PaletteKind::Tableau, n);
         let colors = assign(
@@ -643,6 +769,64 @@ mod tests {
         assert_eq!(unique.len(), n, "every group its own colour");
     }
 
+    /// A `w` × `h` grid of groups, each touching up to eight others.
+    fn grid(w: usize, h: usize) -> Vec<(usize, usize)> {
+        let mut adjacent = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                let g = y * w + x;
+                for (dx, dy) in [(1, 0), (0, 1), (1, 1)] {
+                    if x + dx < w && y + dy < h {
+                        adjacent.push((g, (y + dy) * w + x + dx));
+                    }
+                }
+                if x > 0 && y + 1 < h {
+                    adjacent.push((g, (y + 1) * w + x - 1));
+                }
+            }
+        }
+        adjacent
+    }
+
+    /// Issue 21, item 1: 2,371 top-level groups or more hung every build,
+    /// because the generated palette searched for a 2,371st distinct colour
+    /// that its rings do not have. Any count must be coloured, in bounded
+    /// time, with touching groups apart. Each count runs on its own thread
+    /// and the test waits for it with a generous bound (a hang fails the
+    /// test instead of stalling the suite).
+    #[test]
+    fn any_number_of_groups_is_coloured_in_bounded_time() {
+        for (w, h) in [(2_371, 1), (100, 50), (200, 100)] {
+            let n = w * h;
+            let (tx, rx) = std::sync::mpsc::channel();
+            std::thread::spawn(move || {
+                let adjacent = grid(w, h);
+                let palette = group_palette(PaletteKind::Tableau, n);
+                let colors = assign(
+                    &palette,
+                    &(0..n).collect::<Vec<_>>(),
+                    &adjacent,
+                    &vec![None; n],
+                );
+                let _ = tx.send((palette.len(), colors, adjacent));
+            });
+            let (len, colors, adjacent) = rx
+                .recv_timeout(std::time::Duration::from_secs(WAIT_SECS))
+                .unwrap_or_else(|_| panic!("{n} groups: no colours after {WAIT_SECS} s"));
+            assert!(len > 0 && len <= n, "{n} groups: palette of {len}");
+            assert_eq!(colors.len(), n);
+            let alike = adjacent
+                .iter()
+                .filter(|&&(a, b)| group_distance(colors[a], colors[b]) < ALIKE)
+                .count();
+            assert_eq!(alike, 0, "{n} groups: alike neighbours");
+        }
+    }
+
+    /// How long a test waits for work that must finish: far above what it
+    /// takes (well under a second), so only a hang reaches it.
+    const WAIT_SECS: u64 = 300;
+
     #[test]
     fn hsl_round_trip_is_lossless_on_the_palette() {
         for c in TABLEAU20.iter().chain([WHITE, Rgb::new(0, 0, 0)].iter()) {
@@ -658,6 +842,28 @@ mod tests {
         assert!(luminance(lighten(c, 0.3)) > luminance(c));
         assert!(luminance(lighten(c, -0.3)) < luminance(c));
         assert_eq!(lighten(c, f64::NAN), c);
+    }
+
+    /// Issue 21: the legend showed a group's colour that no cell had. The
+    /// main child keeps it; the siblings stay distinct from it and from each
+    /// other.
+    #[test]
+    fn the_main_child_keeps_its_parents_colour() {
+        let p = TABLEAU20[5];
+        for count in 2..12 {
+            for main in 0..count {
+                let shades: Vec<Rgb> = (0..count)
+                    .map(|i| sibling_shade(p, i, count, main))
+                    .collect();
+                assert_eq!(shades[main], p, "{count} children, main {main}");
+                for i in 0..count {
+                    for j in 0..i {
+                        assert_ne!(shades[i], shades[j], "{count}: {i} {j}");
+                    }
+                }
+            }
+        }
+        assert_eq!(sibling_shade(p, 0, 1, 0), p);
     }
 
     #[test]

@@ -12,11 +12,12 @@ use nptreemap_formats::Dataset;
 use super::labels::{display_name, place_groups, Placed};
 use super::legend::{legend, LegendItem};
 use super::overlay::{marks_svg, place_markers, place_tabs, tabs_svg, Link, OverlayStyle};
-use super::palette::Rgb;
+use super::palette::{luminance, Rgb, WHITE};
 use super::svg::{
     cell_colors, escape, leaf_labels, num, push_cells, push_labels, push_text, stroke_width,
     SvgStyle,
 };
+use crate::geom::Point;
 use crate::layout::{Computed, Layout};
 
 /// How the picture looks, beyond the geometry of its layout.
@@ -261,7 +262,9 @@ pub fn compose(
     if !tabs.is_empty() {
         out.push_str(&tabs_svg(dataset, &tabs, &colors, style.cells.stroke));
     }
-    push_group_labels(&mut out, &groups, &style.cells);
+    push_group_labels(&mut out, &groups, &style.cells, |name| {
+        name_fill(dataset, layout, &colors, name, style.cells.text_color)
+    });
     push_labels(&mut out, &labels, &style.cells);
     if !links.is_empty() {
         out.push_str(&marks_svg(layout, links, &markers, &style.overlay, u));
@@ -294,8 +297,14 @@ pub fn compose(
 /// Opacity of the group names: large and light, under the leaf labels.
 const GROUP_OPACITY: f64 = 0.3;
 
-/// Appends the group names in their own group, drawn without a halo.
-fn push_group_labels(out: &mut String, groups: &[Placed], style: &SvgStyle) {
+/// Appends the group names in their own group, drawn without a halo, each
+/// in the colour `fill` picks for it.
+fn push_group_labels(
+    out: &mut String,
+    groups: &[Placed],
+    style: &SvgStyle,
+    fill: impl Fn(&Placed) -> Rgb,
+) {
     if groups.is_empty() {
         return;
     }
@@ -306,9 +315,78 @@ fn push_group_labels(out: &mut String, groups: &[Placed], style: &SvgStyle) {
         num(GROUP_OPACITY)
     ));
     for g in groups {
-        push_text(out, g, false);
+        push_text(out, g, false, Some(fill(g)));
     }
     out.push_str("</g>\n");
+}
+
+/// Points sampled across a group name's box per side (across, down) to find
+/// the cells under it.
+const NAME_SAMPLES: (usize, usize) = (7, 3);
+
+/// The colour of a group name: `text` (the labels' colour) or white,
+/// whichever contrasts more (WCAG ratio) with the cells under the name, the
+/// mean luminance of its group's leaf cells at points across its box. Cells
+/// keep their colours in the page's dark mode, so the choice holds in every
+/// output; a fixed colour (white in dark mode, dark otherwise) was unreadable
+/// on light or dark cells (issue 21).
+fn name_fill(
+    dataset: &Dataset,
+    layout: &Layout,
+    colors: &[Option<Rgb>],
+    name: &Placed,
+    text: Rgb,
+) -> Rgb {
+    let color_of = |i: usize| colors.get(i).copied().flatten();
+    let mut leaves = Vec::new();
+    let mut stack = vec![name.node];
+    while let Some(i) = stack.pop() {
+        if i >= dataset.len() {
+            continue;
+        }
+        let children = &dataset.node(i).children;
+        if children.is_empty() {
+            leaves.push(i);
+        }
+        stack.extend(children.iter().copied());
+    }
+    let r = &name.rect;
+    let center = Point::new(0.5 * (r.x0 + r.x1), 0.5 * (r.y0 + r.y1));
+    let (sin, cos) = name.angle.to_radians().sin_cos();
+    let (nx, ny) = NAME_SAMPLES;
+    let mut sum = 0.0;
+    let mut found = 0usize;
+    for ix in 0..nx {
+        for iy in 0..ny {
+            let f = |k: usize, n: usize| (k as f64 + 0.5) / n as f64;
+            let d = Point::new(
+                r.x0 + f(ix, nx) * (r.x1 - r.x0),
+                r.y0 + f(iy, ny) * (r.y1 - r.y0),
+            ) - center;
+            let p = center + Point::new(d.x * cos - d.y * sin, d.x * sin + d.y * cos);
+            let under = leaves
+                .iter()
+                .find(|&&l| l < layout.cells.len() && layout.cells[l].polygon.contains(p));
+            if let Some(c) = under.and_then(|&l| color_of(l)) {
+                sum += luminance(c);
+                found += 1;
+            }
+        }
+    }
+    let under = if found > 0 {
+        sum / found as f64
+    } else {
+        luminance(color_of(name.node).unwrap_or(super::palette::TABLEAU10[0]))
+    };
+    let contrast = |c: Rgb| {
+        let l = luminance(c);
+        (l.max(under) + 0.05) / (l.min(under) + 0.05)
+    };
+    if contrast(WHITE) > contrast(text) {
+        WHITE
+    } else {
+        text
+    }
 }
 
 /// What the legend lists: a key for each glyph the picture draws, then the
@@ -498,6 +576,76 @@ mod tests {
         );
         assert_eq!(without.matches("class=\"np-tab\"").count(), 0);
         assert!(!without.contains("np-legend-tab"));
+    }
+
+    /// Issue 21: a group's legend swatch (`#8cd17d`) differed from its
+    /// largest cell's colour (`#65c151`). Every swatch's colour fills a cell
+    /// of its group: the heaviest one.
+    #[test]
+    fn every_legend_swatch_is_the_colour_of_its_groups_largest_cell() {
+        let (ds, layout) = sample();
+        let svg = compose(&ds, &layout, &[], &[], &Style::default());
+        let legend = &svg[svg.find("np-legend").expect("a legend")..];
+        let swatches: Vec<&str> = legend
+            .split("<rect ")
+            .skip(1)
+            .filter_map(|r| r.split("fill=\"").nth(1)?.split('"').next())
+            .collect();
+        assert_eq!(swatches.len(), 2, "{legend}");
+        let fill_of = |id: &str| {
+            let at = svg.find(&format!("data-id=\"{id}\"")).expect("cell");
+            svg[at..]
+                .split("fill=\"")
+                .nth(1)
+                .and_then(|f| f.split('"').next())
+                .expect("fill")
+                .to_owned()
+        };
+        // A's heaviest child is A1; B is a leaf with its own colour.
+        assert!(swatches.contains(&fill_of("A1").as_str()), "{swatches:?}");
+        assert!(swatches.contains(&fill_of("B").as_str()), "{swatches:?}");
+    }
+
+    /// Issue 21: in dark mode the group names were white whatever the cells
+    /// under them, unreadable on light cells (and the light mode's dark
+    /// names on dark cells). Each name takes the colour, dark or white, that
+    /// contrasts more with the cells under it, in every output.
+    #[test]
+    fn group_names_contrast_with_the_cells_under_them() {
+        use nptreemap_formats::{DatasetBuilder, NodeSpec};
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("root"));
+        for (g, color) in [("Light", "#f2efe6"), ("Dark", "#1d2b5c")] {
+            b.add(
+                NodeSpec::new(g)
+                    .parent("root")
+                    .color(Rgb::from_hex(color).expect("colour")),
+            );
+            for k in 0..3 {
+                b.add(
+                    NodeSpec::new(format!("{g}{k}"))
+                        .parent(g)
+                        .weight(10.0 + k as f64),
+                );
+            }
+        }
+        let ds = b.build().expect("valid");
+        let c = crate::layout::compute(&ds, &crate::layout::Request::default()).expect("layout");
+        let svg = picture(&c, &Style::default());
+        let names = &svg[svg.find("np-group-labels").expect("group names")..];
+        let names = &names[..names.find("</g>").expect("end")];
+        let fill_of = |name: &str| {
+            let at = names.find(&format!(">{name}<")).expect(name);
+            let start = names[..at].rfind("<text").expect("text");
+            names[start..at]
+                .split("fill=\"")
+                .nth(1)
+                .and_then(|f| f.split('"').next())
+                .map(str::to_owned)
+        };
+        let text = SvgStyle::default().text_color.to_string();
+        assert_eq!(fill_of("Light"), Some(text), "{names}");
+        assert_eq!(fill_of("Dark"), Some("#ffffff".to_owned()), "{names}");
     }
 
     #[test]

@@ -179,7 +179,8 @@ pub(crate) fn stroke_width(top: f64, depth: usize) -> f64 {
 /// colours, assigned heaviest first so that groups sharing an edge
 /// (`adjacent`, pairs of node indices) never look alike
 /// ([`palette::assign`]), and deeper nodes a lightness variation of their
-/// parent's colour ([`palette::child_shade`]). The root has none unless it is
+/// parent's colour, the heaviest child the parent's own
+/// ([`palette::sibling_shade`]). The root has none unless it is
 /// a leaf.
 pub(crate) fn cell_colors(
     dataset: &Dataset,
@@ -193,7 +194,15 @@ pub(crate) fn cell_colors(
         colors[root] = Some(own(root).unwrap_or(palette::TABLEAU10[0]));
     }
     let groups = &dataset.node(root).children;
-    let position = |i: usize| groups.iter().position(|&g| g == i);
+    // Group position per node index: a search through the groups per pair
+    // cost a flat map of 20,000 groups 10⁹ steps.
+    let mut group_of = vec![None; dataset.len()];
+    for (k, &g) in groups.iter().enumerate() {
+        if g < group_of.len() {
+            group_of[g] = Some(k);
+        }
+    }
+    let position = |i: usize| group_of.get(i).copied().flatten();
     let mut order: Vec<usize> = (0..groups.len()).collect();
     order.sort_by(|&a, &b| {
         let (va, vb) = (dataset.node(groups[a]).value, dataset.node(groups[b]).value);
@@ -215,6 +224,14 @@ pub(crate) fn cell_colors(
     for (p, parent) in dataset.nodes().iter().enumerate() {
         let n = parent.children.len();
         let base = colors[p].unwrap_or(palette::TABLEAU10[0]);
+        // The heaviest child (the first on ties) keeps the parent's colour,
+        // so the legend's swatch is the colour of a cell.
+        let main = (0..n)
+            .max_by(|&a, &b| {
+                let value = |k: usize| dataset.node(parent.children[k]).value;
+                value(a).total_cmp(&value(b)).then(b.cmp(&a))
+            })
+            .unwrap_or(0);
         for (k, &c) in parent.children.iter().enumerate() {
             if c >= colors.len() {
                 continue;
@@ -222,7 +239,7 @@ pub(crate) fn cell_colors(
             let derived = if p == root {
                 top[k]
             } else {
-                palette::child_shade(base, k, n)
+                palette::sibling_shade(base, k, n, main)
             };
             colors[c] = Some(own(c).unwrap_or(derived));
         }
@@ -282,18 +299,20 @@ pub(crate) fn push_labels(out: &mut String, labels: &[Placed], style: &SvgStyle)
         style.stroke,
     ));
     for p in labels {
-        push_text(out, p, true);
+        push_text(out, p, true, None);
     }
     out.push_str("</g>\n");
 }
 
 /// One placed label as a `<text>`: a single line inline, several as
 /// `<tspan>`s with their own position and size; `halo` adds the halo's
-/// stroke width; a turned label rotates about its box's centre.
-pub(crate) fn push_text(out: &mut String, p: &Placed, halo: bool) {
+/// stroke width, `fill` its own colour (else its group's); a turned label
+/// rotates about its box's centre.
+pub(crate) fn push_text(out: &mut String, p: &Placed, halo: bool, fill: Option<Rgb>) {
     let Some(first) = p.lines.first() else {
         return;
     };
+    let fill = fill.map_or_else(String::new, |c| format!(" fill=\"{c}\""));
     let halo_width = |size: f64| {
         if halo {
             format!(" stroke-width=\"{}\"", num(HALO_EM * size))
@@ -313,7 +332,7 @@ pub(crate) fn push_text(out: &mut String, p: &Placed, halo: bool) {
     };
     if p.lines.len() == 1 {
         out.push_str(&format!(
-            "<text x=\"{}\" y=\"{}\" font-size=\"{}\"{}{turn}>{}</text>\n",
+            "<text x=\"{}\" y=\"{}\" font-size=\"{}\"{fill}{}{turn}>{}</text>\n",
             num(first.x),
             num(first.baseline),
             num(first.size),
@@ -323,7 +342,7 @@ pub(crate) fn push_text(out: &mut String, p: &Placed, halo: bool) {
         return;
     }
     out.push_str(&format!(
-        "<text font-size=\"{}\"{}{turn}>",
+        "<text font-size=\"{}\"{fill}{}{turn}>",
         num(first.size),
         halo_width(first.size)
     ));
@@ -472,8 +491,10 @@ mod tests {
         // B has its own colour in the sample.
         assert_eq!(colors[idx("B")], Rgb::from_hex("#ff0000"));
         let a = palette::TABLEAU10[0];
-        assert_eq!(colors[idx("A1")], Some(palette::child_shade(a, 0, 3)));
-        assert_eq!(colors[idx("A2")], Some(palette::child_shade(a, 1, 3)));
+        // A1 is A's heaviest child: A's own colour.
+        assert_eq!(colors[idx("A1")], Some(a));
+        assert_eq!(colors[idx("A2")], Some(palette::sibling_shade(a, 1, 3, 0)));
+        assert_ne!(colors[idx("A2")], Some(a));
         let text = svg(&dataset, &layout, &SvgStyle::default());
         assert!(text.contains("fill=\"#ff0000\""));
     }

@@ -277,3 +277,157 @@ fn real_debian_packages_at_five_seeds() {
         support::assert_area_error(&report, 0.01);
     }
 }
+
+/// How long a battery case may take before it counts as a hang: far above
+/// what any takes here (seconds), so only a loop without end reaches it.
+const HANG_SECS: u64 = 600;
+
+/// Writes a flat border list of `rows` nodes (weights 1 to 13) with a pairs
+/// file holding only its header, and a config drawing it to `outputs`.
+fn flat_border_list(dir: &Path, rows: usize, outputs: &[&str]) -> std::path::PathBuf {
+    let mut nodes = String::from("id,weight\n");
+    for i in 0..rows {
+        nodes.push_str(&format!("n{i},{}\n", 1 + (i * 7) % 13));
+    }
+    std::fs::write(dir.join("nodes.csv"), nodes).expect("write nodes");
+    std::fs::write(dir.join("pairs.csv"), "a,b\n").expect("write pairs");
+    let config = dir.join("nptreemap.yaml");
+    std::fs::write(
+        &config,
+        format!(
+            "datasets:\n  - name: flat\n    format: border-list\n    files: {{nodes: nodes.csv, pairs: pairs.csv}}\n    fields: {{id: id, weight: weight}}\n    outputs: [{}]\n",
+            outputs.join(", ")
+        ),
+    )
+    .expect("write config");
+    config
+}
+
+/// Issue 21, item 1: 2,371 or more top-level groups hung every build (the
+/// generated palette searched for a colour its rings do not have). A flat
+/// table of 2,371 rows and a root with 2,400 groups of two leaves are drawn,
+/// within a generous bound, with touching groups in distinct colours.
+#[test]
+fn thousands_of_top_level_groups() {
+    let dir = support::temp_dir("battery_groups");
+    let config = flat_border_list(&dir, 2_371, &["out/flat.svg", "out/flat.png"]);
+    let run = support::output_within(support::bin().arg("build").arg(&config), HANG_SECS);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let svg = std::fs::read_to_string(dir.join("out/flat.svg")).expect("svg");
+    assert_eq!(svg.matches("<path data-id=").count(), 2_371);
+    let children: Vec<Value> = (0..2_400)
+        .map(|g| {
+            json!({"id": format!("g{g}"), "children": [
+                {"id": format!("g{g}a"), "value": 1 + g % 5},
+                {"id": format!("g{g}b"), "value": 2},
+            ]})
+        })
+        .collect();
+    let input = dir.join("groups.json");
+    let root = json!({"id": "root", "children": children});
+    std::fs::write(&input, root.to_string()).expect("write input");
+    let out = dir.join("groups.svg");
+    let run = support::output_within(
+        support::bin()
+            .arg("layout")
+            .arg(&input)
+            .arg("--out")
+            .arg(&out),
+        HANG_SECS,
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(&out)
+            .expect("svg")
+            .matches("<path data-id=")
+            .count(),
+        2_400 * 3
+    );
+}
+
+/// Issue 21, item 8 (issue 23, item 3): a flat border list without pairs
+/// has nothing to preserve; under the neighbourhood method 100,000 rows never
+/// finished. It is now the plain layout, byte for byte. 10,000 rows here (the
+/// suite runs unoptimised); 100,000 are measured by
+/// `benches/border_no_pairs.sh` (release build).
+#[test]
+fn a_flat_border_list_without_pairs_is_the_plain_layout() {
+    let dir = support::temp_dir("battery_no_pairs");
+    let config = flat_border_list(&dir, 10_000, &["out/flat.json"]);
+    let layout = |method: &str| {
+        let out = dir.join(format!("{method}.json"));
+        let run = support::output_within(
+            support::bin()
+                .args(["layout", "--config"])
+                .arg(&config)
+                .args(["--method", method, "--out"])
+                .arg(&out),
+            HANG_SECS,
+        );
+        assert!(
+            run.status.success(),
+            "{method}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        out
+    };
+    let (neighbor, plain) = (layout("neighbor"), layout("plain"));
+    assert!(
+        std::fs::read(&neighbor).expect("neighbor") == std::fs::read(&plain).expect("plain"),
+        "nothing to preserve: the neighbourhood method's layout is the plain one"
+    );
+    let report = support::check_layout(&neighbor);
+    support::assert_area_error(&report, 0.01);
+}
+
+/// Issue 21, item 8: embedding vectors scaled by 1e-200 lost every
+/// constraint (their squared norms underflowed and they counted as zero
+/// vectors). Cosine does not depend on the scale: the layout of the scaled
+/// vectors has the constraints of the unscaled ones, and is checker-clean.
+#[test]
+fn vectors_of_1e_minus_200() {
+    let root = clustered(&[40, 30, 30], 8, 17);
+    let scaled = |factor: f64| {
+        let mut r = root.clone();
+        for group in r["children"].as_array_mut().expect("groups") {
+            for leaf in group["children"].as_array_mut().expect("leaves") {
+                let v: Vec<f64> = leaf["embeddings"]
+                    .as_array()
+                    .expect("vector")
+                    .iter()
+                    .map(|x| x.as_f64().expect("number") * factor)
+                    .collect();
+                leaf["embeddings"] = json!(v);
+            }
+        }
+        Value::Object(r)
+    };
+    let dir = support::temp_dir("battery_tiny_vectors");
+    let constraints = |name: &str, root: Value| {
+        let input = dir.join(format!("{name}.json"));
+        std::fs::write(&input, root.to_string()).expect("write input");
+        let out = dir.join(format!("{name}_layout.json"));
+        support::layout(&input, &[&out], &["--seed", "1"]);
+        let report = support::check_layout(&out);
+        support::assert_area_error(&report, 0.01);
+        let doc: Value =
+            serde_json::from_slice(&std::fs::read(&out).expect("layout")).expect("json");
+        doc["constraints"]
+            .as_array()
+            .expect("constraints")
+            .iter()
+            .map(|c| (c["a"].to_string(), c["b"].to_string()))
+            .collect::<Vec<_>>()
+    };
+    let reference = constraints("unscaled", scaled(1.0));
+    assert!(reference.len() > 50, "{} constraints", reference.len());
+    assert_eq!(constraints("tiny", scaled(1e-200)), reference);
+}

@@ -1,7 +1,9 @@
 //! The conventions of a Rust CLI: `init` on the examples' tables with their
 //! configs deleted (the written config builds), `build --check` (exit 0 when
 //! every output is current, 1 naming the stale ones, nothing written),
-//! `completions`, the man page, `-q`, and the config found upward.
+//! `completions` (enum flags complete their values), the man pages (one per
+//! subcommand; EXIT STATUS, ENVIRONMENT, FILES), `config --defaults`, `-q`,
+//! log lines without colour codes off a terminal, and the config found upward.
 
 use std::path::Path;
 use std::process::Output;
@@ -16,7 +18,8 @@ fn run_in(dir: &Path, args: &[&str]) -> Output {
         .expect("run nptreemap")
 }
 
-fn ok(out: &Output) -> String {
+/// Asserts success; returns stdout.
+pub(crate) fn ok(out: &Output) -> String {
     assert!(
         out.status.success(),
         "{}",
@@ -43,14 +46,21 @@ fn init_writes_a_config_that_builds_for_three_examples() {
                 "id: iso",
                 "label: name",
                 "weight: population",
-                "groups: [continent]",
+                "groups:",
+                "- continent",
             ][..],
         ),
         (
             "foods",
             &["foods.csv", "vectors.tsv"][..],
             "embedding-matrix",
-            &["id: id", "label: label", "weight: kcal", "groups: [group]"][..],
+            &[
+                "id: id",
+                "label: label",
+                "weight: kcal",
+                "groups:",
+                "- group",
+            ][..],
         ),
         (
             "stocks",
@@ -60,7 +70,8 @@ fn init_writes_a_config_that_builds_for_three_examples() {
                 "id: id",
                 "label: name",
                 "weight: market_cap",
-                "groups: [sector]",
+                "groups:",
+                "- sector",
             ][..],
         ),
         (
@@ -70,7 +81,8 @@ fn init_writes_a_config_that_builds_for_three_examples() {
             &[
                 "label: title",
                 "weight: runtime",
-                "groups: [director]",
+                "groups:",
+                "- director",
                 "genres: genres",
             ][..],
         ),
@@ -286,7 +298,7 @@ fn the_first_build_of_watch_shows_a_progress_bar_on_a_terminal() {
     let bin = env!("CARGO_BIN_EXE_nptreemap");
     // `timeout` ends the daemon (SIGTERM: exit 0) once the first build is done.
     let mut child = on_a_terminal_now(&format!(
-        "timeout -s TERM 60 {bin} watch --cold {}",
+        "timeout -s TERM 300 {bin} watch --cold {}",
         config.display()
     ))
     .stdout(std::process::Stdio::piped())
@@ -309,5 +321,237 @@ fn the_first_build_of_watch_shows_a_progress_bar_on_a_terminal() {
     assert!(
         before.contains("level 1/1"),
         "no bar before the first status line: {seen:?}"
+    );
+}
+
+/// The names of the `.SH` sections of a man page.
+fn sections(man: &str) -> Vec<String> {
+    man.lines()
+        .filter_map(|l| l.strip_prefix(".SH "))
+        .map(|s| s.trim().trim_matches('"').to_string())
+        .collect()
+}
+
+/// The text of section `name` of a man page, with roff's `\-` read as `-`
+/// and its font changes (`\fB`, `\fI`, `\fR`) left out.
+fn section(man: &str, name: &str) -> String {
+    let mut out = String::new();
+    let mut inside = false;
+    for line in man.lines() {
+        if let Some(s) = line.strip_prefix(".SH ") {
+            inside = s.trim().trim_matches('"') == name;
+            continue;
+        }
+        if inside {
+            let plain = ["\\fB", "\\fI", "\\fR"]
+                .iter()
+                .fold(line.replace("\\-", "-"), |l, font| l.replace(font, ""));
+            out.push_str(&plain);
+            out.push('\n');
+        }
+    }
+    out
+}
+
+/// Every environment variable the binary's code reads (`env::var("NAME")` or
+/// `env::var_os("NAME")` in `src/`).
+fn variables_read() -> std::collections::BTreeSet<String> {
+    fn walk(dir: &Path, out: &mut std::collections::BTreeSet<String>) {
+        for entry in std::fs::read_dir(dir).expect("read src") {
+            let path = entry.expect("entry").path();
+            if path.is_dir() {
+                walk(&path, out);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                let text = std::fs::read_to_string(&path).expect("read");
+                for marker in ["env::var(\"", "env::var_os(\""] {
+                    for (at, _) in text.match_indices(marker) {
+                        let rest = &text[at + marker.len()..];
+                        let name = &rest[..rest.find('"').expect("closing quote")];
+                        out.insert(name.to_string());
+                    }
+                }
+            }
+        }
+    }
+    let mut out = std::collections::BTreeSet::new();
+    walk(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"), &mut out);
+    out
+}
+
+#[test]
+fn the_man_page_documents_exit_status_environment_and_files() {
+    let dir = support::temp_dir("man_sections");
+    let man = ok(&run_in(&dir, &["man"]));
+    let names = sections(&man);
+    for wanted in ["EXIT STATUS", "ENVIRONMENT", "FILES"] {
+        assert!(
+            names.iter().any(|n| n == wanted),
+            "no {wanted} in {names:?}"
+        );
+    }
+    let exit = section(&man, "EXIT STATUS");
+    for code in ["0", "1", "2"] {
+        assert!(
+            exit.lines().any(|l| l.trim() == code),
+            "exit code {code} not described:\n{exit}"
+        );
+    }
+    let environment = section(&man, "ENVIRONMENT");
+    let mut wanted = variables_read();
+    assert!(wanted.contains("NPTREEMAP_PROGRESS_AFTER_MS"), "{wanted:?}");
+    wanted.extend(["RUST_LOG".to_string(), "NO_COLOR".to_string()]);
+    for name in &wanted {
+        assert!(
+            environment.contains(name.as_str()),
+            "{name} missing:\n{environment}"
+        );
+    }
+    let files = section(&man, "FILES");
+    for name in ["nptreemap.yaml", ".nptreemap/", "state_dir"] {
+        assert!(files.contains(name), "{name} missing:\n{files}");
+    }
+}
+
+#[test]
+fn every_man_page_the_main_page_lists_can_be_generated() {
+    let dir = support::temp_dir("man_pages");
+    let man = ok(&run_in(&dir, &["man"]));
+    let text = man.replace("\\-", "-");
+    let listed: Vec<&str> = text
+        .match_indices("nptreemap-")
+        .filter_map(|(at, _)| {
+            let rest = &text[at + "nptreemap-".len()..];
+            let end = rest.find("(1)")?;
+            let name = &rest[..end];
+            name.chars().all(|c| c.is_ascii_lowercase()).then_some(name)
+        })
+        .collect();
+    assert!(
+        listed.contains(&"build") && listed.contains(&"init"),
+        "{listed:?}"
+    );
+    for sub in listed {
+        let page = ok(&run_in(&dir, &["man", sub]));
+        assert!(
+            page.contains(&format!(".TH nptreemap-{sub} 1")),
+            "nptreemap man {sub}:\n{page}"
+        );
+        assert!(sections(&page).iter().any(|s| s == "SYNOPSIS"), "{page}");
+    }
+    let unknown = run_in(&dir, &["man", "biuld"]);
+    assert_eq!(unknown.status.code(), Some(2));
+}
+
+#[test]
+fn completions_offer_the_values_of_enum_flags() {
+    let dir = support::temp_dir("completions_values");
+    let bash = ok(&run_in(&dir, &["completions", "bash"]));
+    // In bash, a flag's case line is followed by what it completes: a word
+    // list (compgen -W) for values, file names (compgen -f) otherwise.
+    let completes = |flag: &str| -> Vec<String> {
+        let lines: Vec<&str> = bash.lines().collect();
+        lines
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.trim() == format!("{flag})"))
+            .map(|(i, _)| lines[i + 1].trim().to_string())
+            .collect()
+    };
+    for (flag, values) in [
+        ("--outline", "rect circle ngon"),
+        ("--similarity", "cosine"),
+        ("--method", "neighbor"),
+    ] {
+        let found = completes(flag);
+        assert!(!found.is_empty(), "{flag} not in the bash script");
+        for line in &found {
+            assert!(
+                line.contains("compgen -W") && line.contains(values),
+                "{flag} completes {line:?}"
+            );
+        }
+    }
+    // `man`'s SUBCOMMAND: the subcommands' names.
+    let man = bash
+        .split("nptreemap__subcmd__man)")
+        .nth(1)
+        .and_then(|rest| rest.lines().find(|l| l.trim().starts_with("opts=")))
+        .expect("man's opts line");
+    assert!(man.contains("build watch init"), "{man}");
+    // eval's --method also takes `all`.
+    assert!(
+        completes("--method").iter().any(|l| l.contains(" all")),
+        "{:?}",
+        completes("--method")
+    );
+}
+
+#[test]
+fn config_defaults_prints_the_documented_defaults() {
+    let dir = support::temp_dir("config_defaults");
+    let printed = ok(&run_in(&dir, &["config", "--defaults"]));
+    let file =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/default.yaml"))
+            .expect("config/default.yaml");
+    assert_eq!(printed, file);
+    for key in ["path_separator:", "root_label:"] {
+        assert!(
+            file.lines()
+                .any(|l| l.trim_start_matches(['#', ' ']).starts_with(key)),
+            "{key} is not documented in config/default.yaml"
+        );
+    }
+    // init points to it, not to a file a `cargo install` user does not have.
+    std::fs::write(dir.join("t.csv"), "id,size,tags\na,1,x|y\nb,2,y|z\nc,3,x\n").expect("t");
+    ok(&run_in(&dir, &["init", "t.csv"]));
+    let yaml = std::fs::read_to_string(dir.join("nptreemap.yaml")).expect("written");
+    assert!(yaml.contains("nptreemap config --defaults"), "{yaml}");
+    assert!(!yaml.contains("config/default.yaml"), "{yaml}");
+}
+
+/// Lays out Flare with one iteration per diagram: a WARN log line.
+fn warning_layout(dir: &Path) -> String {
+    format!(
+        "{} layout {} --method plain --max-iterations 1 --out {}",
+        env!("CARGO_BIN_EXE_nptreemap"),
+        support::paper_data().join("flare.json").display(),
+        dir.join("x.json").display()
+    )
+}
+
+#[test]
+fn log_lines_carry_colour_only_on_a_terminal_without_no_color() {
+    let dir = support::temp_dir("log_colour");
+    let command = warning_layout(&dir);
+    let warn_line = |text: &str| -> String {
+        text.lines()
+            .find(|l| l.contains("WARN"))
+            .unwrap_or_else(|| panic!("no WARN line in {text:?}"))
+            .to_string()
+    };
+    // stderr to a pipe: plain text.
+    let piped = std::process::Command::new("sh")
+        .args(["-c", &command])
+        .env_remove("NO_COLOR")
+        .output()
+        .expect("run");
+    assert!(piped.status.success());
+    let line = warn_line(&String::from_utf8_lossy(&piped.stderr));
+    assert!(!line.contains('\u{1b}'), "colour codes in a pipe: {line:?}");
+    // A terminal: colour, unless NO_COLOR is set (to anything non-empty).
+    let on_tty = |no_color: Option<&str>| {
+        let mut c = on_a_terminal(&command);
+        c.env_remove("NO_COLOR");
+        if let Some(v) = no_color {
+            c.env("NO_COLOR", v);
+        }
+        let out = c.output().expect("run script(1)");
+        warn_line(&String::from_utf8_lossy(&out.stdout))
+    };
+    assert!(on_tty(None).contains('\u{1b}'), "no colour on a terminal");
+    let plain = on_tty(Some("1"));
+    assert!(
+        !plain.contains('\u{1b}'),
+        "colour despite NO_COLOR: {plain:?}"
     );
 }

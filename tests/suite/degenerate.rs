@@ -3,6 +3,7 @@
 //! 1:10^6, coincident initial sites, a single leaf. Every test ends with
 //! `sanity_check`.
 
+use crate::support;
 use nptreemap::geom::{ConvexPolygon, Point};
 use nptreemap::layout::map::{MapSettings, MapSimulation};
 use nptreemap::layout::{layout, Outline, Params};
@@ -165,4 +166,37 @@ fn bad_parameters_are_errors_not_panics() {
     ] {
         assert!(layout(&ds, &params).is_err());
     }
+}
+
+/// Issue 21, item 8: a stored layout whose power weights were 1e308 gave a
+/// degenerate picture (continents of zero area, area error 0.65) for two
+/// builds, with no warning (a debug build stopped on its sanity check). The
+/// stored layout is refused with a warning naming the file and the field,
+/// the layout starts cold, and its areas are right.
+#[test]
+fn a_stored_layout_with_absurd_power_weights_is_refused_with_a_warning() {
+    let config = support::example("countries", "absurd_state");
+    let dir = config.parent().expect("folder").to_path_buf();
+    support::build(&config);
+    let state = dir.join("out/.nptreemap/countries.layout.json");
+    let mut doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&state).expect("stored layout")).expect("json");
+    for node in doc["nodes"].as_array_mut().expect("nodes") {
+        node["power_weight"] = serde_json::json!(1e308);
+    }
+    std::fs::write(&state, doc.to_string()).expect("write state");
+    // A data edit, so the layout is not simply taken over.
+    let nodes = dir.join("countries.csv");
+    let text = std::fs::read_to_string(&nodes).expect("countries.csv");
+    let edited = text.replacen("AU,Australia,24992369", "AU,Australia,34992369", 1);
+    assert_ne!(edited, text, "the edit applies");
+    std::fs::write(&nodes, edited).expect("write countries.csv");
+    let out = support::build(&config);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("countries.layout.json") && stderr.contains("power_weight"),
+        "the warning names the file and the field: {stderr}"
+    );
+    let report = support::check_layout(&dir.join("out/countries.json"));
+    support::assert_area_error(&report, 0.01);
 }

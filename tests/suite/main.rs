@@ -16,6 +16,7 @@ mod determinism;
 mod escaping;
 mod exec;
 mod fuzz;
+mod init;
 mod labels;
 mod legibility;
 mod neighborhood;

@@ -325,3 +325,34 @@ fn datasets_with_non_ascii_names_keep_separate_state() {
         "a rebuild without changes wrote:\n{stdout}"
     );
 }
+
+/// Issue 21 item 9: output names of 240 to 255 bytes are valid names and
+/// are written (the temp file's name used to add to them: `File name too
+/// long`), in `build` and again unchanged, leaving no temp file behind.
+/// (That stale temp files of such names are recognised is a unit test of
+/// `store.rs`.)
+#[test]
+fn outputs_with_the_longest_names_are_written() {
+    for len in [240, 250, 255] {
+        let name = format!("{}.svg", "n".repeat(len - 4));
+        let dir = folder(
+            &format!("long_name_{len}"),
+            &[&format!("{{path: out/{name}}}")],
+        );
+        let out = build(&dir);
+        assert!(
+            out.status.success(),
+            "{len}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let svg = std::fs::read_to_string(dir.join("out").join(&name)).expect("svg");
+        assert!(svg.ends_with("</svg>\n"), "{len}");
+        // Again, with nothing to change; and no temp file is left over.
+        assert!(build(&dir).status.success(), "{len}: second build");
+        let left: Vec<String> = files_in(&dir.join("out"))
+            .into_iter()
+            .filter(|n| n.ends_with(".tmp"))
+            .collect();
+        assert!(left.is_empty(), "{len}: {left:?}");
+    }
+}

@@ -166,9 +166,17 @@ pub(crate) fn generate(dir: &Path, leaves: usize, depth: usize, seed: u64) -> Pa
     path
 }
 
-/// Runs `cmd` to completion, or kills it after `secs` seconds and fails the
-/// test: a command that hangs (a FIFO read, a runaway layout) must not hang
-/// the suite.
+/// The shortest bound a test waits for an event (a command's end, a status
+/// line) before it fails: the suite runs on loaded machines (a debug build
+/// at load 8 takes many times its usual time), so a bound only tells a hang
+/// from slowness when it is generous; tests never assert how fast
+/// something happened.
+pub(crate) const WAIT: std::time::Duration = std::time::Duration::from_secs(120);
+
+/// Runs `cmd` to completion, or kills it and fails the test after `secs`
+/// seconds, or [`WAIT`] when that is longer: a command that hangs (a FIFO
+/// read, a runaway layout) must not hang the suite, and one that is only
+/// slow on a busy machine must not fail it.
 pub(crate) fn output_within(cmd: &mut Command, secs: u64) -> Output {
     use std::io::Read;
     let mut child = cmd
@@ -189,7 +197,8 @@ pub(crate) fn output_within(cmd: &mut Command, secs: u64) -> Output {
         let _ = err_pipe.read_to_end(&mut v);
         v
     });
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(secs);
+    let bound = std::time::Duration::from_secs(secs).max(WAIT);
+    let deadline = std::time::Instant::now() + bound;
     let status = loop {
         if let Some(status) = child.try_wait().expect("wait") {
             break status;
@@ -197,7 +206,7 @@ pub(crate) fn output_within(cmd: &mut Command, secs: u64) -> Output {
         if std::time::Instant::now() > deadline {
             let _ = child.kill();
             let _ = child.wait();
-            panic!("{cmd:?} did not finish within {secs} s");
+            panic!("{cmd:?} did not finish within {bound:?}");
         }
         std::thread::sleep(std::time::Duration::from_millis(20));
     };

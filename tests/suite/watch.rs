@@ -69,14 +69,15 @@ const CONFIG: &str = "datasets:
 ";
 
 /// The running daemon: its status lines arrive on a channel; killed on drop.
-struct Daemon {
-    child: Child,
+/// (`exec` drives it too.)
+pub(crate) struct Daemon {
+    pub(crate) child: Child,
     lines: Receiver<String>,
     seen: Vec<String>,
 }
 
 impl Daemon {
-    fn start(config: &Path) -> Self {
+    pub(crate) fn start(config: &Path) -> Self {
         let mut child = support::bin()
             .arg("watch")
             .arg(config)
@@ -102,13 +103,15 @@ impl Daemon {
         }
     }
 
-    /// Waits for the next status line containing every one of `parts`.
-    fn expect(&mut self, parts: &[&str]) -> String {
-        let deadline = Instant::now() + Duration::from_secs(120);
+    /// Waits for the next status line containing every one of `parts`, and
+    /// returns it without its time of day (every line must start with one).
+    pub(crate) fn expect(&mut self, parts: &[&str]) -> String {
+        let deadline = Instant::now() + WAIT;
         loop {
             let left = deadline.saturating_duration_since(Instant::now());
             match self.lines.recv_timeout(left) {
                 Ok(line) => {
+                    let line = unstamped(&line);
                     self.seen.push(line.clone());
                     if parts.iter().all(|p| line.contains(p)) {
                         return line;
@@ -126,11 +129,32 @@ impl Daemon {
     fn drain(&mut self, wait: Duration) -> Vec<String> {
         let mut got = Vec::new();
         while let Ok(line) = self.lines.recv_timeout(wait) {
+            let line = unstamped(&line);
             self.seen.push(line.clone());
             got.push(line);
         }
         got
     }
+}
+
+/// How long a test waits for an event of the daemon (a status line, an
+/// exit, a file) before it fails.
+const WAIT: Duration = support::WAIT;
+
+/// A status line without its time of day (`HH:MM:SS `, issue 22 item 4),
+/// which every line must start with.
+fn unstamped(line: &str) -> String {
+    let b = line.as_bytes();
+    let stamped = b.len() > 9
+        && [0, 1, 3, 4, 6, 7].iter().all(|&i| b[i].is_ascii_digit())
+        && b[2] == b':'
+        && b[5] == b':'
+        && b[8] == b' ';
+    assert!(stamped, "a status line without its time of day: {line:?}");
+    let (h, m, s) = (&line[0..2], &line[3..5], &line[6..8]);
+    let ok = |v: &str, max: u32| v.parse::<u32>().is_ok_and(|v| v <= max);
+    assert!(ok(h, 23) && ok(m, 59) && ok(s, 60), "not a time: {line:?}");
+    line[9..].to_string()
 }
 
 impl Drop for Daemon {
@@ -405,7 +429,7 @@ fn a_burst_of_edits_ends_in_the_last_data() {
     }
     // Wait until a rebuild has seen the final bytes: the daemon goes quiet
     // once its JSON holds them.
-    let deadline = Instant::now() + Duration::from_secs(120);
+    let deadline = Instant::now() + WAIT;
     let mut want = leaves.clone();
     want.sort_by(|a, b| a.0.cmp(&b.0));
     while !same_weights(&weights(&layout_json(&out)), &want) {
@@ -480,10 +504,13 @@ fn a_recreated_folder_is_watched_again() {
     daemon.expect(&["config: error"]);
     std::fs::create_dir_all(&conf).expect("mkdir conf");
     std::fs::write(&config, format!("render: {{legend: false}}\n{config_text}")).expect("config");
-    daemon.expect(&["grid: config: render"]);
+    // While the folder was gone, its `../data` named no folder either: the
+    // dataset may have failed meanwhile (so "ok again, ..."), depending on
+    // when the daemon looked.
+    daemon.expect(&["grid: ", "config: render"]);
     // Watched again: one more config edit is seen.
     std::fs::write(&config, format!("render: {{legend: true}}\n{config_text}")).expect("config");
-    daemon.expect(&["grid: config: render"]);
+    daemon.expect(&["grid: ", "config: render"]);
     signal(&daemon.child, "TERM");
     assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
 }
@@ -555,42 +582,58 @@ fn the_systemd_unit_matches_the_daemon() {
         .any(|l| l.starts_with("ExecStart=") && l.contains("nptreemap watch")));
 }
 
-/// A dataset slow enough to be caught mid-layout: 1,500 leaves by the
-/// neighbourhood method (seconds in the test build).
-fn slow_setup(name: &str) -> (PathBuf, PathBuf) {
-    let dir = support::temp_dir(name);
-    let (n, g) = (1500, 30);
-    let mut nodes = String::from("id,weight,group\n");
-    let mut pairs = String::from("a,b\n");
-    for i in 0..n {
-        nodes.push_str(&format!("n{i},{},g{}\n", 1 + i % 17, i % g));
-        pairs.push_str(&format!("n{i},n{}\n", (i + g) % n));
+/// An adapter command (YAML flow list) that reads its one input, then waits
+/// until the file `gate` appears in the config's folder (or about ten
+/// minutes have passed) before it prints what it read: a `format: exec`
+/// dataset as slow as the test wants. It says it started (and read) by
+/// making the file `started-NAME`.
+fn gated_adapter(name: &str) -> String {
+    format!(
+        "[sh, -c, 'data=$(cat \"$1\"); touch started-{name}; i=0; while [ ! -e gate ] && [ $i -lt 6000 ]; do sleep 0.1; i=$((i+1)); done; printf \"%s\\n\" \"$data\"', adapter]"
+    )
+}
+
+/// Waits (with the suite's generous bound) until `path` exists.
+fn wait_for_file(path: &Path) {
+    let deadline = Instant::now() + WAIT;
+    while !path.exists() {
+        assert!(
+            Instant::now() < deadline,
+            "{} never appeared",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(20));
     }
-    std::fs::write(dir.join("nodes.csv"), nodes).expect("nodes");
-    std::fs::write(dir.join("pairs.csv"), pairs).expect("pairs");
+}
+
+/// Issue 11 item 12, issue 21 item 3: SIGTERM ends the daemon with exit code
+/// 0 while a layout that would run for hours and an adapter that waits for
+/// ten minutes are both under way (it used to wait for the layout, or need
+/// SIGKILL), leaving no output half-written. The bound is generous (the
+/// suite runs on loaded machines); what it shows is that neither was waited
+/// for. The time it took is printed, not asserted.
+#[test]
+fn sigterm_during_long_rebuilds_ends_the_daemon() {
+    let dir = support::temp_dir("watch_term_busy");
+    std::fs::write(dir.join("tree.json"), TREE).expect("tree");
     let config = dir.join("nptreemap.yaml");
     std::fs::write(
         &config,
-        "datasets:\n  - name: slow\n    format: border-list\n    files: {nodes: nodes.csv, pairs: pairs.csv}\n    fields: {groups: [group]}\n    outputs: [{path: out/slow.svg}, {path: out/slow.json}]\n",
+        format!(
+            "layout: {{convergence_ratio: 0, min_iterations: 100000000, max_iterations: 100000000}}\n\
+             datasets:\n  - name: endless\n    format: hierarchy-json\n    files: {{hierarchy: tree.json}}\n    outputs: [{{path: out/endless.svg}}, {{path: out/endless.json}}]\n\
+             \x20 - name: waiting\n    format: exec\n    command: {}\n    timeout: 900\n    files: {{tree: tree.json}}\n    outputs: [{{path: out/waiting.json}}]\n",
+            gated_adapter("waiting")
+        ),
     )
     .expect("config");
-    (dir, config)
-}
-
-/// Issue 11 item 12: SIGTERM during a long rebuild ends the daemon with exit
-/// code 0 within a second (it used to wait for the layout, or need SIGKILL),
-/// leaving no output half-written.
-#[test]
-fn sigterm_during_a_long_rebuild_ends_within_a_second() {
-    let (dir, config) = slow_setup("watch_term_busy");
+    let gate = Gate(dir.join("gate"));
     let mut daemon = Daemon::start(&config);
     daemon.expect(&["watching"]);
-    // The start build is under way now (it takes seconds).
-    std::thread::sleep(Duration::from_millis(800));
+    // The adapter runs; the endless layout started with it.
+    wait_for_file(&dir.join("started-waiting"));
     assert!(daemon.child.try_wait().expect("try_wait").is_none());
     let sent = Instant::now();
-    // Directly, not through python3 (whose start-up takes a while on a busy
-    // machine and would be counted).
     // SAFETY: kill(2) with the pid of our own child and a valid signal.
     let sent_ok = unsafe { libc::kill(daemon.child.id() as libc::pid_t, libc::SIGTERM) };
     assert_eq!(sent_ok, 0, "kill");
@@ -599,23 +642,45 @@ fn sigterm_during_a_long_rebuild_ends_within_a_second() {
             break status;
         }
         assert!(
-            sent.elapsed() < Duration::from_secs(10),
-            "still running 10 s after SIGTERM"
+            sent.elapsed() < WAIT,
+            "still running {WAIT:?} after SIGTERM"
         );
         std::thread::sleep(Duration::from_millis(10));
     };
-    let took = sent.elapsed();
+    eprintln!("exited {:?} after SIGTERM", sent.elapsed());
     assert_eq!(status.code(), Some(0), "exit code after SIGTERM");
-    // One second, plus scheduling slack on a loaded two-core machine.
-    assert!(took < Duration::from_millis(1500), "took {took:?}");
-    // Whatever is there is whole: the rebuild was interrupted before writing.
-    for name in ["slow.svg", "slow.json"] {
+    drop(gate);
+    // Whatever is there is whole: the rebuilds were interrupted before writing.
+    for name in ["endless.svg", "endless.json", "waiting.json"] {
         if let Ok(bytes) = std::fs::read(dir.join("out").join(name)) {
             assert!(
                 bytes.ends_with(b">\n") || bytes.ends_with(b"}\n"),
                 "{name} torn"
             );
         }
+    }
+}
+
+/// A small hierarchy (hierarchy JSON) for the adapter tests.
+const TREE: &str = r#"{"id": "root", "children": [
+  {"id": "a", "children": [{"id": "a1", "value": 3}, {"id": "a2", "value": 5}]},
+  {"id": "b", "children": [{"id": "b1", "value": 2}, {"id": "b2", "value": 7}]}
+]}
+"#;
+
+/// Opens a gate (see [`gated_adapter`]) when dropped, so that no adapter of
+/// a test outlives it by more than a moment, whatever the test's outcome.
+struct Gate(PathBuf);
+
+impl Gate {
+    fn open(&self) {
+        std::fs::write(&self.0, "").expect("open the gate");
+    }
+}
+
+impl Drop for Gate {
+    fn drop(&mut self) {
+        let _ = std::fs::write(&self.0, "");
     }
 }
 
@@ -631,10 +696,7 @@ fn status_lines_tell_the_truth() {
     // The stored layout is written after the status line: wait for it, so
     // the folder is not removed while the daemon still writes in it.
     let state = out.join(".nptreemap/grid.layout.json");
-    let deadline = Instant::now() + Duration::from_secs(30);
-    while !state.exists() && Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    wait_for_file(&state);
     std::thread::sleep(Duration::from_millis(200));
     std::fs::remove_dir_all(&out).expect("rm out");
     std::fs::write(&out, "not a folder").expect("out as a file");
@@ -646,12 +708,17 @@ fn status_lines_tell_the_truth() {
     let summary = daemon.expect(&["grid: data: nodes.csv"]);
     assert!(!summary.contains("no output changed"), "{summary}");
     assert!(summary.contains("not written"), "{summary}");
-    // The folder is back: the next rebuild writes and says it recovered.
+    // The folder can be made again: the failed writes are retried without
+    // any edit (issue 21 item 9: they used to wait for the next edit or
+    // SIGHUP), and the recovery is said.
     std::fs::remove_file(&out).expect("rm file");
+    let line = daemon.expect(&["grid: ", "wrote"]);
+    assert!(line.contains("ok again") && line.contains("retr"), "{line}");
+    assert_outputs_match(&out, &leaves);
+    // Later edits are written as usual.
     leaves[0].1 = 45.0;
     std::fs::write(&nodes, nodes_csv(&leaves)).expect("edit");
-    let line = daemon.expect(&["grid: ", "wrote"]);
-    assert!(line.contains("ok again"), "{line}");
+    daemon.expect(&["grid: data: nodes.csv", "wrote"]);
     assert_outputs_match(&out, &leaves);
 
     // A data error, then its fix: the fix is announced.
@@ -712,5 +779,295 @@ fn warnings_are_status_lines() {
     assert!(pair.contains("line "), "{pair}");
     daemon.expect(&["grid: start", "wrote"]);
     signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
+/// Issue 21 item 3: an adapter that takes its time blocks no other dataset.
+/// While a `format: exec` dataset's adapter runs (its first build waits for
+/// a gate), the other dataset is built at start and follows an edit (both
+/// used to wait for the adapter: `sleep 30` wedged the daemon); edits to the
+/// adapter's own input meanwhile are coalesced into one rebuild after it,
+/// which reads the last of them.
+#[test]
+fn a_slow_adapter_blocks_no_other_dataset() {
+    let (dir, _config, out) = setup("watch_slow_adapter");
+    std::fs::write(dir.join("tree.json"), TREE).expect("tree");
+    let config = dir.join("both.yaml");
+    // The adapter's dataset first: a daemon building in config order waits
+    // for it before the grid.
+    std::fs::write(
+        &config,
+        format!(
+            "datasets:\n  - name: exe\n    format: exec\n    command: {}\n    timeout: 900\n    files: {{tree: tree.json}}\n    outputs: [{{path: out/exe.json}}]\n{}",
+            gated_adapter("exe"),
+            &CONFIG["datasets:\n".len()..]
+        ),
+    )
+    .expect("config");
+    let gate = Gate(dir.join("gate"));
+    let mut daemon = Daemon::start(&config);
+    wait_for_file(&dir.join("started-exe"));
+    daemon.expect(&["grid: start", "wrote"]);
+    let mut leaves = initial_leaves();
+    leaves[4].1 = 61.0;
+    std::fs::write(dir.join("data/nodes.csv"), nodes_csv(&leaves)).expect("edit");
+    daemon.expect(&["grid: data: nodes.csv", "wrote"]);
+    assert_outputs_match(&out, &leaves);
+    // Three edits of the adapter's input while it still runs.
+    for v in [11, 12, 13] {
+        let tree = TREE.replace("\"b2\", \"value\": 7", &format!("\"b2\", \"value\": {v}"));
+        std::fs::write(dir.join("tree.json"), tree).expect("edit tree");
+        std::thread::sleep(Duration::from_millis(150));
+    }
+    assert!(
+        !daemon.seen.iter().any(|l| l.starts_with("exe:")),
+        "the adapter's dataset reported before its adapter ended: {:?}",
+        daemon.seen
+    );
+    gate.open();
+    daemon.expect(&["exe: start", "wrote exe.json"]);
+    daemon.expect(&["exe: data: tree.json", "wrote exe.json"]);
+    let layout: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("exe.json")).expect("exe.json"))
+            .expect("layout JSON");
+    let b2 = layout["nodes"]
+        .as_array()
+        .expect("nodes")
+        .iter()
+        .find(|n| n["id"] == "b2")
+        .expect("b2");
+    assert_eq!(b2["weight"].as_f64(), Some(13.0), "the last edit");
+    // One rebuild for the three edits (nothing else arrives once it is done).
+    daemon.drain(Duration::from_millis(1500));
+    let rebuilds = daemon
+        .seen
+        .iter()
+        .filter(|l| l.starts_with("exe: data"))
+        .count();
+    assert_eq!(rebuilds, 1, "{:?}", daemon.seen);
+    signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
+/// Issue 21 item 3: a panic in one dataset's rebuild is that dataset's
+/// failure, never the daemon's end (under systemd a crash-loop is as bad as
+/// a hang). `timeout: 1e20` made the exec stage panic, and a config edit to
+/// it killed the daemon; the other dataset must go on being rebuilt.
+#[test]
+fn a_panicking_rebuild_does_not_end_the_daemon() {
+    let (dir, _config, out) = setup("watch_panic");
+    std::fs::write(dir.join("tree.json"), TREE).expect("tree");
+    let config = dir.join("both.yaml");
+    let exe = |timeout: &str| {
+        format!(
+            "datasets:\n  - name: exe\n    format: exec\n    command: [cat]\n    timeout: {timeout}\n    files: {{tree: tree.json}}\n    outputs: [{{path: out/exe.json}}]\n{}",
+            &CONFIG["datasets:\n".len()..]
+        )
+    };
+    std::fs::write(&config, exe("30")).expect("config");
+    let mut daemon = Daemon::start(&config);
+    daemon.expect(&["exe: start", "wrote"]);
+    daemon.expect(&["grid: start", "wrote"]);
+    std::fs::write(&config, exe("1e20")).expect("config");
+    // Refused by the config's checks, or failed in the rebuild: either way
+    // a status line, and the daemon lives on.
+    let line = daemon.expect(&["error"]);
+    assert!(
+        line.starts_with("exe: error") || line.starts_with("config: error"),
+        "{line}"
+    );
+    let mut leaves = initial_leaves();
+    leaves[9].1 = 19.0;
+    std::fs::write(dir.join("data/nodes.csv"), nodes_csv(&leaves)).expect("edit");
+    daemon.expect(&["grid: data: nodes.csv", "wrote"]);
+    assert_outputs_match(&out, &leaves);
+    assert!(daemon.child.try_wait().expect("try_wait").is_none());
+    signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
+/// Issue 21 item 5: an input, or the config, that is a symbolic link to a
+/// file in another folder (docs folders link shared data so) is re-read
+/// when the file it names is edited in place or saved atomically, and when
+/// the link is pointed elsewhere (the daemon watched only the link's folder
+/// and the outputs went stale without a word).
+#[test]
+fn edits_behind_symlinks_are_seen() {
+    let dir = support::temp_dir("watch_symlinks");
+    let (data, shared, conf) = (dir.join("data"), dir.join("shared"), dir.join("conf"));
+    for d in [&data, &shared, &conf] {
+        std::fs::create_dir_all(d).expect("dir");
+    }
+    let mut leaves = initial_leaves();
+    std::fs::write(shared.join("nodes.csv"), nodes_csv(&leaves)).expect("nodes");
+    std::fs::write(data.join("pairs.csv"), pairs_csv()).expect("pairs");
+    // Relative links, as `ln -s ../shared/nodes.csv` makes them.
+    std::os::unix::fs::symlink("../shared/nodes.csv", data.join("nodes.csv")).expect("link");
+    std::fs::write(conf.join("real.yaml"), CONFIG).expect("config");
+    let config = dir.join("nptreemap.yaml");
+    std::os::unix::fs::symlink("conf/real.yaml", &config).expect("config link");
+    let out = dir.join("out");
+    let mut daemon = Daemon::start(&config);
+    daemon.expect(&["grid: start", "wrote"]);
+
+    // An in-place edit of the file the link names.
+    leaves[1].1 = 71.0;
+    std::fs::write(shared.join("nodes.csv"), nodes_csv(&leaves)).expect("edit");
+    daemon.expect(&["grid: data: nodes.csv", "wrote"]);
+    assert_outputs_match(&out, &leaves);
+
+    // An atomic save of it (temp file, rename).
+    leaves[2].1 = 72.0;
+    std::fs::write(shared.join(".nodes.csv.swp"), nodes_csv(&leaves)).expect("temp");
+    std::fs::rename(shared.join(".nodes.csv.swp"), shared.join("nodes.csv")).expect("rename");
+    daemon.expect(&["grid: data: nodes.csv", "wrote"]);
+    assert_outputs_match(&out, &leaves);
+
+    // The link pointed at another file, in a third folder; then that file edited.
+    let other = dir.join("other");
+    std::fs::create_dir_all(&other).expect("other");
+    leaves[3].1 = 73.0;
+    std::fs::write(other.join("nodes.csv"), nodes_csv(&leaves)).expect("other nodes");
+    std::os::unix::fs::symlink("../other/nodes.csv", data.join(".relink")).expect("link");
+    std::fs::rename(data.join(".relink"), data.join("nodes.csv")).expect("relink");
+    daemon.expect(&["grid: data: nodes.csv", "wrote"]);
+    assert_outputs_match(&out, &leaves);
+    leaves[4].1 = 74.0;
+    std::fs::write(other.join("nodes.csv"), nodes_csv(&leaves)).expect("edit other");
+    daemon.expect(&["grid: data: nodes.csv", "wrote"]);
+    assert_outputs_match(&out, &leaves);
+
+    // The config behind its link: edited in place.
+    std::fs::write(
+        conf.join("real.yaml"),
+        format!("render: {{legend: false}}\n{CONFIG}"),
+    )
+    .expect("config edit");
+    daemon.expect(&["grid: config: render"]);
+    signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
+/// Issue 21 item 9: an output replaced during `watch` by something that is
+/// not a regular file (a FIFO; a link to a character device) is refused as
+/// `build` refuses it, with a status line; the other outputs are written
+/// (it used to be replaced by a regular file without a word).
+#[test]
+fn an_output_replaced_by_a_special_file_is_refused() {
+    use std::os::unix::fs::FileTypeExt;
+    let (dir, config, out) = setup("watch_special_output");
+    let mut daemon = Daemon::start(&config);
+    daemon.expect(&["grid: start", "wrote"]);
+    std::fs::remove_file(out.join("grid.svg")).expect("rm svg");
+    support::mkfifo(&out.join("grid.svg"));
+    std::fs::remove_file(out.join("grid.png")).expect("rm png");
+    std::os::unix::fs::symlink("/dev/null", out.join("grid.png")).expect("link");
+    let mut leaves = initial_leaves();
+    leaves[6].1 = 66.0;
+    std::fs::write(dir.join("data/nodes.csv"), nodes_csv(&leaves)).expect("edit");
+    let mut refused = vec![
+        daemon.expect(&["grid: error", "not a regular file"]),
+        daemon.expect(&["grid: error", "not a regular file"]),
+    ];
+    refused.sort();
+    assert!(
+        refused[0].contains("grid.png") && refused[0].contains("character device"),
+        "{refused:?}"
+    );
+    assert!(
+        refused[1].contains("grid.svg") && refused[1].contains("FIFO"),
+        "{refused:?}"
+    );
+    let line = daemon.expect(&["grid: data: nodes.csv"]);
+    assert!(
+        line.contains("wrote grid.json") && line.contains("2 not written"),
+        "{line}"
+    );
+    let kind = |name: &str| {
+        std::fs::symlink_metadata(out.join(name))
+            .expect(name)
+            .file_type()
+    };
+    assert!(kind("grid.svg").is_fifo(), "the FIFO was replaced");
+    assert!(kind("grid.png").is_symlink(), "the link was replaced");
+    assert!(std::fs::metadata(out.join("grid.png"))
+        .expect("png")
+        .file_type()
+        .is_char_device());
+    // The daemon goes on: the JSON follows the data.
+    let layout = layout_json(&out);
+    assert!(same_weights(&weights(&layout), &{
+        let mut w = leaves.clone();
+        w.sort_by(|a, b| a.0.cmp(&b.0));
+        w
+    }));
+    signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
+/// Issue 21 item 9: an output name with a newline or an escape character
+/// cannot split a status line or colour the terminal (log injection): the
+/// control characters are printed escaped, in the status lines and in the
+/// log.
+#[test]
+fn control_characters_in_names_are_escaped() {
+    let (_dir, config, out) = setup("watch_escapes");
+    std::fs::write(
+        &config,
+        CONFIG.replace(
+            "      - path: out/grid.svg\n",
+            "      - path: \"out/evil\\ninjected: fake line\\e[31m.svg\"\n",
+        ),
+    )
+    .expect("config");
+    let mut daemon = Daemon::start(&config);
+    let line = daemon.expect(&["grid: start", "wrote"]);
+    assert!(
+        line.contains("evil\\ninjected: fake line\\u{1b}[31m.svg"),
+        "{line}"
+    );
+    assert!(out.join("evil\ninjected: fake line\x1b[31m.svg").is_file());
+    signal(&daemon.child, "TERM");
+    daemon.expect(&["stopped"]);
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+    for l in &daemon.seen {
+        assert!(!l.starts_with("injected") && !l.contains('\x1b'), "{l:?}");
+    }
+    let log = std::fs::read_to_string(config.with_extension("log")).expect("log");
+    for l in log.lines() {
+        assert!(
+            !l.starts_with("injected") && !l.contains("fake line\x1b"),
+            "{l:?}"
+        );
+    }
+}
+
+/// Issue 21 item 4: a warning is printed once, not before every rebuild
+/// (the same unknown-id and self-pair warnings used to repeat at every
+/// edit); a new warning is printed when it appears.
+#[test]
+fn the_same_warning_is_not_repeated() {
+    let (dir, config, _out) = setup("watch_warn_once");
+    let pairs = dir.join("data/pairs.csv");
+    std::fs::write(&pairs, format!("{}n001,n001\n", pairs_csv())).expect("pairs");
+    let mut daemon = Daemon::start(&config);
+    daemon.expect(&["grid: warning", "(n001, n001)"]);
+    daemon.expect(&["grid: start", "wrote"]);
+    let mut leaves = initial_leaves();
+    leaves[8].1 = 18.0;
+    std::fs::write(dir.join("data/nodes.csv"), nodes_csv(&leaves)).expect("edit");
+    daemon.expect(&["grid: data: nodes.csv", "wrote"]);
+    // A second warning joins the first: only it is printed.
+    std::fs::write(&pairs, format!("{}n001,n001\nn002,n002\n", pairs_csv())).expect("pairs");
+    daemon.expect(&["grid: warning", "(n002, n002)"]);
+    daemon.expect(&["grid: data: pairs.csv"]);
+    signal(&daemon.child, "TERM");
+    daemon.expect(&["stopped"]);
+    let warnings: Vec<&String> = daemon
+        .seen
+        .iter()
+        .filter(|l| l.contains("warning"))
+        .collect();
+    assert_eq!(warnings.len(), 2, "{warnings:?}");
     assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
 }

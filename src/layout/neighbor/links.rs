@@ -85,6 +85,12 @@ impl LevelLinks {
         }
     }
 
+    /// True when the level has nothing to preserve: no constraint of its own
+    /// and none below it between different parents' subtrees.
+    pub(super) fn is_empty(&self) -> bool {
+        self.links.iter().all(Vec::is_empty) && self.lifted.iter().all(Vec::is_empty)
+    }
+
     /// What the realised pairs of `a` (level-local) with partners `b` for which
     /// `count(b)` holds are worth: 1 per own constraint, [`LIFTED_WEIGHT`]
     /// per lifted one.

@@ -50,7 +50,7 @@ use super::frames::{Frame, Recorder};
 use super::map::MapSettings;
 use super::method::Method;
 use super::progress::{Monitor, Progress};
-use super::treemap::{finish, sliver};
+use super::treemap::{divide, finish, single_child, sliver, Division};
 use super::{Layout, LayoutCell, LayoutError, Params, Report};
 use crate::geom::{ConvexPolygon, Point};
 use crate::neighborhood::{projection, Constraint};
@@ -224,11 +224,6 @@ fn descend(
         proj_of[*i] = p;
     }
     let links = LevelLinks::new(dataset, &level, ctx.constraints, depth + 1);
-    let lv = LevelCtx {
-        links: &links,
-        scale: ctx.scale,
-        np: ctx.np,
-    };
     let polygons: Vec<ConvexPolygon> = parents
         .iter()
         .map(|&p| {
@@ -238,6 +233,14 @@ fn descend(
                 .expect("invariant: parents are laid out before their children")
         })
         .collect();
+    if links.is_empty() && ctx.method == Method::Neighbor && !ctx.np.prototype {
+        return plain_level(ctx, depth, &parents, polygons, cells);
+    }
+    let lv = LevelCtx {
+        links: &links,
+        scale: ctx.scale,
+        np: ctx.np,
+    };
     let starts = if ctx.method == Method::Neighbor && !ctx.np.prototype {
         starts_for(level.len(), ctx.np)
     } else {
@@ -323,6 +326,70 @@ fn descend(
         }
     }
     Ok(best.unwrap_or((0.0, cells, Report::default(), 0.0)))
+}
+
+/// Lays out level `depth + 1` with the plain engine, each diagram as the
+/// plain layout divides it (`treemap::divide`: the same seed, the same cells
+/// bit for bit), then everything below. For a level with nothing to preserve
+/// ([`LevelLinks::is_empty`]): issue 23's "nothing to preserve, nothing to
+/// pay". The method's CVT, matching, swaps, attraction ticks and restarts
+/// only serve constraints; without any, a flat list of 100,000 nodes took
+/// them for ever, where the plain layout takes seconds.
+fn plain_level(
+    ctx: &Context<'_>,
+    depth: usize,
+    parents: &[usize],
+    polygons: Vec<ConvexPolygon>,
+    mut cells: Vec<Option<LayoutCell>>,
+) -> Result<Descent, LayoutError> {
+    let dataset = ctx.dataset;
+    let diagrams = parents
+        .iter()
+        .filter(|p| dataset.node(**p).children.len() > 1)
+        .count();
+    let progress = Progress {
+        level: depth + 1,
+        levels: dataset.max_depth(),
+        diagram: 0,
+        diagrams,
+        tick: 0,
+        ticks: 0,
+    };
+    if !ctx.monitor.report(progress) {
+        return Err(LayoutError::Cancelled);
+    }
+    let divisions: Vec<Division> = parents
+        .par_iter()
+        .zip(polygons)
+        .map(|(&parent, polygon)| match dataset.node(parent).children.as_slice() {
+            [only] => single_child(*only, polygon),
+            // After a stop the rest are skipped; the run returns an error.
+            _ if ctx.monitor.stopped() => single_child(parent, polygon),
+            _ => divide(dataset, ctx.params, ctx.settings, parent, polygon),
+        })
+        .collect();
+    if ctx.monitor.stopped() {
+        return Err(LayoutError::Cancelled);
+    }
+    let mut report = Report::default();
+    let mut error_sum = 0.0;
+    for d in divisions {
+        if d.optimized {
+            report.diagrams += 1;
+            report.iterations += d.iterations;
+            error_sum += d.error;
+            report.area_error_max = report.area_error_max.max(d.error);
+            if !d.converged {
+                report.unconverged += 1;
+            }
+        }
+        report.degenerate += d.degenerate;
+        for (child, cell) in d.cells {
+            cells[child] = Some(cell);
+        }
+    }
+    let (score, cells, below, below_sum) = descend(ctx, depth + 1, cells)?;
+    Ok((score, cells, add_reports(report, below), error_sum + below_sum))
 }
 
 /// The realised constraints of the deepest level (the lookahead's measure).
@@ -496,4 +563,78 @@ fn run_level(
         r.take("final", frame_cells(&diagrams));
     }
     Ok((score, diagrams, initial))
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::layout::{compute, Method, Request};
+    use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec, SimilarityHint};
+
+    /// Groups of leaves (ids `g{g}n{i}`) with neighbour lists; `pairs` links
+    /// leaves by id.
+    fn related(groups: &[usize], pairs: &[(&str, &str)]) -> Dataset {
+        let mut b = DatasetBuilder::new();
+        b.similarity_hint(SimilarityHint::NeighborList);
+        b.add(NodeSpec::new("root"));
+        for (g, &n) in groups.iter().enumerate() {
+            b.add(NodeSpec::new(format!("g{g}")).parent("root"));
+            for i in 0..n {
+                let id = format!("g{g}n{i}");
+                let mut spec = NodeSpec::new(id.clone())
+                    .parent(format!("g{g}"))
+                    .weight(1.0 + ((g * 7 + i * 3) % 5) as f64);
+                for (a, other) in pairs.iter().filter(|(a, _)| *a == id) {
+                    let _ = a;
+                    spec = spec.relation(*other);
+                }
+                b.add(spec);
+            }
+        }
+        b.build().expect("valid")
+    }
+
+    fn run(ds: &Dataset, method: Method) -> crate::layout::Computed {
+        let request = Request {
+            method: Some(method),
+            ..Request::default()
+        };
+        compute(ds, &request).expect("layout")
+    }
+
+    /// Issue 23, item 3 (issue 21, item 8): nothing to preserve, nothing to
+    /// pay. A flat border list of 100,000 nodes without pairs never finished
+    /// under the neighbourhood method; with no constraint at all it is the
+    /// plain layout, bit for bit.
+    #[test]
+    fn no_constraints_is_the_plain_layout() {
+        let ds = related(&[30, 20, 10], &[]);
+        let neighbor = run(&ds, Method::Neighbor);
+        assert!(neighbor.constraints.is_empty());
+        assert_eq!(neighbor.layout, run(&ds, Method::Plain).layout);
+    }
+
+    /// A level without constraints of its own or below it across its
+    /// parents (here the top level: every pair lies inside group 0) is laid
+    /// out by the plain engine; the level below still preserves its pairs.
+    #[test]
+    fn a_level_without_constraints_is_laid_out_plain() {
+        let pairs = [
+            ("g0n0", "g0n5"),
+            ("g0n1", "g0n7"),
+            ("g0n2", "g0n9"),
+            ("g0n3", "g0n4"),
+        ];
+        let ds = related(&[12, 8, 6, 5], &pairs);
+        let neighbor = run(&ds, Method::Neighbor);
+        assert!(!neighbor.constraints.is_empty());
+        let plain = run(&ds, Method::Plain);
+        for &g in &neighbor.dataset.node(neighbor.dataset.root()).children {
+            assert_eq!(
+                neighbor.layout.cells[g], plain.layout.cells[g],
+                "group {}",
+                neighbor.dataset.node(g).id
+            );
+        }
+        assert_ne!(neighbor.layout, plain.layout, "the leaves are arranged");
+    }
 }

@@ -291,7 +291,7 @@ fn mutation() -> impl Strategy<Value = Mutation> {
     ]
 }
 
-fn mutations() -> impl Strategy<Value = Vec<Mutation>> {
+pub fn mutations() -> impl Strategy<Value = Vec<Mutation>> {
     // Most inputs stay well-formed so the deeper checks run; some get edits.
     prop_oneof![
         3 => Just(Vec::new()),
@@ -472,7 +472,7 @@ fn table_bytes() -> impl Strategy<Value = Vec<u8>> {
         )
 }
 
-fn small_limits() -> impl Strategy<Value = Limits> {
+pub fn small_limits() -> impl Strategy<Value = Limits> {
     prop_oneof![
         3 => Just(Limits::default()),
         1 => (1usize..40, 1usize..6, 1usize..8).prop_map(|(n, d, k)| Limits {
@@ -719,7 +719,7 @@ pub fn csv_cases() -> impl Strategy<Value = CsvCase> {
 }
 
 /// Checks that a parsed dataset honours the limits and the model's invariants.
-fn check_dataset(dataset: &Dataset, limits: &Limits) -> Result<(), String> {
+pub fn check_dataset(dataset: &Dataset, limits: &Limits) -> Result<(), String> {
     if dataset.len() > limits.max_nodes {
         return Err(format!(
             "{} nodes over max_nodes {}",

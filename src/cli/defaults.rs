@@ -1,0 +1,25 @@
+//! `nptreemap config --defaults`: prints `config/default.yaml`, every config
+//! key with its default and what it does, built into the binary so that a
+//! `cargo install` user, who has no copy of the repository, can read it.
+
+use clap::Args;
+
+/// The documented defaults (`config/default.yaml`; a test in `src/config.rs`
+/// checks that it parses to the code's defaults).
+const DEFAULT_YAML: &str = include_str!("../../config/default.yaml");
+
+/// Arguments of `nptreemap config`.
+#[derive(Debug, Args)]
+pub(crate) struct ConfigArgs {
+    /// Print every config key with its default and what it does (a config
+    /// that builds nothing: `nptreemap config --defaults > nptreemap.yaml`,
+    /// then add datasets).
+    #[arg(long, required = true)]
+    defaults: bool,
+}
+
+/// Prints what `args` asks for.
+pub(crate) fn run(args: &ConfigArgs) -> anyhow::Result<()> {
+    debug_assert!(args.defaults);
+    super::write_stdout(DEFAULT_YAML.as_bytes())
+}
