@@ -55,6 +55,7 @@ impl<'a> RealView<'a> {
                 node.weight
             };
             spec.color = node.color;
+            spec.fields = node.fields.clone();
             builder.add(spec);
         }
         // Every spec comes from a valid dataset, minus nodes that are only
