@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use super::labels::{display_name, format_value};
 use super::legend::LegendItem;
-use super::picture::{colors, compose, legend_items, Style};
+use super::picture::{colors, compose, fills, legend_items, Style};
 use super::svg::{escape, leaf_labels, path_data};
 use crate::layout::{Computed, Layout};
 
@@ -45,6 +45,13 @@ pub struct HtmlData {
     /// no slider when empty (layouts made without frames).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub frames: Vec<HtmlFrame>,
+    /// The name of the field the links come from (`page.link`); `None`
+    /// when the map has no links.
+    #[serde(rename = "linkName", skip_serializing_if = "Option::is_none")]
+    pub link_name: Option<String>,
+    /// Links open in a new tab (`page.link_target: new-tab`).
+    #[serde(rename = "newTab", skip_serializing_if = "std::ops::Not::not")]
+    pub new_tab: bool,
 }
 
 /// One snapshot of the optimisation as the slider draws it.
@@ -84,9 +91,42 @@ pub struct HtmlNode {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub partners: Vec<(usize, bool)>,
     /// Further name–value pairs for the tooltip, in order (the user's own
-    /// columns); none yet.
+    /// columns, `page.fields`); a field the node has no value for is left out.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub fields: Vec<(String, String)>,
+    /// The node's link (`page.link`), when it has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub link: Option<HtmlLink>,
+}
+
+/// A node's link: the value as given, and whether the page may follow it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct HtmlLink {
+    /// The URL text (shown as text when not followed).
+    pub href: String,
+    /// True for `http:`, `https:` and relative URLs ([`followable`]); any
+    /// other scheme (`javascript:`, `data:`, `file:`, …) is never followed.
+    pub ok: bool,
+}
+
+/// Whether the page may follow `url`: an `http:` or `https:` URL, or a
+/// relative one (no scheme: no `:` before the first `/`, `?` or `#`). The
+/// test is on the text as browsers read it, so control characters and
+/// spaces (which browsers strip or drop) are refused.
+pub fn followable(url: &str) -> bool {
+    if url.is_empty()
+        || url
+            .chars()
+            .any(|c| c.is_control() || c.is_whitespace() || c == '\\')
+    {
+        return false;
+    }
+    let lower = url.to_ascii_lowercase();
+    if lower.starts_with("http://") || lower.starts_with("https://") {
+        return true;
+    }
+    let end = url.find(['/', '?', '#']).unwrap_or(url.len());
+    !url[..end].contains(':')
 }
 
 /// How the script fits labels into cells for a zoomed view, by the rules
@@ -118,12 +158,13 @@ const STYLE: &str = include_str!("page/page.css");
 /// (each file's header says what it owns). It finds everything inside its
 /// own container, so several maps can share a document; user text reaches
 /// the document only through `textContent` and attribute values.
-const SCRIPT_PARTS: [&str; 6] = [
+const SCRIPT_PARTS: [&str; 7] = [
     include_str!("page/model.js"),
     include_str!("page/hover.js"),
     include_str!("page/lod.js"),
     include_str!("page/zoom.js"),
     include_str!("page/search.js"),
+    include_str!("page/link.js"),
     include_str!("page/main.js"),
 ];
 
@@ -170,6 +211,25 @@ fn legend_html(items: &[LegendItem], key: &str) -> String {
             LegendItem::Unlinked => "<svg class=\"np-glyph\" viewBox=\"0 0 20 20\" aria-hidden=\"true\">\
                 <circle cx=\"10\" cy=\"10\" r=\"8\" fill=\"#fff\" stroke=\"#d62728\" stroke-width=\"2.4\"/></svg>"
                 .to_owned(),
+            LegendItem::Scale {
+                field,
+                low,
+                high,
+                stops,
+            } => {
+                // The bar between its two ends, as CSS (no ids to collide
+                // between two maps in one document).
+                let css: Vec<String> = stops.iter().map(|c| c.to_string()).collect();
+                return format!(
+                    "<li class=\"np-legend-item np-legend-scale\"><span class=\"np-legend-text\">{}: {}</span>\
+                     <span class=\"np-scale-bar\" style=\"background:linear-gradient(to right,{})\"></span>\
+                     <span class=\"np-legend-text\">{}</span></li>\n",
+                    escape(field),
+                    escape(low),
+                    css.join(","),
+                    escape(high)
+                );
+            }
             _ => String::new(),
         };
         format!(
@@ -261,8 +321,16 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
         ));
     }
     out.push_str(&format!(
-        "<nav class=\"np-crumbs\" id=\"{key}-crumbs\" aria-label=\"Zoom\"></nav>\n</div>\n"
+        "<nav class=\"np-crumbs\" id=\"{key}-crumbs\" aria-label=\"Zoom\"></nav>\n"
     ));
+    if let Some(name) = &data.link_name {
+        // The clicked cell's link, filled by the script.
+        out.push_str(&format!(
+            "<div class=\"np-link\" id=\"{key}-link\" aria-live=\"polite\" data-name=\"{}\" hidden></div>\n",
+            escape(name)
+        ));
+    }
+    out.push_str("</div>\n");
     // As wide as the container, and no wider than keeps the whole picture
     // within the window's height below the header (the script refines the
     // estimate with the header's real height).
@@ -335,7 +403,14 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
                     Vec::new()
                 },
                 partners: std::mem::take(&mut partners[i]),
-                fields: Vec::new(),
+                fields: shown_fields(&node.fields, &style.page.fields),
+                link: style.page.link.as_deref().and_then(|name| {
+                    let href = &node.fields.iter().find(|(n, _)| n == name)?.1;
+                    Some(HtmlLink {
+                        href: href.clone(),
+                        ok: followable(href),
+                    })
+                }),
             }
         })
         .collect();
@@ -359,10 +434,10 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
         }
     });
     let legend = if style.legend {
-        let colors = super::svg::cell_colors(dataset, &adjacent, style.cells.palette);
+        let (colors, applied) = fills(dataset, &adjacent, style);
         let tabs = svg_text.contains("class=\"np-tab\"");
         let markers = svg_text.contains("class=\"np-unlinked\"");
-        legend_items(dataset, &colors, tabs, markers, style)
+        legend_items(dataset, &colors, applied.as_ref(), tabs, markers, style)
     } else {
         Vec::new()
     };
@@ -384,8 +459,18 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
             nodes,
             labels,
             frames: frames(computed, style, &view),
+            link_name: style.page.link.clone(),
+            new_tab: style.page.new_tab,
         },
     )
+}
+
+/// The node's values of the `wanted` fields, in that order.
+fn shown_fields(fields: &[(String, String)], wanted: &[String]) -> Vec<(String, String)> {
+    wanted
+        .iter()
+        .filter_map(|w| fields.iter().find(|(name, _)| name == w).cloned())
+        .collect()
 }
 
 /// The optimisation's snapshots, their cells named by the real nodes.

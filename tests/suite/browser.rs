@@ -13,6 +13,7 @@
 
 mod cdp;
 mod explore;
+mod fields;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
@@ -278,6 +279,11 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
     explore::legend_is_readable_on_a_phone(&mut browser, &countries.url);
     explore::focus_ring_differs_from_partners(&mut browser, &countries);
     explore::hover_dims_the_tabs_on_screen(&mut browser, &countries);
+    // Issue 24 items 4 and 5: the reader's own columns and colours.
+    let fields_html = fields::fields_map(&dir);
+    fields::tooltip_shows_the_configured_fields(&mut browser, &fields_html);
+    fields::a_link_opens_only_for_an_allowed_scheme(&mut browser, &fields_html);
+    fields::color_by_has_its_legend(&mut browser, &fields_html);
 
     // One more round trip, so every event sent before it has been read.
     browser.eval("0");

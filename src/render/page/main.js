@@ -59,6 +59,7 @@ map.addEventListener("click", function (e) {
     return;
   }
   tapped = -1;
+  if (isLeaf(i)) { showLink(i); }
   zoomInto(i);
 });
 // A tap elsewhere on the page ends the touch hover.
@@ -67,7 +68,7 @@ document.addEventListener("click", function (e) {
 });
 map.addEventListener("keydown", function (e) {
   var i = leafOf(e.target);
-  if ((e.key === "Enter" || e.key === " ") && i >= 0) { e.preventDefault(); zoomInto(i); }
+  if ((e.key === "Enter" || e.key === " ") && i >= 0) { e.preventDefault(); showLink(i); zoomInto(i); }
 });
 root.addEventListener("keydown", function (e) {
   if (e.key === "Escape" && (view.node !== 0 || view.leaf >= 0) && !e.defaultPrevented) { zoomOut(); }

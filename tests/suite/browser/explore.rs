@@ -57,7 +57,7 @@ fn placed_labels(data: &Value) -> Vec<usize> {
 }
 
 /// A point of leaf `id` (in layout units) where the cell itself is hit.
-fn point_of(browser: &mut Browser, id: &str) -> (f64, f64) {
+pub(super) fn point_of(browser: &mut Browser, id: &str) -> (f64, f64) {
     const POINT: &str = r##"(function (id) {
       var el = Array.prototype.find.call(document.querySelectorAll(".np-map svg path[data-id]"),
         function (e) { return e.getAttribute("data-id") === id; });
