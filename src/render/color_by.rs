@@ -74,6 +74,8 @@ pub struct Applied {
     pub stops: Vec<Rgb>,
     /// True when some leaf has no value (the legend then names the grey).
     pub missing: bool,
+    /// True when the scale is logarithmic (see [`LOG_SPAN`]).
+    pub log: bool,
 }
 
 /// The number of each node's `field` (leaves only); a virtual leaf (method
@@ -104,12 +106,36 @@ pub fn values(dataset: &Dataset, field: &str) -> Vec<Option<f64>> {
         .collect()
 }
 
-/// The colour of value `v` on `by`'s scale over `[lo, hi]`.
+/// Where a sequential scale goes logarithmic: when the values (none
+/// negative) span this many times their smallest positive one, a linear
+/// scale would give one outlier all the colour and every other leaf the
+/// same dark one (lines of code, file sizes, downloads).
+const LOG_SPAN: f64 = 100.0;
+
+/// A sequential scale's position of `v` in `[lo, hi]`, from 0 to 1:
+/// linear, or `ln(v + shift)` when `shift` (the smallest positive value)
+/// is given.
+fn position(lo: f64, hi: f64, v: f64, shift: Option<f64>) -> f64 {
+    let f = |x: f64| shift.map_or(x, |s| (x + s).ln());
+    let (a, b) = (f(lo), f(hi));
+    if b > a {
+        ((f(v) - a) / (b - a)).clamp(0.0, 1.0)
+    } else {
+        0.5
+    }
+}
+
+/// The colour of value `v` on `by`'s scale over `[lo, hi]` (linear).
 pub fn color_at(by: &ColorBy, lo: f64, hi: f64, v: f64) -> Rgb {
+    color_on(by, lo, hi, v, None)
+}
+
+/// [`color_at`], a sequential scale logarithmic when `shift` is given.
+fn color_on(by: &ColorBy, lo: f64, hi: f64, v: f64, shift: Option<f64>) -> Rgb {
     match by.scale {
         ColorScale::Sequential => {
-            let t = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
-            let c = colorous::CIVIDIS.eval_continuous(t.clamp(0.0, 1.0));
+            let t = position(lo, hi, v, shift);
+            let c = colorous::CIVIDIS.eval_continuous(t);
             Rgb::new(c.r, c.g, c.b)
         }
         ColorScale::Diverging => {
@@ -145,30 +171,44 @@ pub fn apply(dataset: &Dataset, colors: &mut [Option<Rgb>], by: &ColorBy) -> Opt
         lo = lo.min(by.midpoint);
         hi = hi.max(by.midpoint);
     }
+    let smallest = values
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|v| *v > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let shift = (by.scale == ColorScale::Sequential
+        && lo >= 0.0
+        && smallest.is_finite()
+        && hi >= LOG_SPAN * smallest)
+        .then_some(smallest);
     let mut missing = false;
     for (i, color) in colors.iter_mut().enumerate().take(dataset.len()) {
         if !dataset.is_leaf(i) {
             continue;
         }
         *color = Some(match values[i] {
-            Some(v) => color_at(by, lo, hi, v),
+            Some(v) => color_on(by, lo, hi, v, shift),
             None => {
                 missing = true;
                 MISSING
             }
         });
     }
+    // Evenly spaced along the bar, so on a logarithmic scale the bar's
+    // middle is the values' geometric middle.
     let stops = (0..LEGEND_STOPS)
         .map(|k| {
-            color_at(
-                by,
-                lo,
-                hi,
-                lo + (hi - lo) * k as f64 / (LEGEND_STOPS - 1) as f64,
-            )
+            let t = k as f64 / (LEGEND_STOPS - 1) as f64;
+            let v = match shift {
+                Some(s) => ((lo + s).ln() + t * ((hi + s).ln() - (lo + s).ln())).exp() - s,
+                None => lo + (hi - lo) * t,
+            };
+            color_on(by, lo, hi, v, shift)
         })
         .collect();
     Some(Applied {
+        log: shift.is_some(),
         field: by.field.clone(),
         lo,
         hi,
@@ -223,6 +263,34 @@ mod tests {
         // Lightness grows at every stop (a perceptual sequential scale).
         let l: Vec<f64> = applied.stops.iter().map(|c| oklab(*c)[0]).collect();
         assert!(l.windows(2).all(|w| w[1] > w[0] - 0.005), "{l:?}");
+    }
+
+    #[test]
+    fn values_over_orders_of_magnitude_get_a_logarithmic_scale() {
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("r"));
+        for (k, v) in ["0", "10", "100", "1000", "100000"].iter().enumerate() {
+            b.add(leaf(&format!("n{k}"), Some(v)));
+        }
+        let ds = b.build().expect("valid");
+        let by = ColorBy {
+            field: "score".into(),
+            scale: ColorScale::Sequential,
+            midpoint: 0.0,
+        };
+        let mut colors = vec![None; ds.len()];
+        let applied = apply(&ds, &mut colors, &by).expect("values");
+        assert!(applied.log);
+        // 10, 100 and 1,000 are told apart (a linear scale over 0..100,000
+        // would draw them all as dark as 0).
+        let l = |id: &str| oklab(colors[ds.find(id).expect("node")].expect("colour"))[0];
+        assert!(
+            l("n1") + 0.05 < l("n2") && l("n2") + 0.05 < l("n3"),
+            "{} {} {}",
+            l("n1"),
+            l("n2"),
+            l("n3")
+        );
     }
 
     #[test]

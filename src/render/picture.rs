@@ -521,7 +521,11 @@ pub(crate) fn legend_items(
     // (whose names are on the map).
     if let Some(a) = applied {
         items.push(LegendItem::Scale {
-            field: a.field.clone(),
+            field: if a.log {
+                format!("{} (log scale)", a.field)
+            } else {
+                a.field.clone()
+            },
             low: format_value(a.lo, ""),
             high: format_value(a.hi, ""),
             stops: a.stops.clone(),
