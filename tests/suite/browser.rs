@@ -284,6 +284,7 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
     fields::tooltip_shows_the_configured_fields(&mut browser, &fields_html);
     fields::a_link_opens_only_for_an_allowed_scheme(&mut browser, &fields_html);
     fields::color_by_has_its_legend(&mut browser, &fields_html);
+    fields::a_found_group_keeps_its_cells_bright(&mut browser, &fields_html);
 
     // One more round trip, so every event sent before it has been read.
     browser.eval("0");

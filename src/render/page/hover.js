@@ -99,6 +99,19 @@ function highlight(i, ring) {
   var keep = new Set(near[i]);
   keep.add(i);
   var frag = document.createDocumentFragment();
+  // A group (the search found one) keeps all of its cells: the veil has a
+  // hole in the group's shape instead of copies of its many cells.
+  var holed = !isLeaf(i) && !!cells[i];
+  veil.style.display = holed ? "none" : "";
+  if (holed) {
+    var x = +veil.getAttribute("x"), y = +veil.getAttribute("y");
+    var w = +veil.getAttribute("width"), h = +veil.getAttribute("height");
+    var hole = document.createElementNS(NS, "path");
+    hole.setAttribute("class", "np-veil np-veil-holed");
+    hole.setAttribute("fill-rule", "evenodd");
+    hole.setAttribute("d", "M" + x + "," + y + "h" + w + "v" + h + "h" + -w + "Z" + cells[i].getAttribute("d"));
+    frag.appendChild(hole);
+  }
   keep.forEach(function (k) {
     if (!cells[k]) { return; }
     var c = copyOf(cells[k], "np-near");

@@ -94,8 +94,8 @@ function closeList() {
   box.setAttribute("aria-expanded", "false");
 }
 
-// Zooms to match i and highlights it: a leaf with its neighbourhood and a
-// ring, a group by its outline.
+// Zooms to match i and highlights it: a leaf with its neighbourhood, a
+// group with its cells, either ringed.
 function go(i) {
   closeList();
   found = i;
@@ -104,15 +104,9 @@ function go(i) {
   zoomStraightTo(i);
   function mark() {
     if (found !== i || !cells[i]) { return; }
-    if (isLeaf(i)) {
-      highlight(i, true);
-    } else {
-      clear();
-      layer.appendChild(outline(i, "np-ring-outer"));
-      layer.appendChild(outline(i, "np-ring-inner"));
-      over.classList.add("np-on");
-      fillTip(i);
-    }
+    // A leaf with its neighbourhood; a group with all its cells (see
+    // highlight); both ringed.
+    highlight(i, true);
     placeAt(i);
   }
   // After the zoom has placed its labels (at once on big maps).

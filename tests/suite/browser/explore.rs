@@ -486,7 +486,7 @@ pub(super) fn hover_dims_the_tabs_on_screen(browser: &mut Browser, page: &Page) 
 }
 
 /// The bytes of standard base64 text (a screenshot from the browser).
-fn base64(text: &str) -> Vec<u8> {
+pub(super) fn base64(text: &str) -> Vec<u8> {
     let value = |c: u8| match c {
         b'A'..=b'Z' => Some(c - b'A'),
         b'a'..=b'z' => Some(c - b'a' + 26),

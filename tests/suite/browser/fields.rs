@@ -274,3 +274,67 @@ pub(super) fn color_by_has_its_legend(browser: &mut Browser, html: &Path) {
     assert_ne!(legend["alpha"], legend["mu"], "{legend}");
     assert_eq!(legend["epsilon"], "#9e9e9e", "{legend}");
 }
+
+/// The search finding a group (issue 24 item 3): the group's own cells
+/// stay bright on screen while everything else is dimmed (the found group
+/// once sat under the veil with the rest of the map).
+pub(super) fn a_found_group_keeps_its_cells_bright(browser: &mut Browser, html: &Path) {
+    browser.open(&file_url(html));
+    browser.eval("document.querySelector('.np-search-box').focus(); 0");
+    browser.insert_text("one");
+    browser.wait_for(
+        "the matches",
+        "document.querySelector('.np-matches [role=option]') !== null",
+        |v| {
+            if v == true {
+                Ok(())
+            } else {
+                Err(v.to_string())
+            }
+        },
+    );
+    super::press(browser, "Enter", "Enter", 13);
+    browser.wait_for(
+        "the found group",
+        "document.querySelector('.nptreemap').getAttribute('data-current')",
+        |v| {
+            if v == "group:one" {
+                Ok(())
+            } else {
+                Err(v.to_string())
+            }
+        },
+    );
+    browser.eval(
+        "new Promise(function (r) { requestAnimationFrame(function () { setTimeout(r, 300); }); })",
+    );
+    for (id, inside) in [("alpha", true), ("eta", false)] {
+        let (x, y) = point_of(browser, id);
+        let fill = browser.eval(&format!(
+            "Array.prototype.find.call(document.querySelectorAll('.np-map > svg path[data-id]'), function (p) {{ return p.getAttribute('data-id') === {}; }}).getAttribute('fill')",
+            serde_json::json!(id)
+        ));
+        let fill = fill.as_str().expect("fill").to_owned();
+        let shot = browser.call(
+            "Page.captureScreenshot",
+            serde_json::json!({"format": "png", "clip": {"x": x, "y": y, "width": 1, "height": 1, "scale": 1}}),
+        );
+        let png = super::explore::base64(shot["data"].as_str().expect("screenshot data"));
+        let pixmap = resvg::tiny_skia::Pixmap::decode_png(&png).expect("a PNG");
+        let p = pixmap.pixel(0, 0).expect("one pixel").demultiply();
+        let channel =
+            |k: usize| f64::from(u8::from_str_radix(&fill[1 + 2 * k..3 + 2 * k], 16).unwrap_or(0));
+        let got = [p.red(), p.green(), p.blue()].map(f64::from);
+        let own = (0..3).all(|k| (got[k] - channel(k)).abs() <= 12.0);
+        assert_eq!(
+            own,
+            inside,
+            "{id} (fill {fill}) shows {got:?} at ({x}, {y}): {}",
+            if inside {
+                "bright inside the found group"
+            } else {
+                "dimmed outside it"
+            }
+        );
+    }
+}
