@@ -583,6 +583,8 @@ fn data_json(data: &HtmlData) -> String {
     json.replace('<', "\\u003c")
 }
 
-#[cfg(test)]
+// The path first: the architecture test reads `#[cfg(test)]` as applying
+// to the `mod` line right after it.
 #[path = "page/tests.rs"]
+#[cfg(test)]
 mod tests;
