@@ -231,6 +231,18 @@ mod tests {
         spec
     }
 
+    /// The leaves' colours and the scale, by `score` on the sequential scale.
+    fn sequential(ds: &Dataset) -> (Vec<Option<Rgb>>, Applied) {
+        let by = ColorBy {
+            field: "score".into(),
+            scale: ColorScale::Sequential,
+            midpoint: 0.0,
+        };
+        let mut colors = vec![None; ds.len()];
+        let applied = apply(ds, &mut colors, &by).expect("values");
+        (colors, applied)
+    }
+
     #[test]
     fn sequential_runs_dark_to_light_and_missing_is_grey() {
         let mut b = DatasetBuilder::new();
@@ -244,13 +256,7 @@ mod tests {
             b.add(leaf(id, v));
         }
         let ds = b.build().expect("valid");
-        let by = ColorBy {
-            field: "score".into(),
-            scale: ColorScale::Sequential,
-            midpoint: 0.0,
-        };
-        let mut colors = vec![None; ds.len()];
-        let applied = apply(&ds, &mut colors, &by).expect("values");
+        let (colors, applied) = sequential(&ds);
         assert_eq!((applied.lo, applied.hi), (1.0, 5.0));
         assert!(applied.missing);
         let at = |id: &str| colors[ds.find(id).expect("node")].expect("leaf colour");
@@ -273,13 +279,7 @@ mod tests {
             b.add(leaf(&format!("n{k}"), Some(v)));
         }
         let ds = b.build().expect("valid");
-        let by = ColorBy {
-            field: "score".into(),
-            scale: ColorScale::Sequential,
-            midpoint: 0.0,
-        };
-        let mut colors = vec![None; ds.len()];
-        let applied = apply(&ds, &mut colors, &by).expect("values");
+        let (colors, applied) = sequential(&ds);
         assert!(applied.log);
         // 10, 100 and 1,000 are told apart (a linear scale over 0..100,000
         // would draw them all as dark as 0).

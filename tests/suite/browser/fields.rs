@@ -142,7 +142,7 @@ pub(super) fn tooltip_shows_the_configured_fields(browser: &mut Browser, html: &
     browser.open(&file_url(html));
     let (x, y) = point_of(browser, "alpha");
     browser.mouse_move(x, y);
-    let tip = browser.wait_for("the tooltip", TIP, |t| shown(t));
+    let tip = browser.wait_for("the tooltip", TIP, shown);
     let lines: Vec<&str> = tip["lines"]
         .as_array()
         .expect("lines")
@@ -191,7 +191,7 @@ pub(super) fn a_link_opens_only_for_an_allowed_scheme(browser: &mut Browser, htm
         browser.open(&file_url(html));
         let (x, y) = point_of(browser, id);
         browser.click(x, y);
-        let link = browser.wait_for("the link line", LINK, |l| shown(l));
+        let link = browser.wait_for("the link line", LINK, shown);
         assert!(
             link["text"].as_str().is_some_and(|t| t.contains(id)),
             "{id}: {link}"
