@@ -25,6 +25,7 @@ mod packaging;
 mod paper_data;
 mod picture_options;
 mod random_hierarchies;
+mod render_fields;
 mod render_refs;
 mod safety;
 mod similarity_paths;
