@@ -95,6 +95,8 @@ internal! {
     mod pipeline;
     mod power;
     mod rng;
+    #[cfg(feature = "serve")]
+    mod serve;
     #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
     mod store;
     #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
