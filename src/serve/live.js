@@ -25,7 +25,7 @@
   var BIG = 3000;
   // Test hooks and counters: `slow` stretches the animation (screenshots
   // of the morph midway), `frames` counts this script's animation frames.
-  var live = window.npLive = { updates: 0, frames: 0, slow: 1, figures: null, errors: 0 };
+  var live = window.npLive = { updates: 0, frames: 0, slow: 1, figures: null, errors: 0, animating: 0 };
 
   function still() {
     return !!(window.matchMedia && window.matchMedia("(prefers-reduced-motion: reduce)").matches);
@@ -129,6 +129,11 @@
     }
     return out;
   }
+  // [r, g, b] of a "#rrggbb" fill, else null.
+  function rgb(fill) {
+    var m = /^#([0-9a-f]{2})([0-9a-f]{2})([0-9a-f]{2})$/i.exec(fill || "");
+    return m ? [parseInt(m[1], 16), parseInt(m[2], 16), parseInt(m[3], 16)] : null;
+  }
   function pathOf(p) {
     return "M" + p.map(function (q) { return q[0].toFixed(2) + "," + q[1].toFixed(2); }).join("L") + "Z";
   }
@@ -198,11 +203,12 @@
   // Runs `step(k)` for k from 0 to 1 over `ms`, then `done`.
   function animate(ms, step, done) {
     var t0 = null, total = ms * (live.slow || 1);
+    live.animating++;
     function tick(t) {
       if (t0 === null) { t0 = t; }
       var k = Math.min(1, (t - t0) / total);
       step(ease(k));
-      if (k < 1) { frame(tick); } else { done(); }
+      if (k < 1) { frame(tick); } else { live.animating--; done(); }
     }
     frame(tick);
   }
@@ -228,7 +234,7 @@
         var a = points(was.getAttribute("d")), b = points(el.getAttribute("d"));
         var m = Math.min(96, Math.max(12, 2 * Math.max(a.length, b.length)));
         var ra = resample(a, m), rb = resample(b, m);
-        if (ra && rb) { tracks.push({ el: was, a: ra, b: rb }); }
+        if (ra && rb) { tracks.push({ el: was, a: ra, b: rb, fa: rgb(was.getAttribute("fill")), fb: rgb(el.getAttribute("fill")) }); }
       } else {
         var group = el.parentNode && el.parentNode.getAttribute("class");
         var into = group ? oldSvg.querySelector("g." + group.split(/\s+/)[0]) : null;
@@ -250,6 +256,10 @@
           p[j] = [t.a[j][0] + (t.b[j][0] - t.a[j][0]) * k, t.a[j][1] + (t.b[j][1] - t.a[j][1]) * k];
         }
         t.el.setAttribute("d", pathOf(p));
+        // A group's colour may change with the layout: it blends across.
+        if (t.fa && t.fb && t.fa.join() !== t.fb.join()) {
+          t.el.setAttribute("fill", "rgb(" + t.fa.map(function (v, j) { return Math.round(v + (t.fb[j] - v) * k); }).join(",") + ")");
+        }
       });
       fade(incoming, 0, 1, k);
       fade(outgoing, 1, 0, k);

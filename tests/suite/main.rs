@@ -25,6 +25,7 @@ mod picture_options;
 mod random_hierarchies;
 mod render_refs;
 mod safety;
+mod serve;
 mod similarity_paths;
 mod single_dataset;
 mod tabs;
