@@ -13,7 +13,9 @@
 //! streams open, which plain threads do well. Requests are answered by a
 //! small fixed pool (a full queue is answered 503 at once), event streams by
 //! a thread each up to a cap; the daemon only ever hands events to bounded
-//! queues without waiting, so no client can slow a rebuild.
+//! queues without waiting, so no client can slow a rebuild. (tiny_http
+//! reads each connection on a thread of its own pool, which it does not
+//! cap; loopback by default keeps that to this machine.)
 
 /// The push channel (server-sent events).
 pub(crate) mod events;

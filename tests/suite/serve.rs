@@ -239,7 +239,9 @@ fn the_preview_serves_outputs_and_nothing_else() {
 
     let page = get(addr, "/grid/grid.html");
     assert_eq!(page.status, 200);
-    assert!(page.header("content-type").is_some_and(|t| t.starts_with("text/html")));
+    assert!(page
+        .header("content-type")
+        .is_some_and(|t| t.starts_with("text/html")));
     let csp = page.header("content-security-policy").expect("a CSP");
     assert!(csp.contains("default-src 'none'"), "{csp}");
     assert!(

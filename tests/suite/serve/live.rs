@@ -169,7 +169,9 @@ fn a_served_page_follows_edits_without_reloading() {
     );
     let panel = browser.eval("document.querySelector('.np-live-figures').textContent");
     assert!(
-        panel.as_str().is_some_and(|t| t.contains("constraints kept")),
+        panel
+            .as_str()
+            .is_some_and(|t| t.contains("constraints kept")),
         "{panel}"
     );
     let _ = writeln!(
@@ -221,11 +223,7 @@ fn a_served_page_follows_edits_without_reloading() {
             Err(format!("{v} running"))
         }
     });
-    let _ = writeln!(
-        std::io::stderr(),
-        "morph screenshots in {}",
-        dir.display()
-    );
+    let _ = writeln!(std::io::stderr(), "morph screenshots in {}", dir.display());
 
     // Reduced motion: the update swaps at once, no animation frame.
     browser.call(
@@ -239,7 +237,10 @@ fn a_served_page_follows_edits_without_reloading() {
     write_nodes(&dir, &nodes_with(&w));
     wait_updates(&mut browser, 3);
     let still = cells(&mut browser);
-    assert_ne!(shown["n02"], still["n02"], "the reduced-motion update happened");
+    assert_ne!(
+        shown["n02"], still["n02"],
+        "the reduced-motion update happened"
+    );
     assert_eq!(browser.eval("window.__raf"), raf, "no animation frames");
     assert_eq!(browser.eval("npLive.frames"), own);
 
