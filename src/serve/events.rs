@@ -150,7 +150,7 @@ impl Hub {
 
     /// A new stream's queue and the events it starts with, or `None` when
     /// [`MAX_STREAMS`] are open.
-    fn subscribe(&self) -> Option<(Receiver<Arc<str>>, Vec<Arc<str>>, StreamGuard)> {
+    fn subscribe(&self) -> Option<Subscription> {
         let mut state = self.state.lock().unwrap_or_else(PoisonError::into_inner);
         if self.open.load(Ordering::SeqCst) >= MAX_STREAMS {
             return None;
@@ -160,14 +160,14 @@ impl Hub {
         let (tx, rx) = sync_channel(QUEUE);
         state.streams.push(tx);
         let standing = state.standing.values().cloned().collect();
-        Some((rx, standing, guard))
+        Some(Subscription(rx, standing, guard))
     }
 
     /// Answers an event-stream request on a thread of its own (or with 503
     /// when too many are open). The thread ends when the page goes away, the
     /// stream is dropped as stuck, or the process ends.
     pub(crate) fn serve(&self, request: tiny_http::Request, headers: &str) {
-        let Some((rx, standing, guard)) = self.subscribe() else {
+        let Some(Subscription(rx, standing, guard)) = self.subscribe() else {
             let _ = request.respond(super::plain(503, "too many open pages"));
             return;
         };
@@ -186,6 +186,9 @@ impl Hub {
         }
     }
 }
+
+/// A new stream: its queue, the events it starts with, its place in the count.
+struct Subscription(Receiver<Arc<str>>, Vec<Arc<str>>, StreamGuard);
 
 /// Counts an open stream until dropped.
 struct StreamGuard(Arc<AtomicUsize>);
@@ -251,19 +254,19 @@ mod tests {
     fn a_problem_stands_until_its_dataset_builds() {
         let hub = Hub::default();
         hub.publish(&problem("a"));
-        let (_, standing, _g) = hub.subscribe().expect("room");
+        let Subscription(_, standing, _g) = hub.subscribe().expect("room");
         assert_eq!(standing.len(), 1);
         assert!(standing[0].contains("\"problem\""));
         assert!(standing[0].contains("\"file\":\"a.csv\",\"line\":3"), "{}", standing[0]);
         hub.publish(&built("a"));
-        let (_, standing, _g2) = hub.subscribe().expect("room");
+        let Subscription(_, standing, _g2) = hub.subscribe().expect("room");
         assert!(standing.is_empty());
     }
 
     #[test]
     fn a_stuck_stream_is_dropped_and_publishing_never_waits() {
         let hub = Hub::default();
-        let (rx, _, _g) = hub.subscribe().expect("room");
+        let Subscription(rx, _, _g) = hub.subscribe().expect("room");
         // Nobody reads `rx`: far more events than its queue holds.
         for _ in 0..QUEUE * 4 {
             hub.publish(&built("a"));

@@ -2,7 +2,8 @@
 // served loads it, the page on disk never does). It listens to the server's
 // event stream; when its dataset is rebuilt it fetches the page again and
 // morphs every cell of the picture from its old polygon to its new one
-// (matched by node id; new cells fade in, removed ones fade out; labels and
+// (matched by node id; new cells grow from their most similar sibling and
+// fade in, removed ones fade out; labels and
 // tabs fade across) in under half a second, then puts the new map in place
 // of the old one in the same document (no reload) and carries the view
 // over: zoom, search text, hovered or focused cell. With
@@ -144,8 +145,11 @@
     var data = null;
     try { data = block ? JSON.parse(block.textContent) : null; } catch (err) { data = null; }
     var nodes = data ? data.nodes : [];
-    var parent = new Set(), cells = new Map(), pairs = new Set();
-    nodes.forEach(function (n) { if (typeof n.parent === "number") { parent.add(n.parent); } });
+    var parent = new Set(), cells = new Map(), pairs = new Set(), similar = new Map(), kin = new Map();
+    function link(list, k, v) { if (!list.has(k)) { list.set(k, []); } list.get(k).push(v); }
+    nodes.forEach(function (n) {
+      if (typeof n.parent === "number") { parent.add(n.parent); link(kin, n.parent, n.id); }
+    });
     var svg = pictureOf(c);
     if (svg) {
       Array.prototype.forEach.call(svg.querySelectorAll("path[data-id]"), function (el) {
@@ -155,13 +159,28 @@
     nodes.forEach(function (n, i) {
       (n.partners || []).forEach(function (p) {
         var other = nodes[p[0]];
+        if (other) { link(similar, n.id, other.id); link(similar, other.id, n.id); }
         if (other && p[1]) { pairs.add(n.id < other.id ? n.id + "\u0000" + other.id : other.id + "\u0000" + n.id); }
       });
     });
     var leaves = [];
     nodes.forEach(function (n, i) { if (!parent.has(i)) { leaves.push(n.id); } });
     var ids = new Set(nodes.map(function (n) { return n.id; }));
-    return { leaves: leaves, cells: cells, realized: pairs, ids: ids, weights: new Map(nodes.map(function (n) { return [n.id, n.weight]; })) };
+    var siblings = new Map();
+    nodes.forEach(function (n) {
+      if (typeof n.parent === "number" && nodes[n.parent]) { siblings.set(n.id, kin.get(n.parent) || []); }
+    });
+    return { leaves: leaves, cells: cells, realized: pairs, ids: ids, similar: similar, siblings: siblings,
+      weights: new Map(nodes.map(function (n) { return [n.id, n.weight]; })) };
+  }
+  // Where a new cell grows from: its most similar node that was already
+  // there (a constraint partner), else a sibling that was, else nowhere.
+  function origin(id, before, after) {
+    var near = (after.similar.get(id) || []).concat(after.siblings.get(id) || []);
+    for (var k = 0; k < near.length; k++) {
+      if (near[k] !== id && before.cells.has(near[k])) { return before.cells.get(near[k]); }
+    }
+    return null;
   }
   function figures(before, after, viewBox) {
     var diag = Math.hypot(viewBox[2], viewBox[3]) || 1;
@@ -242,6 +261,13 @@
         copy.style.opacity = "0";
         (into || oldSvg).appendChild(copy);
         incoming.push(copy);
+        var from = origin(id, before, after);
+        if (from) {
+          var pa = points(from.getAttribute("d")), pb = points(el.getAttribute("d"));
+          var mm = Math.min(96, Math.max(12, 2 * Math.max(pa.length, pb.length)));
+          var sa = resample(pa, mm), sb = resample(pb, mm);
+          if (sa && sb) { tracks.push({ el: copy, a: sa, b: sb, fa: null, fb: null }); }
+        }
       }
     });
     before.cells.forEach(function (el, id) { if (!after.cells.has(id)) { outgoing.push(el); } });

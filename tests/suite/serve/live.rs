@@ -1,7 +1,7 @@
 //! The live preview in a real browser (issue 25): headless Chromium opens a
 //! served page; weights are edited in the CSV and the page follows without a
 //! reload (`performance.timeOrigin` unchanged): the edited cell's polygon
-//! changes, every cell keeps its id, zoom and search text survive, the
+//! changes, every cell keeps its id, an added node's cell appears and goes, zoom and search text survive, the
 //! figures panel fills; with `prefers-reduced-motion` no animation frame is
 //! requested; the history steps back to the previous layout and ahead to
 //! the latest; a bad edit shows its file and line over the last good picture
@@ -225,6 +225,28 @@ fn a_served_page_follows_edits_without_reloading() {
     });
     let _ = writeln!(std::io::stderr(), "morph screenshots in {}", dir.display());
 
+    // A new node grows in (from a sibling's cell) and goes again.
+    let mut more = w.clone();
+    more.push(30.0);
+    write_nodes(&dir, &nodes_with(&more));
+    wait_updates(&mut browser, 3);
+    let grown = cells(&mut browser);
+    assert!(grown.contains_key("n24"), "the new cell is shown");
+    assert_eq!(grown.len(), before.len() + 1);
+    write_nodes(&dir, &nodes_with(&w));
+    wait_updates(&mut browser, 4);
+    assert!(
+        !cells(&mut browser).contains_key("n24"),
+        "the removed cell is gone"
+    );
+    browser.wait_for("the fade to end", "npLive.animating", |v| {
+        if v.as_u64() == Some(0) {
+            Ok(())
+        } else {
+            Err(format!("{v} running"))
+        }
+    });
+
     // Reduced motion: the update swaps at once, no animation frame.
     browser.call(
         "Emulation.setEmulatedMedia",
@@ -235,7 +257,7 @@ fn a_served_page_follows_edits_without_reloading() {
     let shown = cells(&mut browser);
     w[2] *= 4.0;
     write_nodes(&dir, &nodes_with(&w));
-    wait_updates(&mut browser, 3);
+    wait_updates(&mut browser, 5);
     let still = cells(&mut browser);
     assert_ne!(
         shown["n02"], still["n02"],
@@ -273,15 +295,15 @@ fn a_served_page_follows_edits_without_reloading() {
             }
         },
     );
-    assert_eq!(updates(&mut browser), 3, "the fix changed no picture");
+    assert_eq!(updates(&mut browser), 5, "the fix changed no picture");
 
     // History: one step back shows the layout before the last edit, one
     // step ahead the latest again (swapped at once: motion is still reduced).
     browser.eval("document.querySelector('.np-live-history button').click()");
-    wait_updates(&mut browser, 4);
+    wait_updates(&mut browser, 6);
     assert_eq!(cells(&mut browser), shown, "one step back");
     browser.eval("document.querySelectorAll('.np-live-history button')[1].click()");
-    wait_updates(&mut browser, 5);
+    wait_updates(&mut browser, 7);
     assert_eq!(cells(&mut browser), still, "back to the latest");
     assert_eq!(browser.eval("performance.timeOrigin"), origin, "no reload");
     assert_eq!(
