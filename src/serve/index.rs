@@ -6,22 +6,8 @@
 //! `Content-Security-Policy` that goes with both.
 
 use super::paths::{encode, Routes};
+use crate::render::svg::escape as escape_html;
 
-/// Text made safe for HTML text and attribute values.
-fn escape_html(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
-        }
-    }
-    out
-}
 
 /// The header value for a response whose scripts carry `nonce`: nothing from
 /// another origin, scripts only with the nonce or from this server, no

@@ -39,6 +39,22 @@ var __r = window.requestAnimationFrame;
 window.requestAnimationFrame = function (f) { window.__raf++; return __r.call(window, f); };
 document.addEventListener('securitypolicyviolation', function (e) { window.__csp.push(e.violatedDirective + ' ' + e.blockedURI); });";
 
+/// Waits until `expression` is `true`.
+fn wait_true(browser: &mut Browser, what: &str, expression: &str) {
+    browser.wait_for(what, expression, |v| {
+        if v == &Value::Bool(true) {
+            Ok(())
+        } else {
+            Err(format!("{v}"))
+        }
+    });
+}
+
+/// Waits until the live script's animations have ended.
+fn wait_still(browser: &mut Browser) {
+    wait_true(browser, "the animations to end", "npLive.animating === 0");
+}
+
 fn cells(browser: &mut Browser) -> BTreeMap<String, String> {
     serde_json::from_value(browser.eval(CELLS)).expect("cells")
 }
@@ -181,31 +197,19 @@ fn a_served_page_follows_edits_without_reloading() {
 
     // The morph midway, slowed down for the screenshots.
     browser.eval("document.querySelector('.np-crumbs button').click()");
-    browser.wait_for(
+    wait_true(
+        &mut browser,
         "zoom out",
-        "document.querySelector('.nptreemap').classList.contains('np-zoomed')",
-        |v| {
-            if v == &Value::Bool(false) {
-                Ok(())
-            } else {
-                Err("zoomed".into())
-            }
-        },
+        "!document.querySelector('.nptreemap').classList.contains('np-zoomed')",
     );
     browser.eval("npLive.slow = 25");
     w[12] *= 6.0;
     w[7] /= 3.0;
     write_nodes(&dir, &nodes_with(&w));
-    browser.wait_for(
+    wait_true(
+        &mut browser,
         "the morph to start",
         "document.documentElement.hasAttribute('data-np-morphing')",
-        |v| {
-            if v == &Value::Bool(true) {
-                Ok(())
-            } else {
-                Err("not yet".into())
-            }
-        },
     );
     // The slowed morph takes 9 s: about a third and two thirds in.
     std::thread::sleep(Duration::from_millis(3000));
@@ -216,13 +220,7 @@ fn a_served_page_follows_edits_without_reloading() {
     screenshot(&mut browser, &dir.join("morph-3-after.png"));
     browser.eval("npLive.slow = 1");
     // The new labels' fade-in (slowed too) ends before counting frames.
-    browser.wait_for("the fade to end", "npLive.animating", |v| {
-        if v.as_u64() == Some(0) {
-            Ok(())
-        } else {
-            Err(format!("{v} running"))
-        }
-    });
+    wait_still(&mut browser);
     let _ = writeln!(std::io::stderr(), "morph screenshots in {}", dir.display());
 
     // A new node grows in (from a sibling's cell) and goes again.
@@ -239,13 +237,7 @@ fn a_served_page_follows_edits_without_reloading() {
         !cells(&mut browser).contains_key("n24"),
         "the removed cell is gone"
     );
-    browser.wait_for("the fade to end", "npLive.animating", |v| {
-        if v.as_u64() == Some(0) {
-            Ok(())
-        } else {
-            Err(format!("{v} running"))
-        }
-    });
+    wait_still(&mut browser);
 
     // Reduced motion: the update swaps at once, no animation frame.
     browser.call(
@@ -284,16 +276,10 @@ fn a_served_page_follows_edits_without_reloading() {
     );
     assert_eq!(cells(&mut browser), still, "the last good picture stays");
     write_nodes(&dir, &nodes_with(&w));
-    browser.wait_for(
+    wait_true(
+        &mut browser,
         "the banner to go",
         "document.querySelector('.np-live-error').hidden",
-        |v| {
-            if v == &Value::Bool(true) {
-                Ok(())
-            } else {
-                Err("still shown".into())
-            }
-        },
     );
     assert_eq!(updates(&mut browser), 5, "the fix changed no picture");
 
@@ -313,19 +299,5 @@ fn a_served_page_follows_edits_without_reloading() {
     );
 
     // SIGTERM with the page's stream open.
-    let sent = Instant::now();
-    // SAFETY: kill(2) with the pid of our own child and a valid signal.
-    let ok = unsafe { libc::kill(served.child.id() as libc::pid_t, libc::SIGTERM) };
-    assert_eq!(ok, 0);
-    let status = loop {
-        if let Some(status) = served.child.try_wait().expect("try_wait") {
-            break status;
-        }
-        assert!(
-            sent.elapsed() < Duration::from_secs(10),
-            "still running 10 s after SIGTERM with a page open"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    };
-    assert_eq!(status.code(), Some(0));
+    served.terminate();
 }
