@@ -35,6 +35,9 @@ pub struct Config {
     /// Where the stored layouts live (`state_dir:`, resolved), or `None` for
     /// the default, a `.nptreemap/` folder beside each dataset's first output.
     pub state_dir: Option<PathBuf>,
+    /// How many past layouts of a `watch --serve` session a served page keeps
+    /// to step back through (`history:`); 0 keeps none.
+    pub history: usize,
     /// The datasets, in file order.
     pub datasets: Vec<DatasetConfig>,
 }
@@ -630,6 +633,8 @@ struct RawConfig {
     limits: LimitsSection,
     #[serde(default)]
     state_dir: Option<PathBuf>,
+    #[serde(default = "default_history")]
+    history: usize,
     #[serde(default)]
     datasets: Vec<DatasetConfig>,
 }
@@ -679,6 +684,14 @@ impl LimitsSection {
         self.max_adapter_mb.unwrap_or(self.max_file_mb)
     }
 }
+
+/// Past layouts a served page keeps when the config does not say (`history:`).
+const fn default_history() -> usize {
+    8
+}
+
+/// Most past layouts a served page may keep.
+const MAX_HISTORY: usize = 64;
 
 /// A configuration that cannot be used.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -754,6 +767,7 @@ impl Config {
                 render: RenderConfig::default(),
                 limits: LimitsSection::default(),
                 state_dir: None,
+                history: default_history(),
                 datasets: Vec::new(),
             }
         } else {
@@ -771,6 +785,13 @@ impl Config {
             return Err(ConfigError::Value {
                 field: format!("limits.{key}"),
                 message: "must be at least 1".to_string(),
+            });
+        }
+        if raw.history > MAX_HISTORY {
+            // Each kept layout is a whole page in the browser's memory.
+            return Err(ConfigError::Value {
+                field: "history".to_string(),
+                message: format!("must be at most {MAX_HISTORY}"),
             });
         }
         let state_dir = raw.state_dir.as_ref().map(|dir| base.join(dir));
@@ -837,6 +858,7 @@ impl Config {
             render: raw.render,
             limits: raw.limits.readers(),
             state_dir,
+            history: raw.history,
             datasets,
         };
         config.params().validate().map_err(|e| ConfigError::Value {

@@ -99,6 +99,8 @@ internal! {
     mod pipeline;
     mod power;
     mod rng;
+    #[cfg(feature = "serve")]
+    mod serve;
     #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
     mod state;
     #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]

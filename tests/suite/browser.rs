@@ -11,7 +11,7 @@
 //! Without Chromium the test reports itself skipped, unless
 //! `NPTREEMAP_REQUIRE_BROWSER=1` (set by CI) makes that a failure.
 
-mod cdp;
+pub(crate) mod cdp;
 mod explore;
 mod fields;
 

@@ -28,6 +28,7 @@ mod random_hierarchies;
 mod render_fields;
 mod render_refs;
 mod safety;
+mod serve;
 mod similarity_paths;
 mod single_dataset;
 mod tabs;

@@ -148,4 +148,25 @@ root.addEventListener("keydown", function (e) {
   window.addEventListener("resize", fit);
 })();
 
+// glue: issue 25. The live preview (src/serve/live.js) replaces this map
+// with its rebuilt one and carries the view across: the zoomed group and
+// leaf, the search text, the hovered cell.
+root.npView = {
+  get: function () {
+    return { node: ids[view.node], leaf: view.leaf >= 0 ? ids[view.leaf] : null,
+      current: current >= 0 ? ids[current] : null, search: box.value };
+  },
+  set: function (s) {
+    var g = index.get(s.node), l = s.leaf === null ? -1 : index.get(s.leaf);
+    if (g !== undefined && (g !== 0 || l !== -1)) {
+      instantZoom = true;
+      zoomTo(g, l === undefined ? -1 : l);
+      instantZoom = false;
+    }
+    if (s.search) { box.value = s.search; }
+    var c = s.current === null ? undefined : index.get(s.current);
+    if (c !== undefined && isLeaf(c)) { highlight(c, false); placeAt(c); }
+  }
+};
+
 if (window.performance && performance.mark) { performance.mark("nptreemap-ready"); }

@@ -14,6 +14,8 @@ var focusable = new Uint8Array(N);
 var MIN_GAIN = 1.5;
 // Deepest zoom, relative to the whole map.
 var MAX_ZOOM = 400;
+// Set while the live preview restores a view (no animation then).
+var instantZoom = false;
 
 leafCells.forEach(function (i) { cells[i].setAttribute("tabindex", "0"); focusable[i] = 1; });
 
@@ -26,7 +28,7 @@ function setView(box) {
 function animate(from, to, done) {
   // Big maps repaint slowly: they (and readers who ask for less motion)
   // go straight to the end.
-  var still = leafCells.length > 3000 ||
+  var still = instantZoom || leafCells.length > 3000 ||
     (window.matchMedia && window.matchMedia("(prefers-reduced-motion: reduce)").matches);
   if (still) { setView(to); done(); return; }
   var start = null;
