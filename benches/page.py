@@ -25,11 +25,17 @@ laid out by `nptreemap build`.
   and a first hover sent as soon as the page has loaded: when its feedback
   was painted (it waits for the map's own first raster);
 - hover: the mouse moved onto a sample of leaf cells, one after another; for
-  each, the Event Timing API's duration of the `pointerover` (input to the next
-  paint, 8 ms resolution; Chromium reports none under 16 ms, counted as
-  "< 16"), and input to the end of the next frame's main-thread work
-  (requestAnimationFrame, then a task);
-- focus: Tab through cells; the same two figures for each `keydown`;
+  each input that changed the highlighted cell, the time from the renderer
+  taking the input to the display compositor's swap of the frame that shows
+  it (a trace of the run: `paint_times`). Also, for comparison, the Event
+  Timing API's duration of the `pointerover` (8 ms resolution, none reported
+  under 16 ms) and input to the end of the next frame's main-thread work
+  (requestAnimationFrame, then a task). Headless Chromium draws a changed
+  frame at once but reports its presentation to Event Timing only with the
+  next frame it swaps, which on an idle page is the next input's: those
+  durations then grow with the pause between inputs (multiples of it), not
+  with the page's work, so the trace's figure is the paint time;
+- focus: Tab through cells; the same figures for each `keydown`;
 - zoom: a click into a top-level group, input to the page's mark
   `nptreemap-zoomed` (labels placed for the zoomed extent);
 - reach: for a sample of leaves, how many clicks from the overview show the
@@ -234,6 +240,25 @@ class Browser:
             self.call("Input.dispatchKeyEvent",
                       {"type": kind, "key": key, "code": code, "windowsVirtualKeyCode": vk})
 
+    def trace_start(self):
+        """Start a trace of the input, main-thread commit and display-swap
+        events (`paint_times` reads them)."""
+        self.call("Tracing.start", {"traceConfig": {"includedCategories": TRACE_CATEGORIES},
+                                    "transferMode": "ReportEvents"})
+
+    def trace_end(self) -> list:
+        self.call("Tracing.end")
+        events = []
+        t0 = time.monotonic()
+        while True:
+            if time.monotonic() - t0 > DEADLINE:
+                raise RuntimeError("the trace did not complete")
+            message = json.loads(self.ws.recv())
+            if message.get("method") == "Tracing.dataCollected":
+                events += message["params"]["value"]
+            elif message.get("method") == "Tracing.tracingComplete":
+                return events
+
     def screenshot(self, path: Path):
         data = self.call("Page.captureScreenshot", {"format": "png", "captureBeyondViewport": False})
         path.write_bytes(base64.b64decode(data["data"]))
@@ -265,6 +290,9 @@ new PerformanceObserver(function (list) {
 });
 """
 
+# The highlighted cell (hovered, focused or found), if any.
+CURRENT = "(document.querySelector('.nptreemap') || document.body).getAttribute('data-current')"
+
 # The page's leaves with a point on screen where the cell itself is hit.
 LEAF_POINTS = r"""(function (count, seed) {
   var data = JSON.parse(document.querySelector(".np-data").textContent);
@@ -294,6 +322,40 @@ LEAF_POINTS = r"""(function (count, seed) {
 })"""
 
 
+# The trace of a hover or a Tab: the renderer handles the input (its
+# `OnHandleInputEvent`), its compositor thread takes the frame's commit
+# (`ProxyImpl::Commit`; the main thread's own commit span can end after the
+# frame is already on screen) and the display compositor draws and swaps it
+# (`Display::DrawAndSwap`): the moment the feedback is on screen.
+TRACE_CATEGORIES = ["benchmark", "cc", "viz", "devtools.timeline"]
+INPUT_EVENT = "WidgetBaseInputHandler::OnHandleInputEvent"
+COMMIT_EVENT = "ProxyImpl::Commit"
+SWAP_EVENT = "Display::DrawAndSwap"
+
+
+def paint_times(events: list, kind: str, changed: list) -> list:
+    """Input to the swap of the frame that shows its feedback, in ms, for
+    each input of `kind` ("MouseMove", "KeyDown") in order, kept where
+    `changed[k]` (the k-th input changed the highlighted cell: an input that
+    changes nothing commits no frame to wait for). None when no frame was
+    swapped before the next input."""
+    def spans(name, pred=lambda e: True):
+        return sorted((e["ts"], e["ts"] + e.get("dur", 0)) for e in events
+                      if e.get("name") == name and e.get("ph") == "X" and pred(e))
+    inputs = spans(INPUT_EVENT, lambda e: (e.get("args") or {}).get("event") == kind)
+    commits = spans(COMMIT_EVENT)
+    swaps = spans(SWAP_EVENT)
+    out = []
+    for k, (start, end) in enumerate(inputs):
+        if k >= len(changed) or not changed[k]:
+            continue
+        until = inputs[k + 1][0] if k + 1 < len(inputs) else float("inf")
+        commit = next((c for c in commits if c[0] >= end), None)
+        swap = commit and next((w for w in swaps if w[0] >= commit[1]), None)
+        out.append((swap[1] - start) / 1000 if swap and swap[1] < until else None)
+    return out
+
+
 def summary(values: list, unit: str = "ms") -> str:
     if not values:
         return "–"
@@ -301,6 +363,16 @@ def summary(values: list, unit: str = "ms") -> str:
     med = statistics.median(values)
     p90 = values[min(len(values) - 1, int(round(0.9 * (len(values) - 1))))]
     return f"median {med:.0f} {unit}, p90 {p90:.0f}, max {values[-1]:.0f} (n={len(values)})"
+
+
+def paint_summary(times: list) -> str:
+    """Swap times, with the inputs whose frame was not swapped before the
+    next input counted apart."""
+    done = [t for t in times if t is not None]
+    text = summary(done)
+    if len(done) < len(times):
+        text += f"; not swapped before the next input: {len(times) - len(done)}"
+    return text
 
 
 def timing_summary(durations: list, count: int) -> str:
@@ -354,13 +426,21 @@ def measure_page(browser: Browser, path: Path, args) -> dict:
                          "focus_timing": [], "focus_frames": [], "tabs": 0, "stuck": args.deadline})
             break
         browser.eval("window.__np.events = []; window.__np.frames = []; 0")
+        browser.trace_start()
+        hover_changed = []
+        shown = browser.eval(CURRENT)
         for _, x, y in points:
             browser.mouse(x, y)
             time.sleep(args.pause)
+            now = browser.eval(CURRENT)
+            hover_changed.append(now != shown)
+            shown = now
+        hover_paint = paint_times(browser.trace_end(), "MouseMove", hover_changed)
         browser.mouse(1, 1)
         time.sleep(0.5)
         hover = browser.eval("window.__np")
         focus = {"events": [], "frames": []}
+        focus_paint = []
         tabs = 0
         if args.hovers:
             # Focus: Tab until a cell has focus, then through cells.
@@ -370,10 +450,17 @@ def measure_page(browser: Browser, path: Path, args) -> dict:
                 if browser.eval("!!(document.activeElement && document.activeElement.matches('path[data-id]'))"):
                     break
             browser.eval("window.__np.events = []; window.__np.frames = []; 0")
+            browser.trace_start()
+            focus_changed = []
+            shown = browser.eval(CURRENT)
             for _ in range(args.hovers):
                 browser.key("Tab", "Tab", 9)
                 tabs += 1
                 time.sleep(args.pause)
+                now = browser.eval(CURRENT)
+                focus_changed.append(now != shown)
+                shown = now
+            focus_paint = paint_times(browser.trace_end(), "KeyDown", focus_changed)
             focus = browser.eval("window.__np")
             browser.eval("document.activeElement && document.activeElement.blur(); 0")
         runs.append({
@@ -381,6 +468,8 @@ def measure_page(browser: Browser, path: Path, args) -> dict:
             "hover_timing": [e["duration"] for e in hover["events"] if e["name"] == "pointerover" and e["cell"]],
             "hover_frames": [f["ms"] for f in hover["frames"] if f["name"] == "pointerover"],
             "hovers": len(points),
+            "hover_paint": hover_paint,
+            "focus_paint": focus_paint,
             "focus_timing": [e["duration"] for e in focus["events"] if e["name"] == "keydown" and e["cell"]],
             "focus_frames": [f["ms"] for f in focus["frames"] if f["name"] == "keydown"],
             "tabs": tabs,
@@ -493,6 +582,11 @@ def report(results: list, args) -> str:
         foc_f = [d for run in r["runs"] for d in run["focus_frames"]]
         lines.append(f"- interactive (latest of load event, first paint, script ready): {summary(inter)}")
         lines.append(f"- first hover's feedback painted, from navigation start: {summary(first_hover)}")
+        hov_p = [d for run in r["runs"] for d in run.get("hover_paint", [])]
+        foc_p = [d for run in r["runs"] for d in run.get("focus_paint", [])]
+        lines.append(f"- hover that changed the highlighted cell, input to its frame's swap (trace): "
+                     f"{paint_summary(hov_p)}")
+        lines.append(f"- focus (Tab), input to its frame's swap (trace): {paint_summary(foc_p)}")
         lines.append(f"- hover, input to next paint (Event Timing): "
                      f"{timing_summary(hov_t, sum(run['hovers'] for run in r['runs']))}")
         lines.append(f"- hover, input to end of next frame (main thread): {summary(hov_f)}")

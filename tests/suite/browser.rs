@@ -6,7 +6,8 @@
 //! that leaving clears it, that the checkbox shows the unrealised links, the
 //! zoom and its labels, the search, touch, the focus ring, the HTML legend on
 //! a phone, and that the page loads nothing from the network and logs no
-//! error (`explore.rs` holds the exploring checks of issue 24).
+//! error (`explore.rs` holds the exploring checks of issue 24, `reach.rs`
+//! the three-zoom reach of a leaf's label on a bigger map).
 //!
 //! Without Chromium the test reports itself skipped, unless
 //! `NPTREEMAP_REQUIRE_BROWSER=1` (set by CI) makes that a failure.
@@ -14,6 +15,7 @@
 pub(crate) mod cdp;
 mod explore;
 mod fields;
+mod reach;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
@@ -170,9 +172,11 @@ impl Page {
     }
 }
 
-#[test]
-fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
-    let Some(chromium) = cdp::find_chromium() else {
+/// Chromium, or None after reporting the test skipped (a failure when
+/// `NPTREEMAP_REQUIRE_BROWSER=1`).
+fn chromium_or_skip() -> Option<std::path::PathBuf> {
+    let found = cdp::find_chromium();
+    if found.is_none() {
         assert!(
             std::env::var("NPTREEMAP_REQUIRE_BROWSER").as_deref() != Ok("1"),
             "NPTREEMAP_REQUIRE_BROWSER=1 but no chromium at /usr/bin/chromium or on PATH"
@@ -183,6 +187,40 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
             std::io::stderr(),
             "skipped: chromium not installed (the HTML page's browser test did not run)"
         );
+    }
+    found
+}
+
+/// A browser session of its own (its own time budget) on the page's
+/// usual viewport.
+fn session(chromium: &Path, dir: &Path) -> Browser {
+    let mut browser = Browser::launch(chromium, dir, BUDGET);
+    for domain in ["Page", "Runtime", "Log", "Network"] {
+        browser.call(&format!("{domain}.enable"), json!({}));
+    }
+    browser.call(
+        "Emulation.setDeviceMetricsOverride",
+        json!({"width": VIEWPORT.0, "height": VIEWPORT.1, "deviceScaleFactor": 1, "mobile": false}),
+    );
+    browser
+}
+
+/// Issue 24, item 1: any leaf's label within three zooms on a map of
+/// 3,000 leaves (a session of its own: the sample takes a while).
+#[test]
+fn a_leaf_label_shows_within_three_zooms() {
+    let Some(chromium) = chromium_or_skip() else {
+        return;
+    };
+    let dir = support::temp_dir("browser-reach");
+    let html = reach::deep_map(&dir);
+    let mut browser = session(&chromium, &dir);
+    reach::every_leaf_label_within_three_zooms(&mut browser, &html);
+}
+
+#[test]
+fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
+    let Some(chromium) = chromium_or_skip() else {
         return;
     };
     let dir = support::temp_dir("browser");
@@ -228,14 +266,7 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
         );
     }
 
-    let mut browser = Browser::launch(&chromium, &dir, BUDGET);
-    for domain in ["Page", "Runtime", "Log", "Network"] {
-        browser.call(&format!("{domain}.enable"), json!({}));
-    }
-    browser.call(
-        "Emulation.setDeviceMetricsOverride",
-        json!({"width": VIEWPORT.0, "height": VIEWPORT.1, "deviceScaleFactor": 1, "mobile": false}),
-    );
+    let mut browser = session(&chromium, &dir);
     // The tooltip formats the weight with toLocaleString: pin the locale.
     browser.call("Emulation.setLocaleOverride", json!({"locale": "en-US"}));
 
@@ -1014,6 +1045,20 @@ impl<'a> PageModel<'a> {
         n["label"]
             .as_str()
             .unwrap_or(n["id"].as_str().unwrap_or(""))
+    }
+
+    /// The groups above leaf `id`, the root first.
+    pub(crate) fn ancestors(&self, id: &str) -> Vec<&'a str> {
+        let mut out = Vec::new();
+        let mut at = self.index(id);
+        // A parent chain is at most as long as the node list.
+        for _ in 0..self.ids.len() {
+            let Some(p) = self.parents[at] else { break };
+            out.push(self.ids[p]);
+            at = p;
+        }
+        out.reverse();
+        out
     }
 
     /// The ancestor just below the root.

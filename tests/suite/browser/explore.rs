@@ -24,7 +24,7 @@ pub(super) fn big_map(dir: &Path) -> (String, std::path::PathBuf) {
 
 /// Leaves of the page without a label on the whole map whose top-level
 /// group can be zoomed into, in the page's order.
-fn unlabelled_leaves(html: &Path) -> Vec<String> {
+pub(super) fn unlabelled_leaves(html: &Path) -> Vec<String> {
     let data = page_data(&std::fs::read_to_string(html).expect("read page"));
     let model = PageModel::new(&data);
     let placed = placed_labels(&data);
@@ -54,6 +54,13 @@ fn placed_labels(data: &Value) -> Vec<usize> {
         .filter_map(Value::as_u64)
         .map(|i| i as usize)
         .collect()
+}
+
+/// Whether a drawn label `text` names `label`: the whole of it, or a cut
+/// that keeps at least four characters before its ellipsis.
+pub(super) fn labelled_as(text: &str, label: &str) -> bool {
+    let kept = text.trim_end_matches('\u{2026}');
+    text == label || (kept.chars().count() >= 4 && label.starts_with(kept))
 }
 
 /// A point of leaf `id` (in layout units) where the cell itself is hit.
@@ -127,8 +134,7 @@ pub(super) fn a_zoom_places_labels_that_were_absent(browser: &mut Browser, url: 
         match mine {
             Some(l) if v["zoomed"] == true => {
                 let text = l[1].as_str().unwrap_or("");
-                let kept = text.trim_end_matches('\u{2026}');
-                if text == label || (kept.chars().count() >= 4 && label.starts_with(kept)) {
+                if labelled_as(text, &label) {
                     Ok(())
                 } else {
                     Err(format!("{target} is labelled {text:?}, not {label:?}"))
