@@ -26,7 +26,7 @@ use crate::browser::cdp::{self, Browser};
 const BUDGET: Duration = Duration::from_secs(300);
 
 /// Every cell of the shown picture: id to path data.
-const CELLS: &str = "(function () {
+pub(super) const CELLS: &str = "(function () {
   var s = document.querySelector('.nptreemap .np-map > svg:not(.np-hover)'), o = {};
   s.querySelectorAll('path[data-id]').forEach(function (p) { o[p.getAttribute('data-id')] = p.getAttribute('d'); });
   return o;
@@ -34,13 +34,13 @@ const CELLS: &str = "(function () {
 
 /// Counts animation frames requested by anyone, and records security-policy
 /// violations, from the document's start.
-const PROBE: &str = "window.__raf = 0; window.__csp = [];
+pub(super) const PROBE: &str = "window.__raf = 0; window.__csp = [];
 var __r = window.requestAnimationFrame;
 window.requestAnimationFrame = function (f) { window.__raf++; return __r.call(window, f); };
 document.addEventListener('securitypolicyviolation', function (e) { window.__csp.push(e.violatedDirective + ' ' + e.blockedURI); });";
 
 /// Waits until `expression` is `true`.
-fn wait_true(browser: &mut Browser, what: &str, expression: &str) {
+pub(super) fn wait_true(browser: &mut Browser, what: &str, expression: &str) {
     browser.wait_for(what, expression, |v| {
         if v == &Value::Bool(true) {
             Ok(())
@@ -55,7 +55,7 @@ fn wait_still(browser: &mut Browser) {
     wait_true(browser, "the animations to end", "npLive.animating === 0");
 }
 
-fn cells(browser: &mut Browser) -> BTreeMap<String, String> {
+pub(super) fn cells(browser: &mut Browser) -> BTreeMap<String, String> {
     serde_json::from_value(browser.eval(CELLS)).expect("cells")
 }
 
@@ -79,7 +79,7 @@ fn wait_updates(browser: &mut Browser, n: u64) {
 }
 
 /// Saves a screenshot of the page to `file` (for a person to look at).
-fn screenshot(browser: &mut Browser, file: &Path) {
+pub(super) fn screenshot(browser: &mut Browser, file: &Path) {
     let shot = browser.call("Page.captureScreenshot", json!({"format": "png"}));
     let b64 = file.with_extension("b64");
     std::fs::write(&b64, shot["data"].as_str().unwrap_or("")).expect("write screenshot");
