@@ -11,15 +11,14 @@
 //! `NPTREEMAP_REQUIRE_BROWSER=1` makes that a failure.
 
 use std::collections::BTreeMap;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use serde_json::{json, Value};
 
-use super::live::{screenshot, wait_true, PROBE};
+use super::live::{chromium_or_skip, screenshot, wait_true, PROBE};
 use super::{nodes_with, setup, weights, write_nodes, Served};
-use crate::browser::cdp::{self, Browser};
+use crate::browser::cdp::Browser;
 
 /// Cap on the browser session: a bound on a hang, not a speed target.
 const BUDGET: Duration = Duration::from_secs(300);
@@ -67,15 +66,7 @@ fn next_page(served: &mut Served, dir: &Path, n: usize) -> PathBuf {
 
 #[test]
 fn a_watch_page_on_disk_steps_through_its_last_layouts() {
-    let Some(chromium) = cdp::find_chromium() else {
-        assert!(
-            std::env::var("NPTREEMAP_REQUIRE_BROWSER").as_deref() != Ok("1"),
-            "NPTREEMAP_REQUIRE_BROWSER=1 but no chromium at /usr/bin/chromium or on PATH"
-        );
-        let _ = writeln!(
-            std::io::stderr(),
-            "skipped: chromium not installed (the page history's browser test did not run)"
-        );
+    let Some(chromium) = chromium_or_skip("the page history's browser test") else {
         return;
     };
     let (dir, config) = setup("serve_history");

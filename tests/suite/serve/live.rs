@@ -26,7 +26,7 @@ use crate::browser::cdp::{self, Browser};
 const BUDGET: Duration = Duration::from_secs(300);
 
 /// Every cell of the shown picture: id to path data.
-pub(super) const CELLS: &str = "(function () {
+const CELLS: &str = "(function () {
   var s = document.querySelector('.nptreemap .np-map > svg:not(.np-hover)'), o = {};
   s.querySelectorAll('path[data-id]').forEach(function (p) { o[p.getAttribute('data-id')] = p.getAttribute('d'); });
   return o;
@@ -55,7 +55,7 @@ fn wait_still(browser: &mut Browser) {
     wait_true(browser, "the animations to end", "npLive.animating === 0");
 }
 
-pub(super) fn cells(browser: &mut Browser) -> BTreeMap<String, String> {
+fn cells(browser: &mut Browser) -> BTreeMap<String, String> {
     serde_json::from_value(browser.eval(CELLS)).expect("cells")
 }
 
@@ -92,17 +92,26 @@ pub(super) fn screenshot(browser: &mut Browser, file: &Path) {
     let _ = std::fs::remove_file(&b64);
 }
 
-#[test]
-fn a_served_page_follows_edits_without_reloading() {
-    let Some(chromium) = cdp::find_chromium() else {
+/// Chromium, or `None` after saying that `what` did not run (a failure
+/// with `NPTREEMAP_REQUIRE_BROWSER=1`).
+pub(super) fn chromium_or_skip(what: &str) -> Option<std::path::PathBuf> {
+    let found = cdp::find_chromium();
+    if found.is_none() {
         assert!(
             std::env::var("NPTREEMAP_REQUIRE_BROWSER").as_deref() != Ok("1"),
             "NPTREEMAP_REQUIRE_BROWSER=1 but no chromium at /usr/bin/chromium or on PATH"
         );
         let _ = writeln!(
             std::io::stderr(),
-            "skipped: chromium not installed (the live preview's browser test did not run)"
+            "skipped: chromium not installed ({what} did not run)"
         );
+    }
+    found
+}
+
+#[test]
+fn a_served_page_follows_edits_without_reloading() {
+    let Some(chromium) = chromium_or_skip("the live preview's browser test") else {
         return;
     };
     let (dir, config) = setup("serve_live");
