@@ -487,6 +487,7 @@ impl Daemon<'_> {
                 request: self.config.request(&d),
                 style: self.config.style(&d),
                 force: self.troubled.contains_key(&name),
+                history: self.config.history,
                 dataset: d,
             };
             self.send(&name, job);

@@ -52,6 +52,8 @@ pub struct Job {
     /// Rebuild even when the inputs did not change (a problem is open, and
     /// the rebuild should find out whether it is gone).
     pub force: bool,
+    /// How many past layouts its HTML page carries (`history:`).
+    pub history: usize,
 }
 
 /// A finished rebuild that wrote (or tried to write) its outputs.
@@ -279,6 +281,9 @@ impl State {
             return Outcome::Unchanged;
         }
         self.fingerprint = Some(fingerprint);
+        // The graph keeps the dataset's last layouts (the page's history):
+        // it knows each one's fingerprint, which keys the page's render.
+        self.graph.keep_history(job.history);
         let bar = Bar::take(shared, &reason, name);
         let mut request = job.request.clone();
         // A stop ends the layout itself (see `progress`).
@@ -465,6 +470,7 @@ mod tests {
             style: config.style(d),
             dataset: d.clone(),
             force: false,
+            history: config.history,
         }
     }
 

@@ -102,6 +102,17 @@ pub fn render(
     f.finish()
 }
 
+/// An HTML page's render key with its past layouts (their stored layouts'
+/// fingerprints, oldest first): a different history is a different page.
+pub fn history(render: Fingerprint, past: &[Fingerprint]) -> Fingerprint {
+    let mut f = Fingerprinter::new("history");
+    f.fingerprint(render);
+    for state in past {
+        f.fingerprint(*state);
+    }
+    f.finish()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -44,19 +44,20 @@ pub mod report;
 /// Warm or cold: the one decision.
 pub mod start;
 
+use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
 use nptreemap_formats::Dataset;
 
-use crate::config::{DatasetConfig, OutputConfig};
+use crate::config::{DatasetConfig, OutputConfig, OutputKind};
 use crate::fingerprint::{Fingerprint, Fingerprinter};
 use crate::layout::compute::{lay_out_planned, plan, Prepared};
 use crate::layout::{Computed, LayoutError, Previous, Request, Start};
 use crate::neighborhood::{build_constraints, prepare, Constraint, SimilarityKind};
 use crate::pipeline::{self, BuildError, InputFile, Rendered, Written};
-use crate::render::Style;
+use crate::render::{html_page_with_history, Style};
 use crate::state::manifest::{self, LayoutRecord, Manifest, OutputRecord};
 use crate::state::{self};
 use crate::workspace;
@@ -200,6 +201,12 @@ pub struct DatasetGraph {
     prepared: Option<(Fingerprint, Arc<Dataset>)>,
     constraints: Option<(Fingerprint, Arc<Vec<Constraint>>)>,
     last: Option<Last>,
+    /// The layouts before `last` this graph made, oldest first, at most
+    /// `history` of them: the HTML page's past layouts (`history:`, issue
+    /// 25). In memory only: a session's history, not the state folder's.
+    past: VecDeque<(Fingerprint, Arc<Computed>)>,
+    /// How many past layouts the HTML page carries ([`DatasetGraph::keep_history`]).
+    history: usize,
     /// State a commit could not write (a full disk, a read-only folder),
     /// kept for [`DatasetGraph::store_again`].
     unstored: Option<Pending>,
@@ -231,6 +238,16 @@ impl DatasetGraph {
         DatasetGraph {
             options,
             ..DatasetGraph::default()
+        }
+    }
+
+    /// Keeps the last `n` layouts it made before the current one for the
+    /// HTML page's steps back (the watch daemon's `history:`; `build` keeps
+    /// none, so its page has no history and stays a function of the inputs).
+    pub fn keep_history(&mut self, n: usize) {
+        self.history = n;
+        while self.past.len() > n {
+            self.past.pop_front();
         }
     }
 
@@ -382,6 +399,13 @@ impl DatasetGraph {
                     pending.layout = Some((text, state));
                 }
                 let computed = Arc::new(computed);
+                // The layout it replaces becomes history when it differs.
+                if let Some(last) = self.last.take().filter(|l| l.state != state) {
+                    self.past.push_back((last.state, last.computed));
+                }
+                while self.past.len() > self.history {
+                    self.past.pop_front();
+                }
                 self.last = Some(Last {
                     inputs,
                     settings,
@@ -396,8 +420,18 @@ impl DatasetGraph {
         let mut svg_text = None;
         let mut outputs = Vec::with_capacity(d.outputs.len());
         let mut records = Vec::with_capacity(d.outputs.len());
+        // The past layouts are one more input of the HTML page's render,
+        // keyed by their stored layouts' fingerprints (as the current one
+        // is): a page is rendered again when its history changed, and the
+        // other outputs, which do not show it, are not.
+        let past: Vec<Arc<Computed>> = self.past.iter().map(|(_, c)| Arc::clone(c)).collect();
+        let past_states: Vec<Fingerprint> = self.past.iter().map(|(s, _)| *s).collect();
         for (out, disk) in d.outputs.iter().zip(&disk) {
-            let key = keys::render(inputs, settings, state, &job.style, out);
+            let html = out.kind == Some(OutputKind::Html) && !past.is_empty();
+            let mut key = keys::render(inputs, settings, state, &job.style, out);
+            if html {
+                key = keys::history(key, &past_states);
+            }
             let t = Instant::now();
             let known = manifest
                 .output(d, &out.path)
@@ -414,8 +448,14 @@ impl DatasetGraph {
                     }
                 }
                 None => {
-                    let Rendered { path, bytes } =
-                        pipeline::render_output(&computed, &job.style, out, &mut svg_text)?;
+                    let Rendered { path, bytes } = if html {
+                        Rendered {
+                            path: out.path.clone(),
+                            bytes: html_page_with_history(&computed, &job.style, &past).into_bytes(),
+                        }
+                    } else {
+                        pipeline::render_output(&computed, &job.style, out, &mut svg_text)?
+                    };
                     stages.record(name, Stage::Render, true, ms_since(t), kind_name(out));
                     OutputBuild {
                         path,

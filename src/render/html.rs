@@ -8,10 +8,13 @@
 //! build the SVG, do I/O, or reference anything over the network.
 //! Output is deterministic: identical input gives identical bytes.
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
 use super::labels::{display_name, format_value};
 use super::legend::LegendItem;
+use super::palette::TABLEAU10;
 use super::picture::{colors, compose, fills, legend_items, Style};
 use super::svg::{escape, leaf_labels, path_data};
 use crate::layout::{Computed, Layout};
@@ -45,6 +48,11 @@ pub struct HtmlData {
     /// no slider when empty (layouts made without frames).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub frames: Vec<HtmlFrame>,
+    /// The session's past layouts, oldest first, for the page's ◀/▶ steps
+    /// (`history:`, issue 25); the page as drawn is the latest. Empty: no
+    /// step control and no history script (the page is as it was before).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub history: Vec<HtmlLayout>,
     /// The name of the field the links come from (`page.link`); `None`
     /// when the map has no links.
     #[serde(rename = "linkName", skip_serializing_if = "Option::is_none")]
@@ -60,6 +68,16 @@ pub struct HtmlFrame {
     /// What the moment is (`level 2: tick 40`); shown beside the slider.
     pub label: String,
     /// The cells then: node id, SVG path data, fill colour.
+    pub cells: Vec<(String, String, String)>,
+}
+
+/// One past layout as the page's steps draw it: every drawn cell (the
+/// picture's `path[data-id]`s) with its path data and fill exactly as that
+/// layout's own page drew them, so stepping back shows the earlier picture.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(transparent)]
+pub struct HtmlLayout {
+    /// Node id, SVG path data, fill colour (`none` for groups).
     pub cells: Vec<(String, String, String)>,
 }
 
@@ -167,6 +185,22 @@ const SCRIPT_PARTS: [&str; 7] = [
     include_str!("page/link.js"),
     include_str!("page/main.js"),
 ];
+
+/// The script parts of a page with history, after [`SCRIPT_PARTS`]'s: the
+/// morph the live preview shares (`page/history.js`) and the page's own
+/// steps through its past layouts. Left out of a page without history, so
+/// that page keeps its bytes.
+const HISTORY_PARTS: [&str; 2] = [
+    include_str!("page/history.js"),
+    include_str!("page/past.js"),
+];
+
+/// The step control's style, with [`HISTORY_PARTS`] only.
+const HISTORY_STYLE: &str = include_str!("page/history.css");
+
+/// The morph and step code shared by the page's steps and the live
+/// preview's (src/serve serves it ahead of its own script).
+pub const HISTORY_JS: &str = include_str!("page/history.js");
 
 /// Width over height of the SVG's `viewBox`.
 fn view_aspect(svg: &str) -> Option<f64> {
@@ -278,7 +312,12 @@ fn legend_html(items: &[LegendItem], key: &str) -> String {
 pub fn html(svg: &str, data: &HtmlData) -> String {
     let json = data_json(data);
     let key = page_key(svg, &json);
-    let script_len: usize = SCRIPT_PARTS.iter().map(|s| s.len()).sum();
+    let parts: &[&str] = if data.history.is_empty() {
+        &[]
+    } else {
+        &HISTORY_PARTS
+    };
+    let script_len: usize = SCRIPT_PARTS.iter().chain(parts).map(|s| s.len()).sum();
     let mut out = String::with_capacity(svg.len() + json.len() + STYLE.len() + script_len + 4096);
     out.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
     out.push_str(
@@ -292,6 +331,9 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
         "<div class=\"nptreemap np-hide-unrealized\" id=\"{key}\">\n<style>\n"
     ));
     out.push_str(STYLE);
+    if !data.history.is_empty() {
+        out.push_str(HISTORY_STYLE);
+    }
     out.push_str("</style>\n");
     if let Some(heading) = data.heading.as_deref().filter(|h| !h.is_empty()) {
         out.push_str(&format!(
@@ -318,6 +360,17 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
              min=\"0\" max=\"{n}\" value=\"{n}\" step=\"1\"></label> \
              <span class=\"np-frame-label\" id=\"{key}-frame-label\">final layout</span></div>\n",
             n = data.frames.len()
+        ));
+    }
+    if !data.history.is_empty() {
+        // The page as drawn is the latest of them; the script moves the
+        // picture back and forth through the past ones.
+        let n = data.history.len() + 1;
+        out.push_str(&format!(
+            "<div class=\"np-history\" role=\"group\" aria-label=\"Layouts of the session\">\
+             <button type=\"button\" class=\"np-history-back\" id=\"{key}-history-back\" aria-label=\"Previous layout\">\u{25c0}</button>\
+             <span class=\"np-history-label\" id=\"{key}-history-label\" aria-live=\"polite\"> layout {n} of {n} (latest) </span>\
+             <button type=\"button\" class=\"np-history-ahead\" id=\"{key}-history-ahead\" aria-label=\"Next layout\" disabled>\u{25b6}</button></div>\n"
         ));
     }
     out.push_str(&format!(
@@ -350,7 +403,7 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
     ));
     out.push_str(&json);
     out.push_str("\n</script>\n<script>\n(function () {\n\"use strict\";\n");
-    for part in SCRIPT_PARTS {
+    for part in SCRIPT_PARTS.iter().chain(parts) {
         out.push_str(part);
     }
     out.push_str("})();\n</script>\n</div>\n</body>\n</html>\n");
@@ -362,6 +415,16 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
 /// hide; title and legend as HTML instead of in the picture), and per node
 /// its parent, weight, neighbours and constraint partners.
 pub fn html_page(computed: &Computed, style: &Style) -> String {
+    html_page_with_history(computed, style, &[])
+}
+
+/// [`html_page`] carrying `past` layouts (oldest first) for the page's
+/// steps; with none it is [`html_page`], byte for byte.
+pub fn html_page_with_history(
+    computed: &Computed,
+    style: &Style,
+    past: &[Arc<Computed>],
+) -> String {
     let view = RealView::new(computed);
     let dataset = view.dataset.as_ref();
     let layout = view.layout.as_ref();
@@ -459,6 +522,7 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
             nodes,
             labels,
             frames: frames(computed, style, &view),
+            history: past.iter().map(|p| past_layout(p, style)).collect(),
             link_name: style.page.link.clone(),
             new_tab: style.page.new_tab,
         },
@@ -497,6 +561,31 @@ fn frames(computed: &Computed, style: &Style, view: &RealView<'_>) -> Vec<HtmlFr
                 .collect(),
         })
         .collect()
+}
+
+/// A past layout's drawn cells as its own page's picture has them: the
+/// same nodes (real ones, every node but a root over groups), path data
+/// and fills as `svg::cells` writes them.
+fn past_layout(computed: &Computed, style: &Style) -> HtmlLayout {
+    let view = RealView::new(computed);
+    let dataset = view.dataset.as_ref();
+    let layout = view.layout.as_ref();
+    let (colors, _) = fills(dataset, &view.top_pairs(computed), style);
+    let count = dataset.len().min(layout.cells.len());
+    let cells = (0..count)
+        .filter(|&i| dataset.node(i).parent.is_some() || dataset.is_leaf(i))
+        .map(|i| {
+            let mut d = String::new();
+            path_data(&mut d, &layout.cells[i].polygon);
+            let fill = if dataset.is_leaf(i) {
+                colors[i].unwrap_or(TABLEAU10[0]).to_string()
+            } else {
+                "none".to_owned()
+            };
+            (dataset.node(i).id.clone(), d, fill)
+        })
+        .collect();
+    HtmlLayout { cells }
 }
 
 /// The picture as the page needs it, without what the page's script does

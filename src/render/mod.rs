@@ -31,7 +31,9 @@ pub(crate) mod text;
 pub(crate) mod test_support;
 
 pub use color_by::{ColorBy, ColorScale};
-pub use html::{html, html_page, HtmlData, HtmlFrame, HtmlNode};
+pub use html::{
+    html, html_page, html_page_with_history, HtmlData, HtmlFrame, HtmlLayout, HtmlNode,
+};
 pub use labels::LabelStyle;
 pub use palette::{PaletteKind, Rgb};
 pub use picture::{picture, Border, LegendOrder, PageFields, Style};

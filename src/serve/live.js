@@ -12,7 +12,10 @@
 // one. A small panel gives the last update's stability figures (as `eval
 // --previous` defines them: leaf centroid displacement as a share of the
 // canvas diagonal, mean and largest; realised constraints kept), and steps
-// through the last layouts of the session (`history:`).
+// through the last layouts of the session (`history:`). The morph and the
+// step control are src/render/page/history.js's (`npMorph`), served ahead
+// of this file: the page on disk steps through its past layouts with them.
+// The page's own step control is hidden here: the panel's steps do its job.
 (function () {
   "use strict";
   var me = document.currentScript;
@@ -28,12 +31,8 @@
   // of the morph midway), `frames` counts this script's animation frames.
   var live = window.npLive = { updates: 0, frames: 0, slow: 1, figures: null, errors: 0, animating: 0 };
 
-  function still() {
-    return !!(window.matchMedia && window.matchMedia("(prefers-reduced-motion: reduce)").matches);
-  }
   function container() { return document.querySelector(".nptreemap"); }
   function pictureOf(c) { return c ? c.querySelector(".np-map > svg:not(.np-hover)") : null; }
-  function frame(f) { live.frames++; return window.requestAnimationFrame(f); }
 
   // ---- the panel: status, figures, history ----
   var panel = document.createElement("div");
@@ -59,6 +58,7 @@
   panel.appendChild(figuresLine);
   if (HISTORY > 0) { panel.appendChild(steps); }
   document.body.appendChild(panel);
+  document.documentElement.setAttribute("data-np-live", "");
 
   var banner = document.createElement("div");
   banner.className = "np-live-error";
@@ -85,59 +85,8 @@
     document.documentElement.toggleAttribute("data-np-live-error", problems.size > 0);
   }
 
-  // ---- geometry ----
-  function points(d) {
-    var n = (d || "").match(/-?[0-9.]+(?:e-?[0-9]+)?/g) || [];
-    var p = [];
-    for (var k = 0; k + 1 < n.length; k += 2) { p.push([+n[k], +n[k + 1]]); }
-    return p;
-  }
-  function centroid(p) {
-    var a = 0, cx = 0, cy = 0;
-    for (var k = 0; k < p.length; k++) {
-      var q = p[k], r = p[(k + 1) % p.length], c = q[0] * r[1] - r[0] * q[1];
-      a += c; cx += (q[0] + r[0]) * c; cy += (q[1] + r[1]) * c;
-    }
-    if (Math.abs(a) < 1e-12) {
-      var sx = 0, sy = 0;
-      p.forEach(function (q) { sx += q[0]; sy += q[1]; });
-      return p.length ? [sx / p.length, sy / p.length] : [0, 0];
-    }
-    return [cx / (3 * a), cy / (3 * a)];
-  }
-  // m points evenly spaced along the outline, starting where it crosses
-  // the upward ray from its centroid, so two outlines of one cell line up.
-  function resample(p, m) {
-    if (p.length < 2) { return null; }
-    var c = centroid(p), start = 0, best = Infinity, k;
-    for (k = 0; k < p.length; k++) {
-      var ang = Math.atan2(p[k][0] - c[0], -(p[k][1] - c[1]));
-      if (Math.abs(ang) < best) { best = Math.abs(ang); start = k; }
-    }
-    var q = p.slice(start).concat(p.slice(0, start));
-    var len = [0];
-    for (k = 0; k < q.length; k++) {
-      var a = q[k], b = q[(k + 1) % q.length];
-      len.push(len[k] + Math.hypot(b[0] - a[0], b[1] - a[1]));
-    }
-    var total = len[q.length], out = [], e = 0;
-    for (var j = 0; j < m; j++) {
-      var t = total * j / m;
-      while (e < q.length - 1 && len[e + 1] < t) { e++; }
-      var s = len[e + 1] - len[e], f = s > 0 ? (t - len[e]) / s : 0;
-      var a2 = q[e], b2 = q[(e + 1) % q.length];
-      out.push([a2[0] + (b2[0] - a2[0]) * f, a2[1] + (b2[1] - a2[1]) * f]);
-    }
-    return out;
-  }
-  // [r, g, b] of a "#rrggbb" fill, else null.
-  function rgb(fill) {
-    var m = /^#([0-9a-f]{2})([0-9a-f]{2})([0-9a-f]{2})$/i.exec(fill || "");
-    return m ? [parseInt(m[1], 16), parseInt(m[2], 16), parseInt(m[3], 16)] : null;
-  }
-  function pathOf(p) {
-    return "M" + p.map(function (q) { return q[0].toFixed(2) + "," + q[1].toFixed(2); }).join("L") + "Z";
-  }
+  // ---- geometry: the morph shared with the page's own steps ----
+  var points = npMorph.points, centroid = npMorph.centroid, still = npMorph.still, fade = npMorph.fade;
 
   // ---- the figures of an update ----
   function model(c) {
@@ -213,24 +162,7 @@
 
   // ---- the update ----
   var FADING = ".np-labels, .np-group-labels, .np-tabs, .np-unlinked, .np-unlinked-count, .np-unrealized";
-  function fade(els, from, to, k) {
-    var v = String(from + (to - from) * k);
-    els.forEach(function (el) { el.style.opacity = v; });
-  }
-  function ease(k) { return k < 0.5 ? 2 * k * k : 1 - Math.pow(-2 * k + 2, 2) / 2; }
-
-  // Runs `step(k)` for k from 0 to 1 over `ms`, then `done`.
-  function animate(ms, step, done) {
-    var t0 = null, total = ms * (live.slow || 1);
-    live.animating++;
-    function tick(t) {
-      if (t0 === null) { t0 = t; }
-      var k = Math.min(1, (t - t0) / total);
-      step(ease(k));
-      if (k < 1) { frame(tick); } else { live.animating--; done(); }
-    }
-    frame(tick);
-  }
+  function animate(ms, step, done) { npMorph.animate(live, ms, step, done); }
 
   function apply(html, done) {
     var doc = new DOMParser().parseFromString(html, "text/html");
@@ -250,10 +182,8 @@
     after.cells.forEach(function (el, id) {
       var was = before.cells.get(id);
       if (was) {
-        var a = points(was.getAttribute("d")), b = points(el.getAttribute("d"));
-        var m = Math.min(96, Math.max(12, 2 * Math.max(a.length, b.length)));
-        var ra = resample(a, m), rb = resample(b, m);
-        if (ra && rb) { tracks.push({ el: was, a: ra, b: rb, fa: rgb(was.getAttribute("fill")), fb: rgb(el.getAttribute("fill")) }); }
+        var t = npMorph.track(was, was.getAttribute("d"), el.getAttribute("d"), was.getAttribute("fill"), el.getAttribute("fill"));
+        if (t) { tracks.push(t); }
       } else {
         var group = el.parentNode && el.parentNode.getAttribute("class");
         var into = group ? oldSvg.querySelector("g." + group.split(/\s+/)[0]) : null;
@@ -263,10 +193,8 @@
         incoming.push(copy);
         var from = origin(id, before, after);
         if (from) {
-          var pa = points(from.getAttribute("d")), pb = points(el.getAttribute("d"));
-          var mm = Math.min(96, Math.max(12, 2 * Math.max(pa.length, pb.length)));
-          var sa = resample(pa, mm), sb = resample(pb, mm);
-          if (sa && sb) { tracks.push({ el: copy, a: sa, b: sb, fa: null, fb: null }); }
+          var grow = npMorph.track(copy, from.getAttribute("d"), el.getAttribute("d"), null, null);
+          if (grow) { tracks.push(grow); }
         }
       }
     });
@@ -276,17 +204,7 @@
     if (hover) { fading.push(hover); }
     root().setAttribute("data-np-morphing", "");
     animate(MORPH_MS, function (k) {
-      tracks.forEach(function (t) {
-        var p = new Array(t.a.length);
-        for (var j = 0; j < t.a.length; j++) {
-          p[j] = [t.a[j][0] + (t.b[j][0] - t.a[j][0]) * k, t.a[j][1] + (t.b[j][1] - t.a[j][1]) * k];
-        }
-        t.el.setAttribute("d", pathOf(p));
-        // A group's colour may change with the layout: it blends across.
-        if (t.fa && t.fb && t.fa.join() !== t.fb.join()) {
-          t.el.setAttribute("fill", "rgb(" + t.fa.map(function (v, j) { return Math.round(v + (t.fb[j] - v) * k); }).join(",") + ")");
-        }
-      });
+      npMorph.draw(tracks, k);
       fade(incoming, 0, 1, k);
       fade(outgoing, 1, 0, k);
       fade(fading, 1, 0, k);
@@ -357,29 +275,15 @@
   }
 
   // ---- history ----
-  var pages = [], at = -1;
+  var pages = [];
+  var steps = npMorph.stepper(back, ahead, stepLabel, function (k) { show(pages[k]); });
   function remember(html) {
     if (HISTORY <= 0) { return; }
     pages.push(html);
     while (pages.length > HISTORY + 1) { pages.shift(); }
-    at = pages.length - 1;
-    showStep();
+    steps.set(pages.length, pages.length - 1);
   }
-  function showStep() {
-    stepLabel.textContent = pages.length ? " layout " + (at + 1) + " of " + pages.length + (at === pages.length - 1 ? " (latest) " : " ") : " no history yet ";
-    back.disabled = at <= 0;
-    ahead.disabled = at < 0 || at >= pages.length - 1;
-  }
-  function step(by) {
-    var k = at + by;
-    if (k < 0 || k >= pages.length) { return; }
-    at = k;
-    showStep();
-    show(pages[at]);
-  }
-  back.addEventListener("click", function () { step(-1); });
-  ahead.addEventListener("click", function () { step(1); });
-  showStep();
+  steps.set(0, -1);
 
   // ---- the stream ----
   function load(first) {

@@ -34,6 +34,7 @@ use tiny_http::{Header, Method, Request, Response, Server};
 
 use crate::config::OutputKind;
 use crate::daemon::status::Status;
+use crate::render::html::HISTORY_JS;
 use events::Hub;
 use paths::Routes;
 
@@ -52,7 +53,8 @@ const QUEUED: usize = 64;
 /// Largest file served (a 20,000-leaf page is about 16 MB).
 const MAX_FILE: u64 = 512 << 20;
 
-/// The browser side of the preview.
+/// The browser side of the preview (served after the morph it shares with
+/// the page's own steps, [`crate::render::html::HISTORY_JS`]).
 const LIVE_JS: &str = include_str!("live.js");
 /// Its style (the error overlay, the figures panel, the history control).
 const LIVE_CSS: &str = include_str!("live.css");
@@ -217,7 +219,11 @@ fn answer(url: &str, shared: &Shared) -> Answer {
         r
     };
     match paths::decode(url).as_deref() {
-        Some("/_np/live.js") => return ok(LIVE_JS.into(), "text/javascript; charset=utf-8"),
+        Some("/_np/live.js") => {
+            // One function scope: the morph's name stays out of the page's.
+            let script = format!("(function () {{\n{HISTORY_JS}{LIVE_JS}}})();\n");
+            return ok(script.into_bytes(), "text/javascript; charset=utf-8");
+        }
         Some("/_np/live.css") => return ok(LIVE_CSS.into(), "text/css; charset=utf-8"),
         _ => {}
     }

@@ -8,6 +8,7 @@
 //! with a stream open. `serve/live.rs` drives a real browser through an
 //! update.
 
+mod history;
 mod live;
 
 use std::io::{BufRead, BufReader, Read, Write};

@@ -337,3 +337,105 @@ fn label_texts_count_the_leaf_label_group_only() {
     assert_eq!(label_texts(svg_text), 2);
     assert_eq!(label_texts("<svg/>"), 0);
 }
+
+/// `uneven()` with hostile ids on two leaves and `w` as the weight of g1.
+fn hostile_uneven(w: f64) -> crate::layout::Computed {
+    let mut b = DatasetBuilder::new();
+    b.similarity_hint(nptreemap_formats::SimilarityHint::Cosine);
+    b.add(NodeSpec::new("root"))
+        .add(NodeSpec::new("G").parent("root"))
+        .add(NodeSpec::new("H").parent("root"));
+    for (id, parent, weight, f) in [
+        ("</script><b>g1", "G", w, [1.0, 0.05, 0.2]),
+        ("g2 \"q\" & 'a'", "G", 12.0, [0.0, 1.0, 0.0]),
+        ("h1", "H", 9.0, [0.1, 1.0, 0.1]),
+        ("h2", "H", 11.0, [0.0, 0.1, 1.0]),
+    ] {
+        b.add(
+            NodeSpec::new(id)
+                .parent(parent)
+                .weight(weight)
+                .features(f.to_vec()),
+        );
+    }
+    let dataset = b.build().expect("valid");
+    crate::layout::compute(&dataset, &crate::layout::Request::default()).expect("layout")
+}
+
+/// The picture's cells in a page: id (unescaped), path data, fill.
+fn drawn_cells(page: &str) -> Vec<(String, String, String)> {
+    let attr = |s: &str, name: &str| -> String {
+        let at = s.find(&format!(" {name}=\"")).expect("attribute") + name.len() + 3;
+        s[at..at + s[at..].find('"').expect("quote")].to_owned()
+    };
+    let unescape = |s: String| {
+        s.replace("&lt;", "<")
+            .replace("&gt;", ">")
+            .replace("&quot;", "\"")
+            .replace("&apos;", "'")
+            .replace("&amp;", "&")
+    };
+    page.split("<path data-id=\"")
+        .skip(1)
+        .map(|rest| {
+            let id = &rest[..rest.find('"').expect("id end")];
+            let tag = &rest[..rest.find('>').expect("tag end")];
+            (unescape(id.to_owned()), attr(tag, "d"), attr(tag, "fill"))
+        })
+        .collect()
+}
+
+#[test]
+fn a_page_without_history_is_the_page_as_before() {
+    let computed = hostile_uneven(10.0);
+    let style = Style::default();
+    let page = html_page_with_history(&computed, &style, &[]);
+    assert_eq!(page, html_page(&computed, &style));
+    // Nothing of the steps: no control, no script, no style, no data.
+    for part in ["np-history", "npMorph", "data-np-past", "\"history\""] {
+        assert!(!page.contains(part), "{part} in a page without history");
+    }
+}
+
+#[test]
+fn past_layouts_are_the_earlier_pages_cells_and_stay_escaped() {
+    let style = Style::default();
+    let before = std::sync::Arc::new(hostile_uneven(10.0));
+    let after = hostile_uneven(40.0);
+    let earlier = html_page(&before, &style);
+    let page = html_page_with_history(&after, &style, &[before.clone(), before]);
+    let block = data_block(&page);
+    assert!(!block.contains('<'), "no `<` in the data block");
+    let data: serde_json::Value = serde_json::from_str(block).expect("data block parses");
+    let past = data["history"].as_array().expect("history");
+    assert_eq!(past.len(), 2);
+    let mut want = drawn_cells(&earlier);
+    want.sort();
+    assert!(want.iter().any(|c| c.0 == "</script><b>g1"), "{want:?}");
+    let mut got: Vec<(String, String, String)> =
+        serde_json::from_value(past[0].clone()).expect("cells");
+    got.sort();
+    assert_eq!(got, want, "the earlier page's cells, exactly");
+    assert_ne!(
+        drawn_cells(&page),
+        drawn_cells(&earlier),
+        "the layout moved"
+    );
+    // The control says where it is; the script and its tags are the page's.
+    assert!(page.contains("layout 3 of 3 (latest)"));
+    let lower = page.to_lowercase();
+    let plain = html_page(&after, &style).to_lowercase();
+    for tag in ["<script", "</script", "<b>"] {
+        assert_eq!(
+            lower.matches(tag).count(),
+            plain.matches(tag).count(),
+            "{tag}"
+        );
+    }
+    // Deterministic: the same layouts give the same bytes.
+    let again = Arc::new(hostile_uneven(10.0));
+    assert_eq!(
+        page,
+        html_page_with_history(&after, &style, &[again.clone(), again])
+    );
+}

@@ -34,13 +34,13 @@ const CELLS: &str = "(function () {
 
 /// Counts animation frames requested by anyone, and records security-policy
 /// violations, from the document's start.
-const PROBE: &str = "window.__raf = 0; window.__csp = [];
+pub(super) const PROBE: &str = "window.__raf = 0; window.__csp = [];
 var __r = window.requestAnimationFrame;
 window.requestAnimationFrame = function (f) { window.__raf++; return __r.call(window, f); };
 document.addEventListener('securitypolicyviolation', function (e) { window.__csp.push(e.violatedDirective + ' ' + e.blockedURI); });";
 
 /// Waits until `expression` is `true`.
-fn wait_true(browser: &mut Browser, what: &str, expression: &str) {
+pub(super) fn wait_true(browser: &mut Browser, what: &str, expression: &str) {
     browser.wait_for(what, expression, |v| {
         if v == &Value::Bool(true) {
             Ok(())
@@ -79,7 +79,7 @@ fn wait_updates(browser: &mut Browser, n: u64) {
 }
 
 /// Saves a screenshot of the page to `file` (for a person to look at).
-fn screenshot(browser: &mut Browser, file: &Path) {
+pub(super) fn screenshot(browser: &mut Browser, file: &Path) {
     let shot = browser.call("Page.captureScreenshot", json!({"format": "png"}));
     let b64 = file.with_extension("b64");
     std::fs::write(&b64, shot["data"].as_str().unwrap_or("")).expect("write screenshot");
@@ -92,17 +92,26 @@ fn screenshot(browser: &mut Browser, file: &Path) {
     let _ = std::fs::remove_file(&b64);
 }
 
-#[test]
-fn a_served_page_follows_edits_without_reloading() {
-    let Some(chromium) = cdp::find_chromium() else {
+/// Chromium, or `None` after saying that `what` did not run (a failure
+/// with `NPTREEMAP_REQUIRE_BROWSER=1`).
+pub(super) fn chromium_or_skip(what: &str) -> Option<std::path::PathBuf> {
+    let found = cdp::find_chromium();
+    if found.is_none() {
         assert!(
             std::env::var("NPTREEMAP_REQUIRE_BROWSER").as_deref() != Ok("1"),
             "NPTREEMAP_REQUIRE_BROWSER=1 but no chromium at /usr/bin/chromium or on PATH"
         );
         let _ = writeln!(
             std::io::stderr(),
-            "skipped: chromium not installed (the live preview's browser test did not run)"
+            "skipped: chromium not installed ({what} did not run)"
         );
+    }
+    found
+}
+
+#[test]
+fn a_served_page_follows_edits_without_reloading() {
+    let Some(chromium) = chromium_or_skip("the live preview's browser test") else {
         return;
     };
     let (dir, config) = setup("serve_live");
