@@ -11,8 +11,11 @@ use serde::{Deserialize, Deserializer};
 use crate::layout::{Canvas, Method, NeighborParams, Outline, Params, Request};
 use crate::neighborhood::SimilarityKind;
 use crate::render::overlay::OverlayStyle;
-use crate::render::{Border, LabelStyle, LegendOrder, PaletteKind, Rgb, Style, SvgStyle};
-use nptreemap_formats::{FormatOptions, Limits};
+use crate::render::{
+    Border, ColorBy, ColorScale, LabelStyle, LegendOrder, PageFields, PaletteKind, Rgb, Style,
+    SvgStyle,
+};
+use nptreemap_formats::{Carry, FormatOptions, Limits};
 
 /// The built-in defaults, every key documented (`config/default.yaml`); the
 /// tests check that every key parses and matches [`Config`]'s defaults.
@@ -32,6 +35,9 @@ pub struct Config {
     /// Where the stored layouts live (`state_dir:`, resolved), or `None` for
     /// the default, a `.nptreemap/` folder beside each dataset's first output.
     pub state_dir: Option<PathBuf>,
+    /// How many past layouts of a `watch --serve` session a served page keeps
+    /// to step back through (`history:`); 0 keeps none.
+    pub history: usize,
     /// The datasets, in file order.
     pub datasets: Vec<DatasetConfig>,
 }
@@ -122,7 +128,23 @@ pub struct RenderConfig {
     /// Count markers on cells with similar cells that are not neighbours. Default: true.
     pub unlinked_markers: bool,
     /// Largest share of the map the count markers may cover together. Default: 0.015.
-    pub unlinked_markers_share: f64,
+    pub unlinked_markers_share: f64,    /// Colour the leaves by this numeric column (hierarchy JSON: node
+    /// property) instead of by group. Default: none.
+    pub color_by: Option<String>,
+    /// The scale of `color_by`: `sequential` or `diverging`. Default: sequential.
+    #[serde(deserialize_with = "color_scale")]
+    pub color_scale: ColorScale,
+    /// The value a diverging scale centres on. Default: 0.
+    pub color_midpoint: f64,
+}
+
+fn color_scale<'de, D: Deserializer<'de>>(d: D) -> Result<ColorScale, D::Error> {
+    let text = String::deserialize(d)?;
+    ColorScale::from_name(&text).ok_or_else(|| {
+        serde::de::Error::custom(format_args!(
+            "color_scale: unknown scale {text:?}, expected sequential or diverging"
+        ))
+    })
 }
 
 /// `render.labels`: leaf labels and group names. `labels: false` turns both off.
@@ -258,6 +280,9 @@ impl Default for RenderConfig {
             unrealized_links: style.overlay.show_unrealized,
             unlinked_markers: style.overlay.unlinked_markers,
             unlinked_markers_share: style.overlay.marker_share,
+            color_by: None,
+            color_scale: ColorScale::default(),
+            color_midpoint: 0.0,
         }
     }
 }
@@ -293,6 +318,15 @@ impl RenderConfig {
                     self.labels.min_size, self.labels.max_size
                 ),
             ));
+        }
+        if !self.color_midpoint.is_finite() {
+            return Err(bad(
+                "color_midpoint",
+                format!("{} must be a number", self.color_midpoint),
+            ));
+        }
+        if self.color_by.as_deref().is_some_and(|c| c.trim().is_empty()) {
+            return Err(bad("color_by", "must name a column".to_string()));
         }
         let share = self.unlinked_markers_share;
         if !(share.is_finite() && (0.0..=1.0).contains(&share)) {
@@ -355,6 +389,9 @@ pub struct DatasetConfig {
     /// Title above this dataset's pictures; default: `render.title`.
     #[serde(default)]
     pub title: Option<String>,
+    /// What the HTML page shows of the data's own columns.
+    #[serde(default)]
+    pub page: PageConfig,
     /// What to write.
     #[serde(default)]
     pub outputs: Vec<OutputConfig>,
@@ -380,6 +417,82 @@ pub struct DatasetConfig {
     /// layout lives instead of beside its first output. Not a dataset key.
     #[serde(skip)]
     pub state_dir: Option<PathBuf>,
+}
+
+/// A dataset's `page:` section: its own columns in the HTML page (issue 24
+/// item 4).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PageConfig {
+    /// Columns (hierarchy JSON: node properties) shown in the tooltip, in
+    /// this order, each as `name: value`.
+    pub fields: Vec<String>,
+    /// A column whose value is each cell's link: a click on the cell shows
+    /// it above the map as a link (`http:`, `https:` or relative URLs only;
+    /// any other value is shown as text, never followed).
+    pub link: Option<String>,
+    /// Where the link opens: `new-tab` or `same-tab`. Default: new-tab.
+    pub link_target: LinkTarget,
+}
+
+/// `page.link_target`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LinkTarget {
+    /// A new tab (the map stays open).
+    #[default]
+    NewTab,
+    /// The page's own tab.
+    SameTab,
+}
+
+/// 1-based lines of `text` whose key (the first word before a colon, after
+/// any `- `) is `key`, in order: where a config says `page:` or `color_by:`,
+/// for errors about the columns they name (serde keeps no positions of
+/// values that parse).
+fn key_lines(text: &str, key: &str) -> Vec<usize> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, line)| {
+            let t = line.trim_start();
+            let t = t.strip_prefix("- ").unwrap_or(t).trim_start();
+            t.strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with(':'))
+        })
+        .map(|(k, _)| k + 1)
+        .collect()
+}
+
+/// The columns a dataset's pictures need carried into the model: its
+/// `page` fields and link, and `render.color_by`, each once, each with what
+/// asked for it (config line, when found) for the reader's error.
+fn carried(
+    d: &DatasetConfig,
+    i: usize,
+    page_line: Option<usize>,
+    render: &RenderConfig,
+    color_line: Option<usize>,
+) -> Vec<Carry> {
+    let at = |line: Option<usize>| line.map_or(String::new(), |l| format!(", config line {l}"));
+    let mut out: Vec<Carry> = Vec::new();
+    let mut add = |column: &str, asked_by: String| {
+        if !out.iter().any(|c| c.column == column) {
+            out.push(Carry {
+                column: column.to_string(),
+                asked_by,
+            });
+        }
+    };
+    for (k, f) in d.page.fields.iter().enumerate() {
+        add(f, format!("datasets[{i}].page.fields[{k}]{}", at(page_line)));
+    }
+    if let Some(link) = &d.page.link {
+        add(link, format!("datasets[{i}].page.link{}", at(page_line)));
+    }
+    if let Some(c) = &render.color_by {
+        add(c, format!("render.color_by{}", at(color_line)));
+    }
+    out
 }
 
 /// The format name of the runtime plugin: an external command produces the
@@ -520,6 +633,8 @@ struct RawConfig {
     limits: LimitsSection,
     #[serde(default)]
     state_dir: Option<PathBuf>,
+    #[serde(default = "default_history")]
+    history: usize,
     #[serde(default)]
     datasets: Vec<DatasetConfig>,
 }
@@ -569,6 +684,14 @@ impl LimitsSection {
         self.max_adapter_mb.unwrap_or(self.max_file_mb)
     }
 }
+
+/// Past layouts a served page keeps when the config does not say (`history:`).
+const fn default_history() -> usize {
+    8
+}
+
+/// Most past layouts a served page may keep.
+const MAX_HISTORY: usize = 64;
 
 /// A configuration that cannot be used.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -644,6 +767,7 @@ impl Config {
                 render: RenderConfig::default(),
                 limits: LimitsSection::default(),
                 state_dir: None,
+                history: default_history(),
                 datasets: Vec::new(),
             }
         } else {
@@ -663,10 +787,35 @@ impl Config {
                 message: "must be at least 1".to_string(),
             });
         }
+        if raw.history > MAX_HISTORY {
+            // Each kept layout is a whole page in the browser's memory.
+            return Err(ConfigError::Value {
+                field: "history".to_string(),
+                message: format!("must be at most {MAX_HISTORY}"),
+            });
+        }
         let state_dir = raw.state_dir.as_ref().map(|dir| base.join(dir));
         let mut datasets = raw.datasets;
         let mut seen = std::collections::BTreeSet::new();
+        // The k-th `page:` key belongs to the k-th dataset that has one
+        // (no other section has such a key).
+        let mut page_lines = key_lines(text, "page").into_iter();
+        let color_line = key_lines(text, "color_by").first().copied();
         for (i, d) in datasets.iter_mut().enumerate() {
+            let page_line = if d.page == PageConfig::default() {
+                None
+            } else {
+                page_lines.next()
+            };
+            for (k, f) in d.page.fields.iter().enumerate() {
+                if f.trim().is_empty() {
+                    return Err(ConfigError::Value {
+                        field: format!("datasets[{i}].page.fields[{k}]"),
+                        message: "must name a column".to_string(),
+                    });
+                }
+            }
+            d.fields.carry = carried(d, i, page_line, &raw.render, color_line);
             d.fields.limits = raw.limits.readers();
             d.max_adapter_mb = raw.limits.max_adapter_mb();
             d.state_dir = state_dir.clone();
@@ -709,6 +858,7 @@ impl Config {
             render: raw.render,
             limits: raw.limits.readers(),
             state_dir,
+            history: raw.history,
             datasets,
         };
         config.params().validate().map_err(|e| ConfigError::Value {
@@ -758,6 +908,18 @@ impl Config {
             legend: r.legend,
             legend_order: r.legend_order,
             tabs: r.tabs,
+            color_by: r.color_by.as_ref().map(|field| ColorBy {
+                field: field.clone(),
+                scale: r.color_scale,
+                midpoint: r.color_midpoint,
+            }),
+            page: PageFields {
+                fields: dataset.page.fields.clone(),
+                link: dataset.page.link.clone(),
+                // Meaningful only with a link (the default style has none).
+                new_tab: dataset.page.link.is_some()
+                    && dataset.page.link_target == LinkTarget::NewTab,
+            },
             border: (r.border_width > 0.0).then_some(Border {
                 color: r.border_color,
                 width: r.border_width,
@@ -812,6 +974,7 @@ impl DatasetConfig {
             },
             similarity: None,
             title: None,
+            page: PageConfig::default(),
             outputs: Vec::new(),
             command: Vec::new(),
             timeout: None,
@@ -895,6 +1058,7 @@ mod tests {
             fields: Default::default(),
             similarity: None,
             title: None,
+            page: PageConfig::default(),
             outputs: Vec::new(),
             command: Vec::new(),
             timeout: None,

@@ -90,11 +90,19 @@ internal! {
     mod daemon;
     #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
     mod exec;
+    #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
+    mod fingerprint;
+    #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
+    mod graph;
     mod neighborhood;
     #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
     mod pipeline;
     mod power;
     mod rng;
+    #[cfg(feature = "serve")]
+    mod serve;
+    #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
+    mod state;
     #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
     mod store;
     #[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]

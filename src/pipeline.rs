@@ -3,11 +3,10 @@
 //! them with its format from the registry, **lay out**, **render** every output
 //! in memory, **write** the outputs that changed. Writing is its own stage, so
 //! a failure anywhere before it leaves every existing output untouched. No
-//! loop, no watcher, no printing; callers compose the stages ([`build`] is the
-//! one-shot composition) and decide what to say.
+//! loop, no watcher, no printing; the stage graph (`crate::graph`) composes
+//! them, memoised, and callers decide what to say.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::Duration;
 
 use crate::config::{
@@ -20,7 +19,7 @@ use crate::render::{html_page, picture, Style};
 #[cfg(feature = "png")]
 use crate::render::{png, PngError};
 use crate::workspace::FileError;
-use crate::{layout_json, store, workspace};
+use crate::{layout_json, state, store, workspace};
 use nptreemap_formats::{registry, suggest, Dataset, Inputs};
 
 /// Why a build could not be made. [`BuildError::fault`] says whose fault it is.
@@ -231,20 +230,6 @@ pub struct Rendered {
     pub bytes: Vec<u8>,
 }
 
-/// A dataset laid out and rendered, not yet written.
-#[derive(Debug)]
-pub struct Built {
-    /// The dataset's name.
-    pub name: String,
-    /// The layout and its constraints.
-    pub computed: Computed,
-    /// Every output, in config order.
-    pub outputs: Vec<Rendered>,
-    /// What looked wrong but was read anyway ([`warnings`]), and an
-    /// unreadable stored layout, one line each.
-    pub warnings: Vec<String>,
-}
-
 /// What writing a set of outputs did.
 #[derive(Debug, Default)]
 pub struct Written {
@@ -303,7 +288,7 @@ pub fn read_inputs(d: &DatasetConfig) -> Result<Vec<InputFile>, BuildError> {
 /// command gets their paths as they are valid in its folder, the config's,
 /// wherever nptreemap was started.
 fn run_exec(d: &DatasetConfig) -> Result<InputFile, BuildError> {
-    if let Some(missing) = d.files.values().find(|f| !f.exists()) {
+    if let Some(missing) = d.files.values().find(|f| !workspace::exists(f)) {
         return Err(BuildError::File(FileError::Read {
             path: missing.clone(),
             source: std::io::Error::from(std::io::ErrorKind::NotFound),
@@ -428,40 +413,50 @@ pub fn render_outputs(
     style: &Style,
     outputs: &[OutputConfig],
 ) -> Result<Vec<Rendered>, BuildError> {
-    let mut svg_text: Option<String> = None;
+    let mut svg_text = None;
     outputs
         .iter()
-        .map(|out| {
-            let bytes = match out.kind.unwrap_or(OutputKind::Svg) {
-                OutputKind::Svg => svg_text
-                    .get_or_insert_with(|| picture(computed, style))
-                    .clone()
-                    .into_bytes(),
-                #[cfg(feature = "png")]
-                OutputKind::Png => {
-                    let text = svg_text.get_or_insert_with(|| picture(computed, style));
-                    png(text, out.scale).map_err(|source| BuildError::Png {
-                        path: out.path.clone(),
-                        source,
-                    })?
-                }
-                #[cfg(not(feature = "png"))]
-                OutputKind::Png => {
-                    return Err(BuildError::Unsupported {
-                        path: out.path.clone(),
-                        what: "PNG output",
-                        feature: "png",
-                    })
-                }
-                OutputKind::Json => layout_json::document(computed).into_bytes(),
-                OutputKind::Html => html_page(computed, style).into_bytes(),
-            };
-            Ok(Rendered {
-                path: out.path.clone(),
-                bytes,
-            })
-        })
+        .map(|out| render_output(computed, style, out, &mut svg_text))
         .collect()
+}
+
+/// One output of [`render_outputs`]; `svg_text` keeps the picture's SVG
+/// text between the outputs of one layout.
+pub fn render_output(
+    computed: &Computed,
+    style: &Style,
+    out: &OutputConfig,
+    svg_text: &mut Option<String>,
+) -> Result<Rendered, BuildError> {
+    let bytes = match out.kind.unwrap_or(OutputKind::Svg) {
+        OutputKind::Svg => svg_text
+            .get_or_insert_with(|| picture(computed, style))
+            .clone()
+            .into_bytes(),
+        #[cfg(feature = "png")]
+        OutputKind::Png => {
+            let text = svg_text.get_or_insert_with(|| picture(computed, style));
+            png(text, out.scale).map_err(|source| BuildError::Png {
+                path: out.path.clone(),
+                source,
+            })?
+        }
+        #[cfg(not(feature = "png"))]
+        OutputKind::Png => {
+            let _ = svg_text;
+            return Err(BuildError::Unsupported {
+                path: out.path.clone(),
+                what: "PNG output",
+                feature: "png",
+            });
+        }
+        OutputKind::Json => layout_json::document(computed).into_bytes(),
+        OutputKind::Html => html_page(computed, style).into_bytes(),
+    };
+    Ok(Rendered {
+        path: out.path.clone(),
+        bytes,
+    })
 }
 
 /// The input warnings of a parsed dataset (a header without rows, a column
@@ -503,35 +498,6 @@ pub fn write_outputs(outputs: &[Rendered]) -> Written {
     out
 }
 
-/// Stages 1 to 4 for a configured dataset: loads, lays out and renders it,
-/// writing nothing. `request` is the config's for the dataset
-/// ([`crate::config::Config::request`]); the layout starts warm from the one
-/// stored beside the outputs ([`stored_layout`]) unless `cold`.
-pub fn build(
-    d: &DatasetConfig,
-    request: &Request,
-    style: &Style,
-    cold: bool,
-) -> Result<Built, BuildError> {
-    let files = read_inputs(d)?;
-    let dataset = parse_inputs(d, &files)?;
-    let mut warned = warnings(&files, &dataset);
-    let mut request = request.clone();
-    if !cold {
-        let stored = stored_layout(d);
-        request.previous = stored.previous;
-        warned.extend(stored.warning);
-    }
-    let computed = lay_out(d, &dataset, &request)?;
-    let outputs = render_outputs(&computed, style, &d.outputs)?;
-    Ok(Built {
-        name: d.name.clone(),
-        computed,
-        outputs,
-        warnings: warned,
-    })
-}
-
 /// Reads a previous layout (layout JSON) to start from.
 pub fn read_previous(path: &Path) -> Result<Previous, BuildError> {
     let text = workspace::read_text(path)?;
@@ -539,97 +505,6 @@ pub fn read_previous(path: &Path) -> Result<Previous, BuildError> {
         path: path.to_path_buf(),
         source,
     })
-}
-
-/// A dataset's stored layout, as [`stored_layout`] found it.
-#[derive(Debug, Default)]
-pub struct StoredLayout {
-    /// The layout to start warm from, if there is a readable one.
-    pub previous: Option<Arc<Previous>>,
-    /// Why a stored layout that is there could not be used (truncated by a
-    /// full disk, edited by hand): the layout starts cold, so the picture
-    /// jumps; the user should hear of it. One line, naming the file.
-    pub warning: Option<String>,
-}
-
-/// The layout stored for a dataset by [`store_layout`], if there is one. One
-/// that cannot be read is not an error (the next build replaces it): it comes
-/// back as a warning and the layout starts cold.
-pub fn stored_layout(d: &DatasetConfig) -> StoredLayout {
-    let Some(path) = state_path(d) else {
-        return StoredLayout::default();
-    };
-    let unusable = |why: String| StoredLayout {
-        previous: None,
-        warning: Some(format!(
-            "{}: the stored layout cannot be used ({why}); laid out cold, so the picture may move",
-            path.display()
-        )),
-    };
-    let text = match workspace::read_state(&path, &d.fields.limits) {
-        Ok(Some(text)) => text,
-        Ok(None) => return StoredLayout::default(),
-        Err(e) => return unusable(e.to_string()),
-    };
-    match layout_json::read(&text) {
-        Ok(previous) => StoredLayout {
-            previous: Some(Arc::new(previous)),
-            warning: None,
-        },
-        Err(e) => unusable(e.to_string()),
-    }
-}
-
-/// Where a dataset's last layout is kept between runs: the config's
-/// `state_dir:` when it has one, else a hidden folder beside its first
-/// output (`out/.nptreemap/<name>.layout.json`), so it travels with the
-/// outputs and a restarted daemon or `build` starts warm. `None` for a
-/// dataset without outputs. Distinct names give distinct files (see
-/// [`state_file_name`]).
-pub fn state_path(d: &DatasetConfig) -> Option<PathBuf> {
-    let first = d.outputs.first()?;
-    let dir = match &d.state_dir {
-        Some(dir) => dir.clone(),
-        None => first
-            .path
-            .parent()
-            .unwrap_or(Path::new("."))
-            .join(".nptreemap"),
-    };
-    Some(dir.join(state_file_name(&d.name)))
-}
-
-/// The state file's name for a dataset name: letters and digits of any script,
-/// `-` and `_` as they are, every other character percent-encoded (UTF-8
-/// bytes as `%XX`), which is injective (`日本` and `中国` stay themselves; `a b`
-/// is `a%20b`, `a/b` is `a%2Fb`, and `..` cannot escape the folder). A name
-/// over 200 bytes so encoded keeps its first 200 and adds `~` and a 64-bit
-/// FNV-1a hash of the whole name (`~` is encoded everywhere else).
-pub fn state_file_name(name: &str) -> String {
-    use std::fmt::Write;
-    let mut safe = String::new();
-    for c in name.chars() {
-        if c.is_alphanumeric() || c == '-' || c == '_' {
-            safe.push(c);
-        } else {
-            for b in c.encode_utf8(&mut [0; 4]).bytes() {
-                let _ = write!(safe, "%{b:02X}");
-            }
-        }
-    }
-    const KEEP: usize = 200;
-    if safe.len() > KEEP {
-        let mut cut = KEEP;
-        while !safe.is_char_boundary(cut) {
-            cut -= 1;
-        }
-        safe.truncate(cut);
-        let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
-            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-        });
-        let _ = write!(safe, "~{hash:016x}");
-    }
-    format!("{safe}.layout.json")
 }
 
 /// A file a run reads or writes, with the words a message names it by.
@@ -669,11 +544,14 @@ pub fn files_of(config_path: &Path, datasets: &[DatasetConfig]) -> (Vec<Named>, 
                 format!("datasets[{i}].outputs[{k}] (dataset {:?})", d.name),
             ));
         }
-        if let Some(state) = state_path(d) {
-            writes.push(Named::new(
-                state,
-                format!("the stored layout of dataset {:?}", d.name),
-            ));
+        for (path, what) in [
+            (state::layout_path(d), "the stored layout"),
+            (state::manifest_path(d), "the state manifest"),
+            (state::constraints_path(d), "the constraint cache"),
+        ] {
+            if let Some(path) = path {
+                writes.push(Named::new(path, format!("{what} of dataset {:?}", d.name)));
+            }
         }
     }
     (reads, writes)
@@ -718,15 +596,6 @@ pub fn remove_stale_temps(writes: &[Named]) {
     for path in store::remove_stale_temps(&paths) {
         tracing::info!(?path, "removed a temp file left by an interrupted run");
     }
-}
-
-/// Stores a dataset's layout at its [`state_path`] in full precision
-/// (atomically; unchanged bytes are not rewritten).
-pub fn store_layout(d: &DatasetConfig, computed: &Computed) -> std::io::Result<()> {
-    let Some(path) = state_path(d) else {
-        return Ok(());
-    };
-    store::write_if_changed(&path, layout_json::state(computed).as_bytes()).map(|_| ())
 }
 
 #[cfg(test)]

@@ -198,7 +198,7 @@ fn utf8(path: &Path, bytes: Vec<u8>) -> Result<String, FileError> {
     })
 }
 
-/// The text of a stored layout (see [`crate::pipeline::state_path`]):
+/// The text of a stored layout (see [`crate::state::layout_path`]):
 /// `Ok(None)` when there is none (a cold start), the error when one is there
 /// but cannot be read (the caller warns: the picture will jump).
 pub fn read_state(path: &Path, limits: &Limits) -> Result<Option<String>, FileError> {
@@ -256,6 +256,63 @@ pub fn special_at(path: &Path) -> Option<&'static str> {
     std::fs::metadata(path)
         .ok()
         .and_then(|m| special_kind(m.file_type()))
+}
+
+/// Whether `path` is a regular file (following links).
+pub fn is_file(path: &Path) -> bool {
+    path.is_file()
+}
+
+/// Whether something is at `path` (following links).
+pub fn exists(path: &Path) -> bool {
+    path.exists()
+}
+
+/// What is at a path a writer is about to replace, looked at without
+/// opening it (nothing there blocks, a FIFO included).
+#[derive(Debug)]
+pub enum Target {
+    /// Nothing.
+    Missing,
+    /// A symbolic link to nothing, with where it points (`?` if unreadable).
+    Dangling(PathBuf),
+    /// Something (links followed).
+    Present(std::fs::Metadata),
+}
+
+/// What is at `path` (see [`Target`]).
+pub fn target(path: &Path) -> std::io::Result<Target> {
+    let link = match std::fs::symlink_metadata(path) {
+        Ok(meta) => meta,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Target::Missing),
+        Err(e) => return Err(e),
+    };
+    if !link.file_type().is_symlink() {
+        return Ok(Target::Present(link));
+    }
+    match std::fs::metadata(path) {
+        Ok(meta) => Ok(Target::Present(meta)),
+        Err(_) => Ok(Target::Dangling(
+            std::fs::read_link(path).unwrap_or_else(|_| PathBuf::from("?")),
+        )),
+    }
+}
+
+/// True when `meta` (of the file at `path`) and the file at `other` are one
+/// file: the same device and inode on Unix (hard links included), else the
+/// same resolved path.
+pub fn same_file(meta: &std::fs::Metadata, path: &Path, other: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        let _ = path;
+        std::fs::metadata(other).is_ok_and(|m| m.dev() == meta.dev() && m.ino() == meta.ino())
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        resolve(path) == resolve(other)
+    }
 }
 
 #[cfg(test)]

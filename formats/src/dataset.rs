@@ -55,6 +55,10 @@ pub struct Node {
     pub relations: Vec<usize>,
     /// True for nodes inserted to make leaf depth uniform; readers never set it.
     pub is_virtual: bool,
+    /// The source's further columns (or JSON properties) that a caller asked
+    /// to carry ([`crate::FormatOptions::carry`]), as (name, text), in the
+    /// order asked; a column empty for this node is left out.
+    pub fields: Vec<(String, String)>,
 }
 
 /// What the source data says about how node similarity should be measured.
@@ -301,6 +305,8 @@ pub struct NodeSpec {
     pub features: Option<Vec<f64>>,
     /// Ids of related nodes; a relation to the node itself is dropped.
     pub relations: Vec<String>,
+    /// Further (name, text) pairs the node carries unchanged ([`Node::fields`]).
+    pub fields: Vec<(String, String)>,
 }
 
 impl NodeSpec {
@@ -563,6 +569,7 @@ impl DatasetBuilder {
                 features: spec.features,
                 relations,
                 is_virtual: virtual_flags.get(old).copied().unwrap_or(false),
+                fields: spec.fields,
             });
         }
 

@@ -130,6 +130,22 @@ pub struct FormatOptions {
     /// every dataset in its `limits:` section.
     #[serde(skip)]
     pub limits: crate::limits::Limits,
+    /// Further columns (hierarchy JSON: node properties) to carry into
+    /// [`crate::Node::fields`] as text, for a picture's own use (a tooltip
+    /// field, a link, a colour scale). Each must exist; the error names what
+    /// asked for it. Not a `fields:` key: a config fills it from its `page:`
+    /// and `render:` sections.
+    #[serde(skip)]
+    pub carry: Vec<Carry>,
+}
+
+/// A column to carry into the model (see [`FormatOptions::carry`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Carry {
+    /// The column (or property) name.
+    pub column: String,
+    /// What asked for it, for errors (`page.fields, config line 12`).
+    pub asked_by: String,
 }
 
 /// An input format: reads the bytes of its inputs into a validated [`Dataset`].

@@ -29,7 +29,10 @@
 //! `binary`); without either flag, neighbour lists that name nodes of the file give
 //! [`SimilarityHint::NeighborList`] (what an adapter printing them means); else
 //! cosine when any node has features. Neighbour lists left unused by a flag, or
-//! chosen over feature vectors, are a warning. Other fields are ignored.
+//! chosen over feature vectors, are a warning. Other fields are ignored, but
+//! for those asked for in [`HierarchyJsonOptions::carry`]: a string, number or
+//! boolean there becomes the node's [`crate::Node::fields`] entry (other values
+//! are skipped), and a field on no node at all is an error.
 //!
 //! # Error positions
 //!
@@ -50,7 +53,7 @@ use crate::dataset::{
     is_valid_weight, Dataset, DatasetBuilder, ModelError, NodeSpec, SimilarityHint,
 };
 use crate::error::FormatError;
-use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
+use crate::format::{Carry, Format, FormatOptions, InputError, Inputs, Role};
 use crate::json_path::{extend, line_column, locate, skip_whitespace, syntax_error, Step};
 use crate::limits::{Limit, Limits};
 use crate::warning::{Warning, WarningKind};
@@ -65,6 +68,8 @@ pub struct HierarchyJsonOptions {
     /// How many nodes, how deep and how long feature vectors may be. Default:
     /// [`Limits::default`].
     pub limits: Limits,
+    /// Node properties to carry into [`crate::Node::fields`].
+    pub carry: Vec<Carry>,
 }
 
 /// Reads a hierarchy JSON document (see the module docs for the format).
@@ -102,9 +107,26 @@ pub fn parse_hierarchy_json(
         specs: Vec::new(),
         origins: Vec::new(),
         limits: options.limits,
+        carry: &options.carry,
     };
     walk.visit(&root, None, 0)?;
     let Walk { specs, origins, .. } = walk;
+    // A property asked for that no node has is a misspelt name, not data.
+    for carry in &options.carry {
+        if !specs
+            .iter()
+            .any(|spec| spec.fields.iter().any(|(name, _)| *name == carry.column))
+        {
+            return Err(FormatError::Structure {
+                line: None,
+                column: None,
+                message: format!(
+                    "no node has a field {:?} ({}) with a string, number or boolean value",
+                    carry.column, carry.asked_by
+                ),
+            });
+        }
+    }
 
     // Drop relations to ids that are not in the file (see the module docs).
     let ids: HashSet<&str> = specs.iter().map(|spec| spec.id.as_str()).collect();
@@ -228,6 +250,7 @@ struct Walk<'r, 't> {
     specs: Vec<NodeSpec>,
     origins: Vec<Origin>,
     limits: Limits,
+    carry: &'r [Carry],
 }
 
 /// The weight-field names tried on leaves when neither the options nor the file say.
@@ -399,6 +422,11 @@ impl Walk<'_, '_> {
         let features = node.features(&self.flags.feature_field, &self.limits)?;
         let relations = node.relations()?;
         let color = node.color()?;
+        let fields = self
+            .carry
+            .iter()
+            .filter_map(|c| node.carried(&c.column))
+            .collect();
         self.specs.push(NodeSpec {
             id: node.id,
             label,
@@ -407,6 +435,7 @@ impl Walk<'_, '_> {
             color,
             features,
             relations,
+            fields,
         });
         for (child_index, child) in children.iter().enumerate() {
             self.visit(child, Some((index, child_index)), depth + 1)?;
@@ -488,6 +517,17 @@ struct NodeObject<'a, 't> {
 }
 
 impl<'a> NodeObject<'a, '_> {
+    /// The property `name` as a carried field: strings as they are, numbers
+    /// and booleans as their JSON text; `None` when absent, null, empty or
+    /// structured.
+    fn carried(&self, name: &str) -> Option<(String, String)> {
+        let text = match self.object.get(name)? {
+            Value::Bool(b) => b.to_string(),
+            value => id_text(value)?,
+        };
+        (!text.is_empty()).then(|| (name.to_owned(), text))
+    }
+
     /// The path to `field` of this node.
     fn at<'f>(&self, field: &'f str) -> Vec<Step<'f>> {
         extend(&self.path, Step::Key(field))
@@ -771,6 +811,7 @@ impl Format for HierarchyJson {
         let json_options = HierarchyJsonOptions {
             weight_field: options.weight.clone(),
             limits: options.limits,
+            carry: options.carry.clone(),
         };
         parse_hierarchy_json(bytes, &json_options)
             .map_err(|error| InputError::new("hierarchy", error))

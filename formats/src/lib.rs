@@ -64,7 +64,7 @@ pub use color::{ColorError, Rgb};
 pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, SimilarityHint};
 pub use embedding::EmbeddingMatrix;
 pub use error::FormatError;
-pub use format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
+pub use format::{Carry, Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 pub use genre_table::GenreTable;
 pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};
 pub use limits::{Limit, LimitError, Limits};

@@ -13,6 +13,8 @@
 //!   `size` present. With no weight column every row weighs 1. A weight must be a
 //!   finite number `>= 0`.
 //! - **color**: [`FormatOptions::color`], else `color` when present; `#rgb`/`#rrggbb`.
+//! - **carried columns** ([`FormatOptions::carry`]): must exist; a row's
+//!   non-empty cells become its node's [`crate::Node::fields`], as text.
 //!
 //! The hierarchy comes from at most one of:
 //!
@@ -202,6 +204,17 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
         .iter()
         .map(|name| table.required_column(name, "a grouping column"))
         .collect::<Result<Vec<_>, _>>()?;
+    // Each carried column must exist; the error names what asked for it.
+    let carried = options
+        .carry
+        .iter()
+        .map(|c| {
+            Ok((
+                c.column.clone(),
+                table.required_column(&c.column, &c.asked_by)?,
+            ))
+        })
+        .collect::<Result<Vec<_>, FormatError>>()?;
     let separator = options.path_separator.unwrap_or('/');
     let id_field = id_column
         .or(path_column)
@@ -335,6 +348,11 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
 
         let mut spec = NodeSpec::new(id.clone());
         spec.parent = parent;
+        spec.fields = carried
+            .iter()
+            .filter(|(_, column)| !field(*column).is_empty())
+            .map(|(name, column)| (name.clone(), field(*column).to_owned()))
+            .collect();
         spec.label = match (label_column, &path_leaf) {
             (Some(column), _) if !field(column).is_empty() => Some(field(column).to_owned()),
             (_, Some(leaf)) => Some(leaf.clone()),

@@ -36,9 +36,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let (dataset, mut request) = (&job.dataset, job.request.clone());
     // Read even with --cold, for the stability figures.
     let previous = args.options.previous_layout()?;
-    if !args.options.cold {
-        request.previous = previous.clone();
-    }
+    request.previous = crate::graph::start::given(previous.clone(), args.options.cold);
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..args.repeat.max(1) {

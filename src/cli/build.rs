@@ -10,6 +10,7 @@ use clap::Args;
 use super::config_file::ConfigArg;
 use super::progress::LayoutBar;
 use crate::config::Config;
+use crate::graph::{DatasetBuild, DatasetGraph, GraphOptions, Job, LayoutStep};
 use crate::pipeline::{self, BuildError};
 
 /// Arguments of `nptreemap build`.
@@ -57,30 +58,42 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
     if !args.check {
         pipeline::remove_stale_temps(&writes);
     }
+    // Every dataset is built in memory before anything is written.
+    let options = GraphOptions::from_env();
     let mut built = Vec::new();
     let total = config.datasets.len();
     for (i, d) in config.datasets.iter().enumerate() {
-        let mut request = config.request(d);
+        let mut job = Job {
+            dataset: d,
+            request: config.request(d),
+            style: config.style(d),
+            cold: args.cold,
+        };
         let label = format!("{} ({}/{total})", d.name, i + 1);
-        let bar = LayoutBar::attach(&mut request, &label);
-        let result = pipeline::build(d, &request, &config.style(d), args.cold);
+        let bar = LayoutBar::attach(&mut job.request, &label);
+        let mut graph = DatasetGraph::new(options);
+        let result = graph.build(&job);
         drop(bar);
-        built.push((d, result?));
+        job.request.progress = None;
+        built.push((graph, job, result?));
     }
     if args.check {
-        return compare_outputs(built.iter().map(|(_, b)| b));
+        for (_, _, b) in &built {
+            say_layout(b);
+        }
+        return compare_outputs(built.iter().map(|(_, _, b)| b));
     }
-    for (d, b) in &built {
+    for (graph, job, b) in &mut built {
         for line in &b.warnings {
             super::warn(line);
         }
-        let written = pipeline::write_outputs(&b.outputs);
+        for line in &b.notes {
+            super::note(line);
+        }
+        say_layout(b);
+        let written = graph.commit(job, b);
         if let Some(e) = written.failed.into_iter().next() {
             return Err(e.into());
-        }
-        // Losing the stored layout only costs the next build its warm start.
-        if let Err(e) = pipeline::store_layout(d, &b.computed) {
-            tracing::warn!(dataset = %b.name, error = %e, "cannot store the layout for warm starts");
         }
         for out in &b.outputs {
             let state = if written.written.contains(&out.path) {
@@ -91,7 +104,7 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
             super::status(format_args!(
                 "{state} {} ({} bytes, dataset {})",
                 out.path.display(),
-                out.bytes.len(),
+                out.len,
                 b.name
             ));
         }
@@ -99,18 +112,51 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The dataset's status line: how its layout was got, in how long, and the
+/// constraints it realises.
+fn say_layout(b: &DatasetBuild) {
+    let how = match &b.layout {
+        LayoutStep::UpToDate => {
+            "up to date (inputs, layout settings and outputs as recorded)".to_string()
+        }
+        LayoutStep::Reused => "layout reused (every diagram as it was)".to_string(),
+        LayoutStep::Warm => format!("laid out warm in {:.0} ms", b.layout_ms),
+        LayoutStep::Cold(why) => format!("laid out cold in {:.0} ms ({why})", b.layout_ms),
+    };
+    let realized = if b.constraints == 0 {
+        "no constraints".to_string()
+    } else {
+        format!(
+            "{} of {} constraints realized ({:.1}%)",
+            b.realized,
+            b.constraints,
+            100.0 * b.realized as f64 / b.constraints as f64
+        )
+    };
+    super::status(format_args!("{}: {how}; {realized}", b.name));
+    if let Some(report) = b.computed.as_ref().map(|c| &c.report) {
+        if report.unconverged > 0 {
+            tracing::warn!(
+                dataset = %b.name,
+                unconverged = report.unconverged,
+                diagrams = report.diagrams,
+                "some diagrams stopped at the iteration cap above the area-error target"
+            );
+        }
+    }
+}
+
 /// Names each output whose file would change (or is missing); writes nothing.
-fn compare_outputs<'a>(built: impl Iterator<Item = &'a pipeline::Built>) -> anyhow::Result<()> {
+fn compare_outputs<'a>(built: impl Iterator<Item = &'a DatasetBuild>) -> anyhow::Result<()> {
     let mut stale = Vec::new();
     let mut fresh = 0;
-    for out in built.flat_map(|b| &b.outputs) {
+    for b in built {
         // A file that cannot be read is as stale as a missing one.
-        if crate::workspace::read_bytes(&out.path).is_ok_and(|bytes| bytes == out.bytes) {
-            fresh += 1;
-        } else {
+        for out in b.stale() {
             super::status(format_args!("stale {}", out.path.display()));
             stale.push(out.path.clone());
         }
+        fresh += b.outputs.len() - b.stale().count();
     }
     if stale.is_empty() {
         super::status(format_args!("{fresh} outputs up to date"));
@@ -131,7 +177,7 @@ pub(crate) fn check(args: &CheckArgs) -> anyhow::Result<()> {
         for line in pipeline::warnings(&files, &dataset) {
             super::warn(line);
         }
-        if let Some(line) = pipeline::stored_layout(d).warning {
+        if let Some(line) = crate::state::layout::read(d).warning {
             super::warn(line);
         }
         super::status(format_args!(

@@ -13,6 +13,7 @@ use clap::Args;
 use super::progress::LayoutBar;
 use super::{LayoutOptions, UsageError};
 use crate::config::DatasetConfig;
+use crate::graph::{DatasetGraph, GraphOptions, StageReport};
 use crate::layout::{Computed, Method, Previous, Request, Start};
 use crate::measure::{stability, table2, EvalMetrics, Stability};
 use crate::pipeline::{self, Rendered};
@@ -91,15 +92,17 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
     } else {
         vec![job.request.method]
     };
+    // One graph for every row: preparation and constraints are computed
+    // once, before any layout is timed, so every time is the layout's alone.
+    let mut graph = DatasetGraph::new(GraphOptions::from_env());
+    graph.prepare_for(&job.config, &job.dataset, &job.request)?;
     let mut rows = Vec::new();
     let mut stability_rows = Vec::new();
     for method in methods {
         let mut request = job.request.clone();
         request.method = method;
-        if !args.options.cold {
-            request.previous = previous.clone();
-        }
-        let (computed, time_ms) = timed(&job.config, &job.dataset, &request)?;
+        request.previous = crate::graph::start::given(previous.clone(), args.options.cold);
+        let (computed, time_ms) = timed(&mut graph, &job.config, &job.dataset, &request)?;
         let m = table2(&computed);
         if let Some(out) = &args.out {
             let rendered = [Rendered {
@@ -111,7 +114,8 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
             }
         }
         if let Some(previous) = &previous {
-            stability_rows = stability_against(previous, &job, request, (&computed, time_ms))?;
+            stability_rows =
+                stability_against(&mut graph, previous, &job, request, (&computed, time_ms))?;
             if let Start::Refused(why) = &computed.start {
                 super::note(format_args!(
                     "previous layout not used ({why}); laid out cold"
@@ -150,8 +154,10 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Lays out and measures the wall time of the whole layout step.
+/// Lays out and measures the wall time of the layout stage (preparation and
+/// constraints are the graph's already).
 fn timed(
+    graph: &mut DatasetGraph,
     d: &DatasetConfig,
     dataset: &Dataset,
     request: &Request,
@@ -159,7 +165,7 @@ fn timed(
     let mut request = request.clone();
     let bar = LayoutBar::attach(&mut request, &d.name);
     let t = Instant::now();
-    let computed = pipeline::lay_out(d, dataset, &request)?;
+    let computed = graph.lay_out(d, dataset, &request, &mut StageReport::default())?;
     let time_ms = t.elapsed().as_secs_f64() * 1000.0;
     drop(bar);
     Ok((computed, time_ms))
@@ -168,6 +174,7 @@ fn timed(
 /// The warm and the cold row against `previous`; `done` is the layout of
 /// `request` already made (warm unless --cold), so only the other start runs.
 fn stability_against(
+    graph: &mut DatasetGraph,
     previous: &Arc<Previous>,
     job: &super::Job,
     mut request: Request,
@@ -179,7 +186,7 @@ fn stability_against(
     } else {
         Some(Arc::clone(previous))
     };
-    let (other, other_ms) = timed(&job.config, &job.dataset, &request)?;
+    let (other, other_ms) = timed(graph, &job.config, &job.dataset, &request)?;
     let row = |start, computed: &Computed, time_ms| StabilityRow {
         start,
         used_previous: matches!(computed.start, Start::Warm { .. }),

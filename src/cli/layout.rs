@@ -1,6 +1,6 @@
 //! `nptreemap layout`: one dataset (a hierarchy JSON file, or a dataset of a
-//! config) to layout JSON, SVG, PNG and/or HTML files, through the pipeline's
-//! stages.
+//! config) to layout JSON, SVG, PNG and/or HTML files, through the stage
+//! graph's stages.
 
 use std::path::PathBuf;
 
@@ -9,6 +9,7 @@ use clap::Args;
 use super::progress::LayoutBar;
 use super::{LayoutOptions, UsageError};
 use crate::config::{kind_of, OutputConfig};
+use crate::graph::{DatasetGraph, GraphOptions, StageReport};
 use crate::layout::{Method, Start};
 use crate::pipeline;
 
@@ -63,7 +64,13 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
     job.check_outputs(&args.out)?;
     job.request.previous = args.options.warm_start()?;
     let bar = LayoutBar::attach(&mut job.request, &job.config.name);
-    let computed = pipeline::lay_out(&job.config, &job.dataset, &job.request)?;
+    let mut graph = DatasetGraph::new(GraphOptions::from_env());
+    let computed = graph.lay_out(
+        &job.config,
+        &job.dataset,
+        &job.request,
+        &mut StageReport::default(),
+    )?;
     drop(bar);
     if let Start::Refused(why) = &computed.start {
         super::note(format_args!(

@@ -73,6 +73,13 @@ fn environment(roff: &mut Roff) {
         "Milliseconds a layout runs before its progress bar appears (default 1000; 0 shows it \
          at once). The bar is drawn only when stderr is a terminal, and never with -q.",
     );
+    entry(
+        roff,
+        bold("NPTREEMAP_NO_CACHE"),
+        "When set to anything but the empty string or 0, build, layout and eval reuse \
+         nothing: no stage result, no state manifest, no constraint cache, no stored layout \
+         (a cold build from scratch, as the first one).",
+    );
 }
 
 /// The files the commands read and write besides those a config names.
@@ -89,8 +96,21 @@ fn files(roff: &mut Roff) {
         roff,
         italic("OUTPUT_FOLDER/.nptreemap/DATASET.layout.json"),
         "The last layout of each dataset, beside its first output (or in the folder the \
-         config's state_dir names): the warm start of the next build or watch. Deleting it \
-         costs only a cold start.",
+         config's state_dir names), with the fingerprint of its layout settings: the warm \
+         start of the next build or watch. Deleting it costs only a cold start.",
+    );
+    entry(
+        roff,
+        italic("OUTPUT_FOLDER/.nptreemap/DATASET.manifest.json"),
+        "Fingerprints of the inputs, layout settings and outputs of the last build (or watch \
+         rebuild): a build or build --check that finds them unchanged stops there, and watch \
+         starts without laying out. Commit it with the outputs and the stored layout.",
+    );
+    entry(
+        roff,
+        italic("OUTPUT_FOLDER/.nptreemap/cache/"),
+        "The constraints of the last similarity inputs (so a weight edit computes none). \
+         Local only: it holds its own .gitignore.",
     );
     entry(
         roff,

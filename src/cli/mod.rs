@@ -204,12 +204,15 @@ impl LayoutOptions {
         }
     }
 
-    /// The layout to start warm from: `--previous` unless `--cold`.
+    /// The layout to start warm from: `--previous` unless `--cold` (the
+    /// graph's one decision, [`crate::graph::start::given`]).
     pub(crate) fn warm_start(&self) -> anyhow::Result<Option<Arc<Previous>>> {
-        if self.cold {
-            return Ok(None);
-        }
-        self.previous_layout()
+        let previous = if self.cold {
+            None
+        } else {
+            self.previous_layout()?
+        };
+        Ok(crate::graph::start::given(previous, self.cold))
     }
 }
 

@@ -33,6 +33,12 @@ pub(crate) struct WatchArgs {
     /// layout stored beside its outputs.
     #[arg(long)]
     cold: bool,
+    /// Also serve a live preview over HTTP at ADDR (HOST, PORT or HOST:PORT;
+    /// default 127.0.0.1:7878, or the next free port): an index of the
+    /// datasets and each dataset's page, which follows every rebuild.
+    #[cfg(feature = "serve")]
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "")]
+    serve: Option<String>,
 }
 
 /// How long a stop signal waits for the daemon to stop by itself (it checks
@@ -42,6 +48,23 @@ pub(crate) struct WatchArgs {
 const GRACE: Duration = Duration::from_millis(600);
 
 pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
+    // The preview's URL is the first line, before the daemon's.
+    #[cfg(feature = "serve")]
+    let preview = match &args.serve {
+        Some(addr) => {
+            let config = std::path::absolute(args.config.path()?)?;
+            let preview = crate::serve::start(addr, &config).map_err(|e| match e {
+                // A malformed address is the arguments' fault (exit code 2).
+                crate::serve::ServeError::Address(_) => {
+                    anyhow::Error::new(super::UsageError(e.to_string()))
+                }
+                e => anyhow::Error::new(e),
+            })?;
+            super::say(preview.first_line());
+            Some(preview)
+        }
+        None => None,
+    };
     let (tx, rx) = daemon::channel();
     let stop = Arc::new(AtomicBool::new(false));
     let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
@@ -75,10 +98,47 @@ pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
         first_build_progress: Some(FirstBuildProgress(Arc::new(super::progress::sink))),
         ..Options::default()
     };
-    daemon::run(&args.config.path()?, options, tx, &rx, &mut |status| {
-        super::say(status);
-    })?;
+    // The status lines are printed (and pushed to the preview's pages); the
+    // rebuild events are logged with `-vv`.
+    daemon::run(
+        &args.config.path()?,
+        options,
+        tx,
+        &rx,
+        &mut |report| match report {
+            daemon::event::Report::Line(line) => {
+                // glue: issue 25. The preview is told of every rebuild by
+                // the same line that reports it (after the outputs are
+                // written).
+                #[cfg(feature = "serve")]
+                if let Some(preview) = &preview {
+                    preview.publish(&line.status);
+                }
+                super::say(line)
+            }
+            daemon::event::Report::Rebuilt(event) => log_event(&event),
+        },
+    )?;
     Ok(())
+}
+
+/// Logs a rebuild event at debug level (`-vv`), every field of it.
+fn log_event(event: &daemon::event::Rebuilt) {
+    let at = daemon::status::time_of_day(event.at);
+    let (dataset, reason) = (&event.dataset, &event.reason);
+    match &event.result {
+        Ok(o) => tracing::debug!(
+            %dataset, %at, %reason, layout = ?o.layout, ms = o.ms,
+            written = o.written.len(), unchanged = o.unchanged.len(), failed = o.failed.len(),
+            stages = o.stages.runs.len(),
+            moved_mean = ?o.stability.map(|s| s.displacement_mean),
+            "rebuild event"
+        ),
+        Err(f) => tracing::debug!(
+            %dataset, %at, %reason, file = ?f.file, line = ?f.line, message = %f.message,
+            "rebuild event: failed"
+        ),
+    }
 }
 
 /// Ends the process with exit code 0 once no set of outputs is being written

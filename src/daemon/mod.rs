@@ -2,8 +2,11 @@
 //! current (issue 6). Orchestration only: wait for a batch of file events
 //! ([`watcher`]; links followed to the files they name, [`links`]), sort it
 //! into work ([`change`]), queue it per dataset ([`queue`]), hand each
-//! dataset's next task to that dataset's own [`worker`] thread, and report
-//! one [`status`] line per outcome as it comes back. No dataset waits for
+//! dataset's next task to that dataset's own [`worker`] thread (which hands
+//! the changed inputs to the dataset's stage graph, [`crate::graph`], kept
+//! in memory between rebuilds), and report each outcome as it comes back:
+//! one [`event::Rebuilt`] per attempt and its [`status`] lines, both
+//! through the one [`event::Report`] callback. No dataset waits for
 //! another, and the loop never waits for a rebuild (issue 21 item 3). A bad
 //! edit is a reported problem that keeps the last good config and outputs;
 //! a panic in a rebuild is that dataset's failure; only a failure to start
@@ -11,6 +14,8 @@
 
 /// What a batch of changed paths means: relayout, re-render, added, removed.
 pub mod change;
+/// The typed event of each rebuild attempt, for subscribers.
+pub mod event;
 /// Inputs behind symbolic links.
 pub mod links;
 /// Work waiting per dataset, and retries of failed writes.
@@ -33,6 +38,7 @@ use crate::config::{Config, ConfigFileError, DatasetConfig};
 use crate::layout::ProgressSink;
 use crate::pipeline::{self, BuildError, Fault};
 use change::{ChangeSet, Reason};
+use event::Report;
 use links::Aliases;
 use queue::Queue;
 use status::{Line, Status};
@@ -115,7 +121,7 @@ struct Daemon<'a> {
     config: Config,
     timing: Timing,
     stop: Arc<AtomicBool>,
-    report: &'a mut dyn FnMut(Line),
+    report: &'a mut dyn FnMut(Report),
     /// What the workers share; its `done` end is `done`.
     shared: Arc<Shared>,
     done: Receiver<Done>,
@@ -135,6 +141,9 @@ struct Daemon<'a> {
     pending: BTreeMap<String, (Status, Instant)>,
     /// When the last relevant event arrived (for [`SETTLE`]).
     last_event: Instant,
+    /// When the last batch with relevant paths ended (its debounce over):
+    /// the rebuilds it causes are timed from it.
+    last_batch: Instant,
     /// The problems last reported per subject (a dataset or `config`), until
     /// they are fixed: the same problems are not reported twice in a row,
     /// and the fix is announced ("ok again").
@@ -185,13 +194,14 @@ pub fn shutdown() {
 /// `rx` (whose sender `tx` also feeds the file watcher and the workers).
 /// Builds everything once, then rebuilds what each batch of changes
 /// affects; a [`Message::Reload`] reads the config and every input again.
-/// Every line of output goes to `report`.
+/// Every line of output, and the [`event::Rebuilt`] event of every rebuild
+/// attempt, goes to `report`.
 pub fn run(
     config_path: &Path,
     options: Options,
     tx: Sender<Message>,
     rx: &Receiver<Message>,
-    report: &mut dyn FnMut(Line),
+    report: &mut dyn FnMut(Report),
 ) -> Result<(), DaemonError> {
     let config_path = std::path::absolute(config_path).map_err(|source| DaemonError::Path {
         path: config_path.to_path_buf(),
@@ -226,6 +236,7 @@ pub fn run(
         dirs: BTreeSet::new(),
         pending: BTreeMap::new(),
         last_event: Instant::now(),
+        last_batch: Instant::now(),
         troubled: BTreeMap::new(),
         warned: BTreeMap::new(),
     };
@@ -274,6 +285,7 @@ impl Daemon<'_> {
             }
             if !paths.is_empty() {
                 self.last_event = Instant::now();
+                self.last_batch = self.last_event;
                 tracing::debug!(?paths, "batch");
             }
             let mut work = ChangeSet::default();
@@ -314,7 +326,7 @@ impl Daemon<'_> {
 
     /// Reports one line, with its time of day.
     fn say(&mut self, status: Status) {
-        (self.report)(Line::now(status));
+        (self.report)(Report::Line(Line::now(status)));
     }
 
     /// How long the loop may wait for events: until the next pending problem
@@ -463,7 +475,14 @@ impl Daemon<'_> {
             let Some(next) = self.queue.take(&name, now) else {
                 continue;
             };
+            // A start build is timed from its dispatch, the rest from the
+            // batch that caused them.
+            let since = match &next {
+                queue::Next::Build(Reason::Start) | queue::Next::Retry => now,
+                _ => self.last_batch,
+            };
             let job = Job {
+                since,
                 next,
                 request: self.config.request(&d),
                 style: self.config.style(&d),
@@ -519,12 +538,15 @@ impl Daemon<'_> {
         }
     }
 
-    /// Reports one outcome.
-    fn outcome(&mut self, Done { name, outcome }: Done) {
+    /// Reports one outcome: its event, then its lines.
+    fn outcome(&mut self, Done { name, reason, outcome }: Done) {
         // A dataset that left the config meanwhile: nothing to say.
         let Some(d) = self.dataset(&name).cloned() else {
             return;
         };
+        if let Some(event) = event::of(&name, &reason, &outcome) {
+            (self.report)(Report::Rebuilt(Arc::new(event)));
+        }
         match outcome {
             Outcome::Unchanged => {}
             Outcome::Abandoned => tracing::debug!(dataset = name, "stopping; rebuild abandoned"),
@@ -542,9 +564,7 @@ impl Daemon<'_> {
             Outcome::Panicked(message) => {
                 let problem = Status::Problem {
                     subject: name.clone(),
-                    message: format!(
-                        "internal error (a bug; please report it with this line): {message}"
-                    ),
+                    message: event::panicked(&message),
                     consequence: worker::kept(&d, false).to_string(),
                 };
                 self.problems(&name, vec![problem]);
@@ -564,12 +584,15 @@ impl Daemon<'_> {
             written,
             warnings,
             unsaved,
+            ..
         } = built;
         self.pending.remove(name);
         let retry = reason == Reason::Retry;
         if !retry {
             self.warn(name, warnings);
         }
+        // With -v: the figure benches/incremental.py reads.
+        tracing::info!("{name}: outputs on disk {ms:.1} ms after the batch ({reason})");
         let failed = written.failed.len();
         let others = match (written.written.len(), written.unchanged.len()) {
             (0, 0) => "no output written".to_string(),

@@ -23,6 +23,9 @@ pub enum LayoutKind {
     Warm,
     /// The stored layout was reused (render-only change).
     Reused,
+    /// Nothing had changed since the outputs were made (by the state
+    /// folder's manifest): nothing was laid out or drawn.
+    UpToDate,
     /// Nothing was laid out or drawn: outputs that could not be written
     /// before were written again.
     Kept,
@@ -94,24 +97,29 @@ impl Status {
         error: &(dyn std::error::Error + 'static),
         consequence: impl Into<String>,
     ) -> Self {
-        let mut message = error.to_string();
-        let mut source = error.source();
-        while let Some(e) = source {
-            let text = e.to_string();
-            // thiserror's transparent and "{source}" variants repeat the inner
-            // message; print each part once.
-            if !message.contains(&text) {
-                message.push_str(": ");
-                message.push_str(&text);
-            }
-            source = e.source();
-        }
         Status::Problem {
             subject: subject.into(),
-            message,
+            message: chain(error),
             consequence: consequence.into(),
         }
     }
+}
+
+/// An error's message with its whole `source()` chain, each part once.
+pub fn chain(error: &(dyn std::error::Error + 'static)) -> String {
+    let mut message = error.to_string();
+    let mut source = error.source();
+    while let Some(e) = source {
+        let text = e.to_string();
+        // thiserror's transparent and "{source}" variants repeat the inner
+        // message; print each part once.
+        if !message.contains(&text) {
+            message.push_str(": ");
+            message.push_str(&text);
+        }
+        source = e.source();
+    }
+    message
 }
 
 fn file_name(p: &std::path::Path) -> String {
@@ -225,6 +233,7 @@ impl Status {
                     LayoutKind::Cold => "laid out",
                     LayoutKind::Warm => "laid out warm",
                     LayoutKind::Reused => "re-rendered",
+                    LayoutKind::UpToDate => "found up to date",
                     LayoutKind::Kept => "written again",
                 };
                 let again = if *recovered { "ok again, " } else { "" };

@@ -3,11 +3,11 @@
 //! only its own dataset, and the daemon's loop stays free to batch events,
 //! dispatch work and report. A worker keeps its dataset's last good layout
 //! (the source of render-only rebuilds and of the next warm start) and the
-//! outputs it could not write; it runs one task at a time through the
-//! [`pipeline`]'s stages and answers each with an [`Outcome`]. A panic in a
-//! task is caught and is that dataset's failure: the daemon lives on.
-//!
-//! [`pipeline`]: crate::pipeline
+//! outputs it could not write; it hands each task's input files to the
+//! dataset's stage graph ([`crate::graph`], kept in memory between
+//! rebuilds), which decides what to run, and answers with an [`Outcome`].
+//! A panic in a task is caught and is that dataset's failure: the daemon
+//! lives on.
 
 use std::ops::ControlFlow;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -17,9 +17,13 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::config::DatasetConfig;
-use crate::layout::{Computed, LayoutError, ProgressSink, Request, Start};
+use crate::fingerprint::Fingerprint;
+use crate::graph::{self, DatasetGraph, GraphOptions, LayoutStep, Stage, StageReport};
+use crate::layout::{LayoutError, ProgressSink, Request};
+use crate::measure::stability::{stability, Stability};
 use crate::pipeline::{self, BuildError, Rendered, Written};
 use crate::render::Style;
+use crate::workspace;
 
 use super::change::Reason;
 use super::queue::Next;
@@ -34,6 +38,9 @@ const STACK: usize = 8 << 20;
 
 /// One task for a worker, with the config it runs under.
 pub struct Job {
+    /// When the batch that asked for it ended (its debounce over): the
+    /// rebuild's time is counted from it.
+    pub since: Instant,
     /// What to do.
     pub next: Next,
     /// The dataset, as the config says now.
@@ -61,6 +68,11 @@ pub struct Built {
     pub warnings: Vec<String>,
     /// Why the layout could not be stored for warm starts, if it could not.
     pub unsaved: Option<std::io::Error>,
+    /// What each stage did (empty for a retry).
+    pub stages: StageReport,
+    /// How far the cells moved against the dataset's previous picture, when
+    /// it was laid out and there was one.
+    pub stability: Option<Stability>,
 }
 
 /// How a task ended.
@@ -83,6 +95,8 @@ pub enum Outcome {
 pub struct Done {
     /// The dataset.
     pub name: String,
+    /// Why the task ran.
+    pub reason: Reason,
     /// How it ended.
     pub outcome: Outcome,
 }
@@ -160,6 +174,11 @@ fn serve(name: &str, jobs: &Receiver<Job>, shared: &Shared, run: &mut Run<'_>) {
             });
         let done = Done {
             name: name.to_string(),
+            reason: match &job.next {
+                Next::Build(reason) => reason.clone(),
+                Next::Render => Reason::Render,
+                Next::Retry => Reason::Retry,
+            },
             outcome,
         };
         if shared.done.send(done).is_err() || shared.wake.send(Message::Wake).is_err() {
@@ -178,25 +197,39 @@ fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
 }
 
 /// What a worker remembers of its dataset between tasks.
-#[derive(Default)]
 struct State {
-    /// The last good layout.
-    computed: Option<Computed>,
+    /// The dataset's stage graph: the last result of every stage (the last
+    /// good layout among them: the source of render-only rebuilds and of the
+    /// next warm start) and the state a commit could not write.
+    graph: DatasetGraph,
     /// Fingerprint of the input bytes last built (or last failed on), so an
     /// event that changed nothing (a touch, a save without edits) costs nothing.
-    fingerprint: Option<u64>,
+    fingerprint: Option<Fingerprint>,
+    /// Whether a build has succeeded: there are good outputs, and a failed
+    /// build's inputs, seen again unchanged, need no second attempt.
+    good: bool,
     /// The outputs of the last rebuild when some could not be written: the
     /// whole set, so that a retry leaves it consistent (the ones that were
     /// written are skipped as unchanged).
     unwritten: Option<Vec<Rendered>>,
-    /// Whether the last layout could not be stored for warm starts.
-    unsaved: bool,
+}
+
+impl Default for State {
+    fn default() -> Self {
+        State {
+            // `NPTREEMAP_NO_CACHE=1` turns reuse off here too, as for `build`.
+            graph: DatasetGraph::new(GraphOptions::from_env()),
+            fingerprint: None,
+            good: false,
+            unwritten: None,
+        }
+    }
 }
 
 /// What happens to a failed dataset's outputs, truthfully: kept when there
 /// are some, else none yet.
 pub fn kept(d: &DatasetConfig, missing_input: bool) -> &'static str {
-    let any = d.outputs.iter().any(|o| o.path.is_file());
+    let any = d.outputs.iter().any(|o| workspace::is_file(&o.path));
     match (any, missing_input) {
         (true, true) => "last outputs kept; rebuilt when the file is back",
         (true, false) => "last good outputs kept",
@@ -212,17 +245,16 @@ impl State {
         }
         match &job.next {
             Next::Build(reason) => self.build(name, reason.clone(), job, shared),
-            Next::Render => match self.computed.take() {
-                Some(computed) => self.render(computed, job, shared),
-                // No good layout yet (its last build failed): a full build.
-                None => self.build(name, Reason::Render, job, shared),
-            },
+            // The graph re-renders from the layout it holds (and lays out
+            // only when it holds none: the last build failed).
+            Next::Render => self.build(name, Reason::Render, job, shared),
             Next::Retry => self.retry(job, shared),
         }
     }
 
-    /// Reads, lays out (warm when a previous layout exists), renders and
-    /// writes the dataset.
+    /// Hands the dataset's files to its graph, which runs the stages their
+    /// changes call for (warm or cold is its decision, `graph::start`), and
+    /// writes what changed.
     fn build(&mut self, name: &str, reason: Reason, job: &Job, shared: &Shared) -> Outcome {
         let d = &job.dataset;
         let started = Instant::now();
@@ -234,136 +266,100 @@ impl State {
                 return Outcome::Unreadable(e, consequence);
             }
         };
-        let fingerprint = fingerprint(&files);
+        let mut stages = StageReport::default();
+        stages.record(name, Stage::Read, true, ms_since(started), "");
+        let fingerprint = graph::keys::inputs(d, &files);
         let data_only = matches!(reason, Reason::Data(_) | Reason::Reload);
         if data_only
             && self.fingerprint == Some(fingerprint)
-            && self.computed.is_some()
+            && self.good
             && !job.force
         {
             tracing::debug!(dataset = name, "inputs unchanged; nothing to do");
             return Outcome::Unchanged;
         }
         self.fingerprint = Some(fingerprint);
-        // Warm from the last good layout in memory; at start, from the one
-        // stored beside the outputs (unless --cold).
-        let mut request = job.request.clone();
-        let mut warnings = Vec::new();
-        request.previous = match &self.computed {
-            Some(computed) => Some(Arc::new(computed.previous())),
-            None if reason == Reason::Start && shared.cold => None,
-            None => {
-                let stored = pipeline::stored_layout(d);
-                warnings.extend(stored.warning);
-                stored.previous
-            }
-        };
-        let read_ms = ms_since(started);
         let bar = Bar::take(shared, &reason, name);
+        let mut request = job.request.clone();
+        // A stop ends the layout itself (see `progress`).
         request.progress = Some(progress(shared.stop.clone(), bar.sink()));
-        let result = pipeline::parse_inputs(d, &files).and_then(|dataset| {
-            let parsed = Instant::now();
-            warnings.extend(pipeline::warnings(&files, &dataset));
-            if shared.stopping() {
-                return Ok(None);
-            }
-            // A stop ends the layout itself (see `progress`).
-            let computed = match pipeline::lay_out(d, &dataset, &request) {
-                Err(BuildError::Layout {
-                    source: LayoutError::Cancelled,
-                    ..
-                }) => return Ok(None),
-                other => other?,
-            };
-            // Done with the reporter: a terminal bar clears before the
-            // status line prints.
-            request.progress = None;
-            drop(bar);
-            let laid_out = Instant::now();
-            if shared.stopping() {
-                return Ok(None);
-            }
-            let outputs = pipeline::render_outputs(&computed, &job.style, &d.outputs)?;
-            tracing::debug!(
-                dataset = name,
-                read_ms,
-                parse_ms = ms_between(started, parsed) - read_ms,
-                layout_ms = ms_between(parsed, laid_out),
-                render_ms = ms_since(laid_out),
-                "rebuilt in memory"
-            );
-            Ok(Some((computed, outputs)))
-        });
-        match result {
-            Ok(None) => Outcome::Abandoned,
-            Ok(Some((computed, outputs))) => {
-                let layout = match computed.start {
-                    Start::Warm { .. } => LayoutKind::Warm,
-                    Start::Cold | Start::Refused(_) => LayoutKind::Cold,
-                };
-                self.finish(reason, layout, started, computed, outputs, warnings, job, shared)
-            }
-            Err(e) => Outcome::Failed(e, kept(d, false)),
-        }
-    }
-
-    /// Renders the last good layout again (a render-only config change).
-    fn render(&mut self, computed: Computed, job: &Job, shared: &Shared) -> Outcome {
-        let started = Instant::now();
-        match pipeline::render_outputs(&computed, &job.style, &job.dataset.outputs) {
-            Ok(outputs) => self.finish(
-                Reason::Render,
-                LayoutKind::Reused,
-                started,
-                computed,
-                outputs,
-                Vec::new(),
-                job,
-                shared,
-            ),
-            Err(e) => {
-                self.computed = Some(computed);
-                Outcome::Failed(e, kept(&job.dataset, false))
-            }
-        }
-    }
-
-    /// Writes the outputs that changed (atomically) and stores the layout;
-    /// keeps the outputs for a retry when some could not be written.
-    #[allow(clippy::too_many_arguments)]
-    fn finish(
-        &mut self,
-        reason: Reason,
-        layout: LayoutKind,
-        started: Instant,
-        computed: Computed,
-        outputs: Vec<Rendered>,
-        warnings: Vec<String>,
-        job: &Job,
-        shared: &Shared,
-    ) -> Outcome {
+        let graph_job = graph::Job {
+            dataset: d,
+            request,
+            style: job.style.clone(),
+            cold: reason == Reason::Start && shared.cold,
+        };
+        let result = self.graph.build_from(&graph_job, &files, stages);
+        // Done with the reporter: a terminal bar clears before the status
+        // line prints.
+        drop(bar);
+        let mut build = match result {
+            Err(BuildError::Layout {
+                source: LayoutError::Cancelled,
+                ..
+            }) => return Outcome::Abandoned,
+            Err(e) => return Outcome::Failed(e, kept(d, false)),
+            Ok(build) => build,
+        };
         if shared.stopping() {
             return Outcome::Abandoned;
         }
-        let written = pipeline::write_outputs(&outputs);
-        self.unwritten = (!written.failed.is_empty()).then_some(outputs);
-        let unsaved = pipeline::store_layout(&job.dataset, &computed).err();
-        self.unsaved = unsaved.is_some();
-        self.computed = Some(computed);
+        let layout = match &build.layout {
+            LayoutStep::Cold(_) => LayoutKind::Cold,
+            LayoutStep::Warm => LayoutKind::Warm,
+            LayoutStep::Reused => LayoutKind::Reused,
+            LayoutStep::UpToDate => LayoutKind::UpToDate,
+        };
+        // How far the cells moved from the layout the warm start began with
+        // (cheap next to the layout: one pass over the leaves and the
+        // realised pairs).
+        let stability = match (&build.started_from, &build.computed) {
+            (Some(before), Some(after)) => Some(stability(before, after)),
+            _ => None,
+        };
+        let written = self.graph.commit(&graph_job, &mut build);
+        self.good = true;
+        // Kept for the retry only when some output could not be written.
+        self.unwritten = (!written.failed.is_empty()).then(|| {
+            build
+                .outputs
+                .iter()
+                .filter_map(|o| {
+                    o.bytes.as_ref().map(|bytes| Rendered {
+                        path: o.path.clone(),
+                        bytes: bytes.clone(),
+                    })
+                })
+                .collect()
+        });
+        let unsaved = if written.failed.is_empty() && self.graph.unstored() {
+            Some(std::io::Error::other(
+                "the state folder could not be written; retried",
+            ))
+        } else {
+            None
+        };
+        for note in &build.notes {
+            tracing::info!(dataset = name, "{note}");
+        }
+        let mut warnings = build.warnings;
+        warnings.extend(build.notes);
         Outcome::Built(Built {
             reason,
             layout,
-            ms: ms_since(started),
+            ms: ms_since(job.since.min(started)),
             written,
             warnings,
             unsaved,
+            stages: build.stages,
+            stability,
         })
     }
 
     /// Writes again what the last rebuild could not write: its outputs, and
-    /// the stored layout.
+    /// the state folder.
     fn retry(&mut self, job: &Job, shared: &Shared) -> Outcome {
-        if self.unwritten.is_none() && !self.unsaved {
+        if self.unwritten.is_none() && !self.graph.unstored() {
             return Outcome::Unchanged;
         }
         let started = Instant::now();
@@ -380,11 +376,11 @@ impl State {
             }
             None => Written::default(),
         };
-        let unsaved = match (&self.computed, self.unsaved) {
-            (Some(computed), true) => pipeline::store_layout(&job.dataset, computed).err(),
-            _ => None,
+        let unsaved = if written.failed.is_empty() {
+            self.graph.store_again(&job.dataset).err()
+        } else {
+            None
         };
-        self.unsaved = unsaved.is_some();
         if shared.stopping() {
             return Outcome::Abandoned;
         }
@@ -395,6 +391,8 @@ impl State {
             written,
             warnings: Vec::new(),
             unsaved,
+            stages: StageReport::default(),
+            stability: None,
         })
     }
 }
@@ -453,32 +451,25 @@ fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1000.0
 }
 
-fn ms_between(a: Instant, b: Instant) -> f64 {
-    b.duration_since(a).as_secs_f64() * 1000.0
-}
-
-/// A fingerprint of a dataset's input bytes (roles, paths and contents).
-fn fingerprint(files: &[pipeline::InputFile]) -> u64 {
-    use std::hash::{Hash, Hasher};
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    for f in files {
-        f.role.hash(&mut h);
-        f.path.hash(&mut h);
-        f.bytes.hash(&mut h);
-    }
-    h.finish()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::config::Config;
 
-    /// Issue 21 item 3: a task that panics is its dataset's failure, with
-    /// the panic's message; the worker forgets what the task left behind
-    /// and goes on with the next task.
-    #[test]
-    fn a_panicking_task_is_a_failure_and_the_worker_goes_on() {
+    /// A task for dataset `d` of `config`.
+    fn job_of(config: &Config, d: &DatasetConfig, next: Next) -> Job {
+        Job {
+            since: Instant::now(),
+            next,
+            request: config.request(d),
+            style: config.style(d),
+            dataset: d.clone(),
+            force: false,
+        }
+    }
+
+    /// What a worker shares, with the ends its outcomes and wake-ups go to.
+    fn shared() -> (Shared, Receiver<Done>, Receiver<Message>) {
         let (done, outcomes) = std::sync::mpsc::channel();
         let (wake, woken) = std::sync::mpsc::channel();
         let shared = Shared {
@@ -489,19 +480,22 @@ mod tests {
             progress: None,
             bar: AtomicBool::new(false),
         };
+        (shared, outcomes, woken)
+    }
+
+    /// Issue 21 item 3: a task that panics is its dataset's failure, with
+    /// the panic's message; the worker forgets what the task left behind
+    /// and goes on with the next task.
+    #[test]
+    fn a_panicking_task_is_a_failure_and_the_worker_goes_on() {
+        let (shared, outcomes, woken) = shared();
         let config = Config::from_str(
             "datasets:\n  - name: d\n    format: hierarchy-json\n    files: {hierarchy: t.json}\n    outputs: [{path: out/d.svg}]\n",
             std::path::Path::new("/nowhere"),
         )
         .expect("config");
         let d = config.datasets[0].clone();
-        let job = |next| Job {
-            next,
-            request: config.request(&d),
-            style: config.style(&d),
-            dataset: d.clone(),
-            force: false,
-        };
+        let job = |next| job_of(&config, &d, next);
         let (jobs, rx) = std::sync::mpsc::channel();
         jobs.send(job(Next::Build(Reason::Start))).expect("send");
         jobs.send(job(Next::Retry)).expect("send");
@@ -510,10 +504,10 @@ mod tests {
         serve("d", &rx, &shared, &mut |state, _job, _shared| {
             calls += 1;
             if calls == 1 {
-                state.unsaved = true;
+                state.unwritten = Some(Vec::new());
                 panic!("bad input made a bug show");
             }
-            assert!(!state.unsaved, "the panicked task's state was dropped");
+            assert!(state.unwritten.is_none(), "the panicked task's state was dropped");
             Outcome::Unchanged
         });
         let outcomes: Vec<Done> = outcomes.try_iter().collect();
@@ -524,5 +518,94 @@ mod tests {
             _ => panic!("not a panic outcome"),
         }
         assert!(matches!(outcomes[1].outcome, Outcome::Unchanged));
+    }
+
+    /// A scratch copy of the countries example, with SVG and layout JSON
+    /// outputs only (quick), and its config.
+    fn countries(tag: &str) -> (std::path::PathBuf, Config) {
+        let dir = std::env::temp_dir().join(format!("nptreemap-worker-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("scratch");
+        let example = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/countries");
+        for f in ["countries.csv", "borders.csv"] {
+            std::fs::copy(example.join(f), dir.join(f)).expect("copy");
+        }
+        let text = std::fs::read_to_string(example.join("nptreemap.yaml"))
+            .expect("config")
+            .replace("      - path: out/countries.png\n", "");
+        std::fs::write(dir.join("nptreemap.yaml"), text).expect("config");
+        let config = Config::from_path(&dir.join("nptreemap.yaml")).expect("config");
+        (dir, config)
+    }
+
+    /// Issue 22 item 1: the daemon's worker hands its dataset's changes to
+    /// the stage graph it keeps between rebuilds: a weight edit recomputes
+    /// no constraint and lays out warm (with the stability figures of the
+    /// move), and a bad edit's event names the file and line. Fails with
+    /// the caches off (`NPTREEMAP_NO_CACHE=1`), and on the worker that
+    /// re-composed the pipeline (no stage report).
+    #[test]
+    fn a_weight_edit_in_watch_recomputes_no_constraint() {
+        let (dir, config) = countries("weight");
+        let d = config.datasets[0].clone();
+        let job = |next| job_of(&config, &d, next);
+        let (shared, outcomes, _woken) = shared();
+        let shared = Arc::new(shared);
+        let (jobs, rx) = std::sync::mpsc::channel();
+        let worker = std::thread::spawn(move || {
+            serve("countries", &rx, &shared, &mut |state, job, shared| {
+                state.run("countries", job, shared)
+            });
+        });
+        let next = |task| {
+            jobs.send(job(task)).expect("send");
+            let done = outcomes
+                .recv_timeout(std::time::Duration::from_secs(300))
+                .expect("an outcome");
+            assert_eq!(done.name, "countries");
+            done
+        };
+
+        let first = next(Next::Build(Reason::Start));
+        let Outcome::Built(built) = &first.outcome else {
+            panic!("the start build failed");
+        };
+        assert_eq!(built.stages.ran(Stage::Constraints), 1, "{:?}", built.stages);
+        assert!(built.written.failed.is_empty());
+
+        let csv = dir.join("countries.csv");
+        let text = std::fs::read_to_string(&csv).expect("csv");
+        let edited = text.replacen("AU,Australia,24992369,", "AU,Australia,27491606,", 1);
+        assert_ne!(edited, text);
+        std::fs::write(&csv, &edited).expect("edit");
+        let second = next(Next::Build(Reason::Data(vec!["countries.csv".to_string()])));
+        let Outcome::Built(built) = &second.outcome else {
+            panic!("the rebuild failed");
+        };
+        let s = &built.stages;
+        assert_eq!(s.ran(Stage::Constraints), 0, "{s:?}");
+        assert_eq!(s.reused(Stage::Constraints), 1, "{s:?}");
+        assert_eq!(built.layout, LayoutKind::Warm, "{s:?}");
+        assert!(!built.written.written.is_empty(), "the edit shows");
+        let moved = built.stability.expect("stability figures of a warm layout");
+        assert!(moved.leaves > 0 && moved.unchanged + 1 == moved.leaves, "{moved:?}");
+        let event = super::super::event::of("countries", &second.reason, &second.outcome)
+            .expect("an event");
+        let outputs = event.result.expect("ok");
+        assert_eq!(outputs.written, built.written.written);
+
+        let bad_line = edited.lines().count() + 1;
+        std::fs::write(&csv, format!("{edited}XX,Nowhere,not-a-number,Asia\n")).expect("bad");
+        let third = next(Next::Build(Reason::Data(vec!["countries.csv".to_string()])));
+        let event = super::super::event::of("countries", &third.reason, &third.outcome)
+            .expect("an event");
+        let failure = event.result.expect_err("a bad edit fails");
+        assert_eq!(failure.file.as_deref(), Some(csv.as_path()), "{failure:?}");
+        assert_eq!(failure.line, Some(bad_line), "{failure:?}");
+        assert!(failure.message.contains("countries.csv"), "{failure:?}");
+
+        drop(jobs);
+        worker.join().expect("the worker ends");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

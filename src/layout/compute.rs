@@ -23,8 +23,9 @@ use nptreemap_formats::Dataset;
 #[non_exhaustive]
 pub struct Computed {
     /// The dataset the layout is indexed by: the prepared one (with virtual
-    /// nodes) when a similarity was used, else the input.
-    pub dataset: Dataset,
+    /// nodes) when a similarity was used, else the input. Shared: a build
+    /// keeps the prepared dataset of its similarity inputs between runs.
+    pub dataset: Arc<Dataset>,
     /// The layout.
     pub layout: Layout,
     /// How the optimisation went.
@@ -37,6 +38,8 @@ pub struct Computed {
     pub method: Method,
     /// Whether the layout started cold or from the previous layout.
     pub start: Start,
+    /// The settings it was laid out with ([`Request::settings`]).
+    pub settings: LayoutSettings,
     /// Each depth level's adjacency in `layout` (index = depth), computed at
     /// most once: by [`compute`] when there are constraints to flag, else on
     /// first use ([`Computed::adjacency`]).
@@ -110,11 +113,51 @@ pub struct Request {
     pub progress: Option<ProgressSink>,
 }
 
-/// Runs the layout step.
-pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutError> {
+/// The settings of a request that shape the picture: everything but the
+/// previous layout and the progress callback. A layout is a function of the
+/// dataset, these settings and the previous layout it started from; the
+/// build records them beside a stored layout so that a warm start from a
+/// layout made with other settings (another seed, say) is never taken.
+#[derive(Clone, Debug, Default, PartialEq)]
+#[non_exhaustive]
+pub struct LayoutSettings {
+    /// Layout parameters.
+    pub params: Params,
+    /// The method asked for (`None`: chosen by the data).
+    pub method: Option<Method>,
+    /// The similarity asked for (`None`: the data's own).
+    pub similarity: Option<SimilarityKind>,
+    /// Settings of the similarity-driven methods.
+    pub neighbor: NeighborParams,
+}
+
+impl Request {
+    /// The settings of this request that shape the picture.
+    pub fn settings(&self) -> LayoutSettings {
+        LayoutSettings {
+            params: self.params.clone(),
+            method: self.method,
+            similarity: self.similarity,
+            neighbor: self.neighbor.clone(),
+        }
+    }
+}
+
+/// What a run on a dataset does: the similarity it uses (none for a plain
+/// treemap) and the method, as [`compute`] resolves them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Plan {
+    /// The similarity, from the request or the data's hint.
+    pub(crate) kind: Option<SimilarityKind>,
+    /// The method, from the request or chosen by the similarity.
+    pub(crate) method: Method,
+}
+
+/// Checks the parameters and resolves the similarity and the method of a
+/// run; a similarity-driven method without a similarity is an error.
+pub(crate) fn plan(dataset: &Dataset, request: &Request) -> Result<Plan, LayoutError> {
     // Every method relies on a canvas in range; check before any of them runs.
     request.params.validate()?;
-    let monitor = Monitor::new(request.progress.as_ref());
     let kind = request
         .similarity
         .or_else(|| dataset.similarity_hint().map(SimilarityKind::from_hint));
@@ -123,32 +166,54 @@ pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutE
     } else {
         Method::Plain
     });
-    let Some(kind) = kind else {
-        if method.uses_similarity() {
-            return Err(LayoutError::NoSimilarity {
-                method: method.name(),
-            });
-        }
-        let start = warm_start_for(dataset, request);
-        let (layout, report) = match &request.previous {
-            Some(previous) if matches!(start, Start::Warm { .. }) => {
-                layout_warm_with(dataset, &request.params, previous, None, &monitor)?
-            }
-            _ => treemap::layout_with(dataset, &request.params, &monitor)?,
-        };
-        return Ok(Computed {
-            dataset: dataset.clone(),
-            layout,
-            report,
-            constraints: Vec::new(),
-            realized: Vec::new(),
-            method,
-            start,
-            adjacency: OnceLock::new(),
+    if kind.is_none() && method.uses_similarity() {
+        return Err(LayoutError::NoSimilarity {
+            method: method.name(),
         });
+    }
+    Ok(Plan { kind, method })
+}
+
+/// Runs the layout step.
+pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutError> {
+    let plan = plan(dataset, request)?;
+    let input = match plan.kind {
+        None => Prepared::Plain(Arc::new(dataset.clone())),
+        Some(kind) => {
+            let prepared = prepare(dataset);
+            let constraints = build_constraints(&prepared, kind);
+            Prepared::Similar(Arc::new(prepared), constraints)
+        }
     };
-    let prepared = prepare(dataset);
-    let constraints = build_constraints(&prepared, kind);
+    lay_out_planned(input, plan, request)
+}
+
+/// What the layout of a planned run starts from.
+#[derive(Debug)]
+pub(crate) enum Prepared {
+    /// A plan without a similarity: the dataset as it is.
+    Plain(Arc<Dataset>),
+    /// A plan with a similarity: the prepared dataset ([`prepare`]) and its
+    /// constraints ([`build_constraints`] with the plan's similarity), which
+    /// the caller may have kept from an earlier run on the same similarity
+    /// inputs (the build's stage graph does).
+    Similar(Arc<Dataset>, Vec<Constraint>),
+}
+
+/// The layout of a planned run (see [`plan`]) from its [`Prepared`] input.
+pub(crate) fn lay_out_planned(
+    input: Prepared,
+    plan: Plan,
+    request: &Request,
+) -> Result<Computed, LayoutError> {
+    let monitor = Monitor::new(request.progress.as_ref());
+    let method = plan.method;
+    let (kind, prepared, constraints) = match (plan.kind, input) {
+        (Some(kind), Prepared::Similar(prepared, constraints)) => (kind, prepared, constraints),
+        (_, Prepared::Plain(dataset) | Prepared::Similar(dataset, _)) => {
+            return lay_out_plain(dataset, method, request, &monitor)
+        }
+    };
     // Survival is judged on the prepared dataset: virtual nodes have ids
     // derived from their parents', so they match their previous selves too.
     let start = warm_start_for(&prepared, request);
@@ -190,11 +255,43 @@ pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutE
         realized,
         method,
         start,
+        settings: request.settings(),
         adjacency: OnceLock::from(adjacency),
     })
 }
 
-/// Whether `request`'s previous layout (if any) fits a run on `dataset`.
+/// The plain treemap of `dataset` (no similarity), warm when the request's
+/// previous layout fits.
+fn lay_out_plain(
+    dataset: Arc<Dataset>,
+    method: Method,
+    request: &Request,
+    monitor: &Monitor<'_>,
+) -> Result<Computed, LayoutError> {
+    let start = warm_start_for(&dataset, request);
+    let (layout, report) = match &request.previous {
+        Some(previous) if matches!(start, Start::Warm { .. }) => {
+            layout_warm_with(&dataset, &request.params, previous, None, monitor)?
+        }
+        _ => treemap::layout_with(&dataset, &request.params, monitor)?,
+    };
+    Ok(Computed {
+        dataset,
+        layout,
+        report,
+        constraints: Vec::new(),
+        realized: Vec::new(),
+        method,
+        start,
+        settings: request.settings(),
+        adjacency: OnceLock::new(),
+    })
+}
+
+/// Whether `request`'s previous layout (if any) fits a run on `dataset`:
+/// the layout core's half of the warm-or-cold decision (the data side:
+/// canvas, outline, survivors). Which previous layout a build offers is
+/// decided in one place, `graph::start`.
 fn warm_start_for(dataset: &Dataset, request: &Request) -> Start {
     let Some(previous) = &request.previous else {
         return Start::Cold;

@@ -44,7 +44,7 @@ use crate::geom::{level_adjacency, ConvexPolygon, LevelAdjacency, Point};
 use nptreemap_formats::Dataset;
 
 pub use check::SanityError;
-pub use compute::{compute, Computed, Request, Start};
+pub use compute::{compute, Computed, LayoutSettings, Request, Start};
 pub use frames::Frame;
 pub use method::Method;
 pub use neighbor::NeighborParams;

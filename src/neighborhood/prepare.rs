@@ -61,6 +61,7 @@ pub fn prepare(dataset: &Dataset) -> Dataset {
         spec.weight = if is_short_leaf { None } else { node.weight };
         spec.color = node.color;
         spec.features = features[index].clone();
+        spec.fields = node.fields.clone();
         spec.relations = node
             .relations
             .iter()

@@ -1,29 +1,57 @@
 //! The interactive HTML page: one self-contained HTML5 file wrapping a finished
 //! SVG with inline style, inline script and the node data as JSON, for the hover
-//! behaviour of the paper's prototype (method reference §8.5). Owns the page's
-//! structure, its style and script and the escaping of the data block; may not
+//! behaviour of the paper's prototype (method reference §8.5) and exploring a
+//! big map (issue 24: labels placed for the zoomed extent, search, touch, a
+//! focus ring, title and legend as HTML text). Owns the page's structure, its
+//! data block (real nodes only, numbers at the precision the picture shows)
+//! and the escaping of both; the style and script live in `page/`. May not
 //! build the SVG, do I/O, or reference anything over the network.
 //! Output is deterministic: identical input gives identical bytes.
 
 use serde::Serialize;
 
-use super::labels::display_name;
-use super::picture::{colors, picture, Style};
-use super::svg::{escape, path_data};
-use crate::layout::Computed;
-use nptreemap_formats::Dataset;
+use super::labels::{display_name, format_value};
+use super::legend::LegendItem;
+use super::picture::{colors, compose, fills, legend_items, Style};
+use super::svg::{escape, leaf_labels, path_data};
+use crate::layout::{Computed, Layout};
+
+#[path = "page/view.rs"]
+mod view;
+
+use view::RealView;
 
 /// What the page knows about the map beyond its picture.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct HtmlData {
     /// Page title, shown in the browser tab (escaped; any text is safe).
     pub title: String,
-    /// Every node the script may look up, in the caller's order (written so).
+    /// A heading above the map (the picture's title); `None` shows none.
+    #[serde(skip)]
+    pub heading: Option<String>,
+    /// The legend above the map, as HTML text; empty shows none.
+    #[serde(skip)]
+    pub legend: Vec<LegendItem>,
+    /// Text after every weight (`" KiB"`), as the picture writes values.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub unit: String,
+    /// Every real node, the root first, parents before their children.
     pub nodes: Vec<HtmlNode>,
+    /// How the script labels cells when it zooms; `None` when the picture
+    /// has no leaf labels (the page then adds none either).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub labels: Option<HtmlLabels>,
     /// Snapshots of the optimisation for the slider, in order; the page shows
     /// no slider when empty (layouts made without frames).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub frames: Vec<HtmlFrame>,
+    /// The name of the field the links come from (`page.link`); `None`
+    /// when the map has no links.
+    #[serde(rename = "linkName", skip_serializing_if = "Option::is_none")]
+    pub link_name: Option<String>,
+    /// Links open in a new tab (`page.link_target: new-tab`).
+    #[serde(rename = "newTab", skip_serializing_if = "std::ops::Not::not")]
+    pub new_tab: bool,
 }
 
 /// One snapshot of the optimisation as the slider draws it.
@@ -35,297 +63,110 @@ pub struct HtmlFrame {
     pub cells: Vec<(String, String, String)>,
 }
 
-/// One node of the map as the page's script sees it.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+/// One node of the map as the page's script sees it. Relations are written
+/// once, at the lower index of the two; the script makes them symmetric.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct HtmlNode {
     /// Node id; equals the `data-id` of its cell `<path>` in the SVG.
     pub id: String,
-    /// Display label.
-    pub label: String,
-    /// Labels from the root to this node, both included; the tooltip text.
-    pub path: Vec<String>,
-    /// The node's weight, shown in the tooltip.
-    pub weight: f64,
-    /// Depth in the hierarchy; the root has depth 0.
-    pub depth: usize,
-    /// Whether the node is a leaf (only leaves react to hovering).
-    pub leaf: bool,
-    /// The parent's id; `None` for the root.
-    pub parent: Option<String>,
+    /// Display label; `None` when it is the id.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
+    /// The parent's index in [`HtmlData::nodes`]; `None` for the root.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub parent: Option<usize>,
+    /// The weight as the picture writes values (thousands separators, at
+    /// most two decimals), without the unit.
+    pub weight: String,
     /// The view box (`x y width height`) that zooms into this group, with the
     /// picture's aspect; `None` for leaves and for groups too large to zoom.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub zoom: Option<[f64; 4]>,
-    /// Ids of the cells at the same depth sharing an edge with this one
-    /// (`neighbours` in the page's data, which its script reads).
-    #[serde(rename = "neighbours")]
-    pub neighbors: Vec<String>,
-    /// Ids of the node's constraint partners, each with whether the constraint
-    /// is realised (the two cells share an edge).
-    pub partners: Vec<(String, bool)>,
+    /// Leaves sharing an edge with this leaf that come after it in
+    /// [`HtmlData::nodes`] (indices).
+    #[serde(rename = "near", skip_serializing_if = "Vec::is_empty")]
+    pub neighbors: Vec<usize>,
+    /// Constraint partners after it (indices), each with whether the
+    /// constraint is realised (the two cells share an edge).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub partners: Vec<(usize, bool)>,
+    /// Further name–value pairs for the tooltip, in order (the user's own
+    /// columns, `page.fields`); a field the node has no value for is left out.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub fields: Vec<(String, String)>,
+    /// The node's link (`page.link`), when it has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub link: Option<HtmlLink>,
+}
+
+/// A node's link: the value as given, and whether the page may follow it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct HtmlLink {
+    /// The URL text (shown as text when not followed).
+    pub href: String,
+    /// True for `http:`, `https:` and relative URLs ([`followable`]); any
+    /// other scheme (`javascript:`, `data:`, `file:`, …) is never followed.
+    pub ok: bool,
+}
+
+/// Whether the page may follow `url`: an `http:` or `https:` URL, or a
+/// relative one (no scheme: no `:` before the first `/`, `?` or `#`). The
+/// test is on the text as browsers read it, so control characters and
+/// spaces (which browsers strip or drop) are refused.
+pub fn followable(url: &str) -> bool {
+    if url.is_empty()
+        || url
+            .chars()
+            .any(|c| c.is_control() || c.is_whitespace() || c == '\\')
+    {
+        return false;
+    }
+    let lower = url.to_ascii_lowercase();
+    if lower.starts_with("http://") || lower.starts_with("https://") {
+        return true;
+    }
+    let end = url.find(['/', '?', '#']).unwrap_or(url.len());
+    !url[..end].contains(':')
+}
+
+/// How the script fits labels into cells for a zoomed view, by the rules
+/// of the picture's own labels.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct HtmlLabels {
+    /// CSS font family of the labels.
+    pub font: String,
+    /// Text colour.
+    pub fill: String,
+    /// Halo colour (the outline colour).
+    pub halo: String,
+    /// Smallest label size, pixels on screen (the picture's `min_size`).
+    pub min: f64,
+    /// Largest label size on that scale.
+    pub max: f64,
+    /// For each `<text>` of the picture's label group, in order, the index
+    /// of the node it names; empty when that order could not be confirmed.
+    pub placed: Vec<usize>,
 }
 
 /// Class of the JSON data block, which the script reads.
 const DATA_CLASS: &str = "np-data";
 
-/// Inline style, scoped to the map's container so that pages can be inlined
-/// into any document (two maps on one page included): the hover classes, the
-/// tooltip, the zoom, a picture that fits its container's width (keeping its
-/// aspect, legend in view) and a dark variant.
-const STYLE: &str = r#".nptreemap { font: 14px Helvetica, Arial, sans-serif; color: #1a1a1a; max-width: 100%; }
-.nptreemap .np-map { margin: 0 auto; }
-.nptreemap .np-map svg { display: block; width: 100%; height: auto; }
-.nptreemap .np-map path { transition: opacity .1s; }
-.nptreemap .np-map path.np-dim { opacity: .25; }
-.nptreemap .np-map path.np-outside { opacity: .12; pointer-events: none; }
-.nptreemap .np-map path.np-partner { stroke: #000; stroke-width: 4px; }
-.nptreemap .np-map path.np-partner-unrealized { stroke-dasharray: 6 3; }
-.nptreemap .np-map path:focus { outline: none; stroke: #000; stroke-width: 3px; }
-.nptreemap.np-hide-unrealized .np-unrealized { display: none; }
-.nptreemap .np-tooltip { position: fixed; z-index: 10; pointer-events: none; background: #fff; color: #1a1a1a;
-  border: 1px solid #888; padding: .3em .5em; max-width: 40em; box-shadow: 0 1px 4px rgba(0,0,0,.3); }
-.nptreemap .np-tooltip[hidden] { display: none; }
-.nptreemap .np-controls { display: flex; flex-wrap: wrap; gap: .3em 1.2em; align-items: center; margin: .3em 0; }
-.nptreemap .np-frames input { width: 16em; max-width: 60vw; vertical-align: middle; }
-.nptreemap .np-crumbs button { font: inherit; border: 0; background: none; color: #1f5fa8; cursor: pointer; padding: 0; }
-.nptreemap .np-crumbs button[aria-current] { color: inherit; cursor: default; font-weight: bold; }
-@media (prefers-color-scheme: dark) {
-  .nptreemap { color: #e8e8e8; color-scheme: dark; }
-  .nptreemap .np-background { fill: #161616; }
-  .nptreemap .np-cells, .nptreemap .np-tabs { stroke: #161616; }
-  .nptreemap .np-labels { fill: #f2f2f2; stroke: #161616; }
-  .nptreemap .np-legend-labels, .nptreemap .np-title { fill: #e8e8e8; }
-  .nptreemap .np-map path.np-partner { stroke: #fff; }
-  .nptreemap .np-tooltip { background: #262626; color: #e8e8e8; border-color: #555; }
-  .nptreemap .np-crumbs button { color: #8ab8ff; }
-}
-"#;
+/// The page's style, scoped to the map's container (see the file's header).
+const STYLE: &str = include_str!("page/page.css");
 
-/// Inline script: hover (and focus, and tap) highlighting, the tooltip, the
-/// unrealised-links toggle, the optimisation slider and the zoom into groups
-/// with a breadcrumb back. It finds everything inside its own container, so
-/// several maps can share a document. User text reaches the page only
-/// through `textContent`.
-const SCRIPT: &str = r##"(function () {
-  "use strict";
-  var root = document.currentScript.parentNode;
-  function part(name) { return root.querySelector(".np-" + name); }
-  var data = JSON.parse(part("data").textContent);
-  // Maps and sets, never plain objects: ids such as "constructor",
-  // "toString" or "__proto__" are keys like any other (issue 11, item 14).
-  var nodes = new Map();
-  data.nodes.forEach(function (n) { nodes.set(n.id, n); });
-  var map = part("map");
-  var svg = map.querySelector("svg");
-  var tip = part("tooltip");
-  var crumbs = part("crumbs");
-  var cells = new Map();
-  var leaves = [];
-  Array.prototype.forEach.call(map.querySelectorAll("path[data-id]"), function (el) {
-    var id = el.getAttribute("data-id");
-    var n = nodes.get(id);
-    cells.set(id, el);
-    if (n && n.leaf) {
-      leaves.push(el);
-      el.setAttribute("tabindex", "0");
-      el.setAttribute("role", "img");
-      el.setAttribute("aria-label", n.path.join(" \u203a ") + ", weight " + n.weight.toLocaleString());
-    }
-  });
-  var current = null;
-
-  function clear() {
-    current = null;
-    leaves.forEach(function (el) { el.classList.remove("np-dim"); });
-    Array.prototype.forEach.call(map.querySelectorAll(".np-partner"), function (el) {
-      el.classList.remove("np-partner", "np-partner-unrealized");
-    });
-    tip.hidden = true;
-  }
-
-  function show(el) {
-    var n = nodes.get(el.getAttribute("data-id"));
-    current = el;
-    // The hovered cell and its neighbours stay; every other leaf greys out.
-    var near = new Set(n.neighbours);
-    near.add(n.id);
-    leaves.forEach(function (c) {
-      if (!near.has(c.getAttribute("data-id"))) { c.classList.add("np-dim"); }
-    });
-    n.partners.forEach(function (p) {
-      var c = cells.get(p[0]);
-      if (c) {
-        c.classList.add("np-partner");
-        if (!p[1]) { c.classList.add("np-partner-unrealized"); }
-      }
-    });
-    tip.textContent = n.path.join(" \u203a ") + " \u2014 weight " + n.weight.toLocaleString();
-    tip.hidden = false;
-  }
-
-  function place(cx, cy) {
-    // Beside the point, flipped to its other side near the window's edge so
-    // the tooltip never runs out of view.
-    var x = cx + 14, y = cy + 14;
-    if (x + tip.offsetWidth > window.innerWidth) { x = Math.max(0, cx - 14 - tip.offsetWidth); }
-    if (y + tip.offsetHeight > window.innerHeight) { y = Math.max(0, cy - 14 - tip.offsetHeight); }
-    tip.style.left = x + "px";
-    tip.style.top = y + "px";
-  }
-
-  function leafAt(target) {
-    var el = target && target.closest ? target.closest("path[data-id]") : null;
-    var n = el && nodes.get(el.getAttribute("data-id"));
-    return n && n.leaf ? el : null;
-  }
-
-  map.addEventListener("mouseover", function (e) {
-    var el = leafAt(e.target);
-    if (el === current) { return; }
-    clear();
-    if (el) { show(el); }
-  });
-  map.addEventListener("mouseleave", clear);
-  map.addEventListener("mousemove", function (e) { place(e.clientX, e.clientY); });
-  // Keyboard: Tab moves through the cells, the focused one behaves as hovered.
-  map.addEventListener("focusin", function (e) {
-    var el = leafAt(e.target);
-    if (!el) { return; }
-    clear();
-    show(el);
-    var r = el.getBoundingClientRect();
-    place(r.left + r.width / 2, r.top + r.height / 2);
-  });
-  map.addEventListener("focusout", function (e) {
-    if (!map.contains(e.relatedTarget)) { clear(); }
-  });
-
-  // Zoom: a click (Enter on a focused cell) opens the group under the
-  // current view that holds the cell; the breadcrumb (Escape) goes back.
-  var full = svg.getAttribute("viewBox").split(" ").map(Number);
-  var top = data.nodes.length ? data.nodes[0].id : null;
-  var view = top;
-  function ancestors(id) {
-    var out = [];
-    for (var n = nodes.get(id); n; n = n.parent === null ? null : nodes.get(n.parent)) { out.unshift(n.id); }
-    return out;
-  }
-  function setView(box) { svg.setAttribute("viewBox", box.map(function (v) { return v.toFixed(2); }).join(" ")); }
-  function animate(from, to) {
-    var start = null;
-    function step(t) {
-      if (start === null) { start = t; }
-      var k = Math.min(1, (t - start) / 250);
-      var e = k < 0.5 ? 2 * k * k : 1 - Math.pow(-2 * k + 2, 2) / 2;
-      setView(from.map(function (v, i) { return v + (to[i] - v) * e; }));
-      if (k < 1) { requestAnimationFrame(step); } else { setView(to); }
-    }
-    requestAnimationFrame(step);
-  }
-  function zoomTo(id) {
-    var n = nodes.get(id);
-    if (!n) { return; }
-    var target = n.zoom || full;
-    var from = svg.getAttribute("viewBox").split(" ").map(Number);
-    view = id;
-    clear();
-    var inside = new Set();
-    data.nodes.forEach(function (m) {
-      if (id === top || ancestors(m.id).indexOf(id) >= 0) { inside.add(m.id); }
-    });
-    cells.forEach(function (el, cid) {
-      var out = !inside.has(cid);
-      el.classList.toggle("np-outside", out);
-      if (nodes.get(cid) && nodes.get(cid).leaf) { el.setAttribute("tabindex", out ? "-1" : "0"); }
-    });
-    root.classList.toggle("np-zoomed", id !== top);
-    root.setAttribute("data-zoom", id);
-    drawCrumbs();
-    animate(from, target);
-  }
-  function drawCrumbs() {
-    while (crumbs.firstChild) { crumbs.removeChild(crumbs.firstChild); }
-    ancestors(view).forEach(function (id, k, all) {
-      if (k > 0) { crumbs.appendChild(document.createTextNode(" \u203a ")); }
-      var b = document.createElement("button");
-      b.type = "button";
-      b.textContent = nodes.get(id).label;
-      b.setAttribute("data-id", id);
-      if (k === all.length - 1) { b.setAttribute("aria-current", "location"); }
-      b.addEventListener("click", function () { zoomTo(id); });
-      crumbs.appendChild(b);
-    });
-  }
-  function zoomInto(el) {
-    // The first group below the view on the way to the cell that can be
-    // zoomed into (virtual levels and whole-map groups are passed over).
-    var path = ancestors(el.getAttribute("data-id"));
-    for (var k = path.indexOf(view) + 1; k > 0 && k < path.length; k++) {
-      var n = nodes.get(path[k]);
-      if (n.leaf) { return; }
-      if (n.zoom) { zoomTo(path[k]); return; }
-    }
-  }
-  var pointer = "mouse";
-  map.addEventListener("pointerdown", function (e) { pointer = e.pointerType || "mouse"; });
-  map.addEventListener("click", function (e) {
-    var el = e.target.closest ? e.target.closest("path[data-id]") : null;
-    if (!el) { return; }
-    // Touch: the first tap acts as hover, a second tap on the same cell zooms.
-    if (pointer === "touch" && leafAt(el) && el !== current) {
-      clear();
-      show(el);
-      var r = el.getBoundingClientRect();
-      place(r.left + r.width / 2, r.top + r.height / 2);
-      return;
-    }
-    zoomInto(el);
-  });
-  map.addEventListener("keydown", function (e) {
-    var el = leafAt(e.target);
-    if ((e.key === "Enter" || e.key === " ") && el) { e.preventDefault(); zoomInto(el); }
-    if (e.key === "Escape" && view !== top) {
-      var path = ancestors(view);
-      zoomTo(path[path.length - 2]);
-    }
-  });
-  drawCrumbs();
-
-  // The optimisation slider: frame k drawn over the map, the last position
-  // the finished picture.
-  var slider = part("frame");
-  if (slider && data.frames) {
-    var NS = svg.namespaceURI;
-    var layer = document.createElementNS(NS, "g");
-    layer.setAttribute("class", "np-frame-layer");
-    layer.setAttribute("pointer-events", "none");
-    layer.setAttribute("stroke", "#ffffff");
-    layer.setAttribute("stroke-width", "1");
-    svg.appendChild(layer);
-    var caption = part("frame-label");
-    var showFrame = function () {
-      var k = parseInt(slider.value, 10);
-      while (layer.firstChild) { layer.removeChild(layer.firstChild); }
-      var frame = data.frames[k];
-      if (!frame) { caption.textContent = "final layout"; return; }
-      frame.cells.forEach(function (c) {
-        var p = document.createElementNS(NS, "path");
-        p.setAttribute("d", c[1]);
-        p.setAttribute("fill", c[2]);
-        p.setAttribute("data-frame-id", c[0]);
-        layer.appendChild(p);
-      });
-      caption.textContent = (k + 1) + " / " + data.frames.length + ": " + frame.label;
-    };
-    slider.addEventListener("input", showFrame);
-    showFrame();
-  }
-
-  var box = part("unrealized-toggle");
-  function toggle() { root.classList.toggle("np-hide-unrealized", !box.checked); }
-  box.addEventListener("change", toggle);
-  toggle();
-})();
-"##;
+/// The page's script: one function scope over its parts, in this order
+/// (each file's header says what it owns). It finds everything inside its
+/// own container, so several maps can share a document; user text reaches
+/// the document only through `textContent` and attribute values.
+const SCRIPT_PARTS: [&str; 7] = [
+    include_str!("page/model.js"),
+    include_str!("page/hover.js"),
+    include_str!("page/lod.js"),
+    include_str!("page/zoom.js"),
+    include_str!("page/search.js"),
+    include_str!("page/link.js"),
+    include_str!("page/main.js"),
+];
 
 /// Width over height of the SVG's `viewBox`.
 fn view_aspect(svg: &str) -> Option<f64> {
@@ -349,21 +190,96 @@ fn page_key(svg: &str, data: &str) -> String {
     format!("np-{h:08x}")
 }
 
+/// Groups shown in the legend before the rest fold away behind a button.
+const LEGEND_SHOWN: usize = 12;
+
+/// The legend as an HTML list: the glyph keys and the group swatches, the
+/// groups past [`LEGEND_SHOWN`] in a disclosure.
+fn legend_html(items: &[LegendItem], key: &str) -> String {
+    if items.is_empty() {
+        return String::new();
+    }
+    let entry = |item: &LegendItem| -> String {
+        let glyph = match item {
+            LegendItem::Swatch { color, .. } => {
+                format!("<span class=\"np-swatch\" style=\"background:{color}\"></span>")
+            }
+            LegendItem::Tab => "<svg class=\"np-glyph\" viewBox=\"0 0 20 20\" aria-hidden=\"true\">\
+                <rect width=\"10\" height=\"20\" fill=\"#9c9c9c\"/><rect x=\"10\" width=\"10\" height=\"20\" fill=\"#cfcfcf\"/>\
+                <polygon points=\"9.6,6.8 15.2,4.8 15.2,15.2 9.6,13.2\" fill=\"#9c9c9c\" stroke=\"#fff\" stroke-width=\"1.2\"/></svg>"
+                .to_owned(),
+            LegendItem::Unlinked => "<svg class=\"np-glyph\" viewBox=\"0 0 20 20\" aria-hidden=\"true\">\
+                <circle cx=\"10\" cy=\"10\" r=\"8\" fill=\"#fff\" stroke=\"#d62728\" stroke-width=\"2.4\"/></svg>"
+                .to_owned(),
+            LegendItem::Scale {
+                field,
+                low,
+                high,
+                stops,
+            } => {
+                // The bar between its two ends, as CSS (no ids to collide
+                // between two maps in one document).
+                let css: Vec<String> = stops.iter().map(|c| c.to_string()).collect();
+                return format!(
+                    "<li class=\"np-legend-item np-legend-scale\"><span class=\"np-legend-text\">{}: {}</span>\
+                     <span class=\"np-scale-bar\" style=\"background:linear-gradient(to right,{})\"></span>\
+                     <span class=\"np-legend-text\">{}</span></li>\n",
+                    escape(field),
+                    escape(low),
+                    css.join(","),
+                    escape(high)
+                );
+            }
+            _ => String::new(),
+        };
+        format!(
+            "<li class=\"np-legend-item\">{glyph}<span class=\"np-legend-text\">{}</span></li>\n",
+            escape(&item.text())
+        )
+    };
+    let groups = items
+        .iter()
+        .filter(|i| matches!(i, LegendItem::Swatch { .. }))
+        .count();
+    let mut out = format!("<ul class=\"np-legend\" id=\"{key}-legend\" aria-label=\"Legend\">\n");
+    let mut shown_groups = 0;
+    let mut rest = String::new();
+    for item in items {
+        if matches!(item, LegendItem::Swatch { .. }) {
+            shown_groups += 1;
+            if shown_groups > LEGEND_SHOWN && groups > LEGEND_SHOWN + 1 {
+                rest.push_str(&entry(item));
+                continue;
+            }
+        }
+        out.push_str(&entry(item));
+    }
+    if !rest.is_empty() {
+        let more = LegendItem::More(groups - LEGEND_SHOWN).text();
+        out.push_str(&format!(
+            "<li class=\"np-legend-more\"><details><summary>{}</summary>\n<ul class=\"np-legend\">\n{rest}</ul></details></li>\n",
+            escape(&more)
+        ));
+    }
+    out.push_str("</ul>\n");
+    out
+}
+
 /// Writes one self-contained HTML5 page showing `svg` (inserted verbatim, so it
 /// must be our own SVG text, whose cell `<path>`s carry `data-id`) with `data`.
 ///
 /// The page has no network references: style, script and data are inline. The
-/// data is JSON in `<script type="application/json" id="nptreemap-data">`, with
-/// every `<` written as `\u003c` so no label can close the block. Hovering a
-/// leaf dims every leaf cell outside its neighbour set (not itself, unlike the
-/// prototype, which greys the hovered cell too), outlines its constraint partners (dashed where unrealised)
-/// and shows its root-to-leaf path and weight in a tooltip; a checkbox "Show
-/// unrealized links" (off by default) shows or hides SVG elements of class
-/// `np-unrealized`. Identical input gives identical bytes.
+/// data is JSON in `<script type="application/json" class="np-data">`, with
+/// every `<` written as `\u003c` so no label can close the block. Above the
+/// map: the heading, the legend, a search box, a checkbox "Show unrealized
+/// links" (off by default, for SVG elements of class `np-unrealized`), the
+/// optimisation slider when there are frames, and the zoom's breadcrumb.
+/// Identical input gives identical bytes.
 pub fn html(svg: &str, data: &HtmlData) -> String {
     let json = data_json(data);
     let key = page_key(svg, &json);
-    let mut out = String::with_capacity(svg.len() + STYLE.len() + SCRIPT.len() + 1024);
+    let script_len: usize = SCRIPT_PARTS.iter().map(|s| s.len()).sum();
+    let mut out = String::with_capacity(svg.len() + json.len() + STYLE.len() + script_len + 4096);
     out.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
     out.push_str(
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>",
@@ -373,10 +289,24 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
     // Everything of the map lives in one container with ids under one key:
     // it can be copied into another document as it is.
     out.push_str(&format!(
-        "<div class=\"nptreemap\" id=\"{key}\">\n<style>\n"
+        "<div class=\"nptreemap np-hide-unrealized\" id=\"{key}\">\n<style>\n"
     ));
     out.push_str(STYLE);
-    out.push_str("</style>\n<div class=\"np-controls\">\n");
+    out.push_str("</style>\n");
+    if let Some(heading) = data.heading.as_deref().filter(|h| !h.is_empty()) {
+        out.push_str(&format!(
+            "<h1 class=\"np-title\" id=\"{key}-title\">{}</h1>\n",
+            escape(heading)
+        ));
+    }
+    out.push_str(&legend_html(&data.legend, &key));
+    out.push_str("<div class=\"np-controls\">\n");
+    out.push_str(&format!(
+        "<div class=\"np-search\" role=\"search\"><input type=\"search\" class=\"np-search-box\" id=\"{key}-search\" \
+         placeholder=\"Find (press /)\" aria-label=\"Find a cell by name or path\" autocomplete=\"off\" spellcheck=\"false\" \
+         role=\"combobox\" aria-autocomplete=\"list\" aria-expanded=\"false\" aria-controls=\"{key}-matches\">\
+         <ul class=\"np-matches\" id=\"{key}-matches\" role=\"listbox\" aria-label=\"Matches\" hidden></ul></div>\n"
+    ));
     out.push_str(&format!(
         "<label><input type=\"checkbox\" class=\"np-unrealized-toggle\" id=\"{key}-unrealized\"> \
          Show unrealized links</label>\n"
@@ -391,13 +321,22 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
         ));
     }
     out.push_str(&format!(
-        "<nav class=\"np-crumbs\" id=\"{key}-crumbs\" aria-label=\"Zoom\"></nav>\n</div>\n"
+        "<nav class=\"np-crumbs\" id=\"{key}-crumbs\" aria-label=\"Zoom\"></nav>\n"
     ));
+    if let Some(name) = &data.link_name {
+        // The clicked cell's link, filled by the script.
+        out.push_str(&format!(
+            "<div class=\"np-link\" id=\"{key}-link\" aria-live=\"polite\" data-name=\"{}\" hidden></div>\n",
+            escape(name)
+        ));
+    }
+    out.push_str("</div>\n");
     // As wide as the container, and no wider than keeps the whole picture
-    // (legend included) within the window's height.
+    // within the window's height below the header (the script refines the
+    // estimate with the header's real height).
     let aspect = view_aspect(svg).unwrap_or(1.0);
     out.push_str(&format!(
-        "<div class=\"np-map\" id=\"{key}-map\" style=\"max-width: calc((100vh - 4.5em) * {aspect:.4})\">\n"
+        "<div class=\"np-map\" id=\"{key}-map\" data-aspect=\"{aspect:.4}\" style=\"max-width: calc((100vh - 9em) * {aspect:.4})\">\n"
     ));
     out.push_str(svg);
     if !svg.ends_with('\n') {
@@ -410,55 +349,137 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
         "<script type=\"application/json\" class=\"{DATA_CLASS}\" id=\"{key}-data\">\n"
     ));
     out.push_str(&json);
-    out.push_str("\n</script>\n<script>\n");
-    out.push_str(SCRIPT);
-    out.push_str("</script>\n</div>\n</body>\n</html>\n");
+    out.push_str("\n</script>\n<script>\n(function () {\n\"use strict\";\n");
+    for part in SCRIPT_PARTS {
+        out.push_str(part);
+    }
+    out.push_str("})();\n</script>\n</div>\n</body>\n</html>\n");
     out
 }
 
-/// The interactive page of a finished computation: the picture (its
-/// unrealised links drawn, for the page's checkbox to show or hide), and per
-/// cell its path from the root, weight, neighbours and constraint partners for
-/// the hover highlight.
+/// The interactive page of a finished computation: the picture of its real
+/// nodes (the unrealised links drawn, for the page's checkbox to show or
+/// hide; title and legend as HTML instead of in the picture), and per node
+/// its parent, weight, neighbours and constraint partners.
 pub fn html_page(computed: &Computed, style: &Style) -> String {
-    let dataset = &computed.dataset;
-    // The links are always drawn on the page; its checkbox shows or hides them.
+    let view = RealView::new(computed);
+    let dataset = view.dataset.as_ref();
+    let layout = view.layout.as_ref();
     let mut page_style = style.clone();
     page_style.overlay.show_unrealized = true;
-    let svg_text = picture(computed, &page_style);
-    let adjacency = computed.adjacency();
-    let mut partners: Vec<Vec<(String, bool)>> = vec![Vec::new(); dataset.len()];
-    for (c, r) in computed.constraints.iter().zip(&computed.realized) {
-        partners[c.a].push((dataset.node(c.b).id.clone(), *r));
-        partners[c.b].push((dataset.node(c.a).id.clone(), *r));
+    page_style.title = None;
+    page_style.legend = false;
+    let links = view.links(computed);
+    let adjacent = view.top_pairs(computed);
+    let svg_text = compose(dataset, layout, &links, &adjacent, &page_style);
+    let svg_text = lighten(&svg_text);
+
+    let names = &style.cells.labels.names;
+    let mut partners: Vec<Vec<(usize, bool)>> = vec![Vec::new(); dataset.len()];
+    for link in &links {
+        let (a, b) = (link.a.min(link.b), link.a.max(link.b));
+        if a != b && a < partners.len() && !partners[a].iter().any(|p| p.0 == b) {
+            partners[a].push((b, link.realized));
+        }
     }
-    let nodes = dataset
-        .nodes()
-        .iter()
-        .enumerate()
-        .map(|(i, node)| HtmlNode {
-            id: node.id.clone(),
-            label: display_name(dataset, i, &style.cells.labels.names),
-            path: path_labels(dataset, i, &style.cells.labels.names),
-            weight: node.value,
-            depth: node.depth,
-            leaf: node.children.is_empty(),
-            parent: node.parent.map(|p| dataset.node(p).id.clone()),
-            zoom: zoom_box(computed, i),
-            neighbors: adjacency[node.depth]
-                .neighbors(i)
-                .iter()
-                .map(|j| dataset.node(*j).id.clone())
-                .collect(),
-            partners: std::mem::take(&mut partners[i]),
+    let count = dataset.len().min(layout.cells.len());
+    let nodes = (0..count)
+        .map(|i| {
+            let node = dataset.node(i);
+            let label = display_name(dataset, i, names);
+            let leaf = node.children.is_empty();
+            HtmlNode {
+                id: node.id.clone(),
+                label: (label != node.id).then_some(label),
+                parent: node.parent,
+                weight: format_value(node.value, ""),
+                zoom: zoom_box(dataset, layout, i),
+                neighbors: if leaf {
+                    view.leaf_neighbors(computed, i)
+                        .into_iter()
+                        .filter(|&j| j > i)
+                        .collect()
+                } else {
+                    Vec::new()
+                },
+                partners: std::mem::take(&mut partners[i]),
+                fields: shown_fields(&node.fields, &style.page.fields),
+                link: style.page.link.as_deref().and_then(|name| {
+                    let href = &node.fields.iter().find(|(n, _)| n == name)?.1;
+                    Some(HtmlLink {
+                        href: href.clone(),
+                        ok: followable(href),
+                    })
+                }),
+            }
         })
         .collect();
-    let title = style
+
+    let labels = page_style.cells.labels.show.then(|| {
+        let placed = leaf_labels(dataset, layout, &page_style.cells.labels);
+        let texts = label_texts(&svg_text);
+        HtmlLabels {
+            font: page_style.cells.font_family.clone(),
+            fill: page_style.cells.text_color.to_string(),
+            halo: page_style.cells.stroke.to_string(),
+            min: page_style.cells.labels.min_size,
+            max: page_style.cells.labels.max_size,
+            // The script pairs the picture's label texts with nodes in
+            // this order; it must be the picture's own.
+            placed: if texts == placed.len() {
+                placed.iter().map(|p| p.node).collect()
+            } else {
+                Vec::new()
+            },
+        }
+    });
+    let legend = if style.legend {
+        let (colors, applied) = fills(dataset, &adjacent, style);
+        let tabs = svg_text.contains("class=\"np-tab\"");
+        let markers = svg_text.contains("class=\"np-unlinked\"");
+        legend_items(dataset, &colors, applied.as_ref(), tabs, markers, style)
+    } else {
+        Vec::new()
+    };
+    let heading = style
         .title
+        .as_deref()
+        .map(super::labels::clean)
+        .filter(|t| !t.is_empty());
+    let title = heading
         .clone()
-        .unwrap_or_else(|| dataset.node(dataset.root()).label.clone());
+        .unwrap_or_else(|| computed.dataset.node(computed.dataset.root()).label.clone());
+    html(
+        &svg_text,
+        &HtmlData {
+            title,
+            heading,
+            legend,
+            unit: style.cells.labels.unit.clone(),
+            nodes,
+            labels,
+            frames: frames(computed, style, &view),
+            link_name: style.page.link.clone(),
+            new_tab: style.page.new_tab,
+        },
+    )
+}
+
+/// The node's values of the `wanted` fields, in that order.
+fn shown_fields(fields: &[(String, String)], wanted: &[String]) -> Vec<(String, String)> {
+    wanted
+        .iter()
+        .filter_map(|w| fields.iter().find(|(name, _)| name == w).cloned())
+        .collect()
+}
+
+/// The optimisation's snapshots, their cells named by the real nodes.
+fn frames(computed: &Computed, style: &Style, view: &RealView<'_>) -> Vec<HtmlFrame> {
+    if computed.report.frames.is_empty() {
+        return Vec::new();
+    }
     let colors = colors(computed, style);
-    let frames = computed
+    computed
         .report
         .frames
         .iter()
@@ -471,19 +492,57 @@ pub fn html_page(computed: &Computed, style: &Style) -> String {
                     let mut d = String::new();
                     path_data(&mut d, polygon);
                     let fill = colors[*i].map_or("#cccccc".to_string(), |c| c.to_string());
-                    (dataset.node(*i).id.clone(), d, fill)
+                    (view.dataset.node(view.real_of(*i)).id.clone(), d, fill)
                 })
                 .collect(),
         })
-        .collect();
-    html(
-        &svg_text,
-        &HtmlData {
-            title,
-            nodes,
-            frames,
-        },
-    )
+        .collect()
+}
+
+/// The picture as the page needs it, without what the page's script does
+/// better and what would only slow a big map's loading: the cells' `<title>`
+/// elements (the page has its own tooltip and names the focused cell; the
+/// browser's would show beside it) and the unrealised links' lines (one per
+/// unrealised constraint; the script draws them from the data when the
+/// checkbox asks, into the group left empty). Our own SVG text, so plain
+/// text surgery is exact; anything unexpected is left as it is.
+fn lighten(svg: &str) -> String {
+    let mut out = String::with_capacity(svg.len());
+    let mut rest = svg;
+    // A cell is `<path data-id=".." d=".." fill=".."><title>..</title></path>`;
+    // escaped text holds no `<`, so a title ends at the first `</title>`.
+    while let Some(at) = rest.find("<title>") {
+        let Some(len) = rest[at..].find("</title></path>") else {
+            break;
+        };
+        let opening = rest[..at].rfind('<').map_or("", |o| &rest[o..at]);
+        out.push_str(&rest[..at]);
+        if !opening.starts_with("<path ") || rest[at + 7..at + len].contains('<') {
+            out.push_str(&rest[at..at + len + 8]);
+        }
+        rest = &rest[at + len + 8..];
+    }
+    out.push_str(rest);
+    const LINKS: &str = "<g class=\"np-unrealized\"";
+    if let Some(at) = out.find(LINKS) {
+        let body = out[at..].find(">\n").map(|e| at + e + 2);
+        let end = body.and_then(|b| out[b..].find("</g>\n").map(|e| b + e));
+        if let (Some(body), Some(end)) = (body, end) {
+            if out[body..end].lines().all(|l| l.starts_with("<line ")) {
+                out.replace_range(body..end, "");
+            }
+        }
+    }
+    out
+}
+
+/// How many `<text>` elements the picture's leaf label group holds.
+fn label_texts(svg: &str) -> usize {
+    let Some(start) = svg.find("<g class=\"np-labels\"") else {
+        return 0;
+    };
+    let end = svg[start..].find("</g>").map_or(svg.len(), |e| start + e);
+    svg[start..end].matches("<text").count()
 }
 
 /// Groups whose cell spans more than this share of the canvas in both
@@ -492,12 +551,11 @@ const ZOOM_MIN_GAIN: f64 = 0.97;
 
 /// The view box that shows group `i` as large as the picture allows: its
 /// cell's bounding box with a margin, widened to the canvas's aspect.
-fn zoom_box(computed: &Computed, i: usize) -> Option<[f64; 4]> {
-    let node = computed.dataset.node(i);
+fn zoom_box(dataset: &nptreemap_formats::Dataset, layout: &Layout, i: usize) -> Option<[f64; 4]> {
+    let node = dataset.node(i);
     if node.children.is_empty() || node.parent.is_none() || node.is_virtual {
         return None;
     }
-    let layout = &computed.layout;
     let (lo, hi) = layout.cells.get(i)?.polygon.bbox();
     let (cw, ch) = (layout.canvas.width, layout.canvas.height);
     let margin = 0.03 * (hi.x - lo.x).max(hi.y - lo.y);
@@ -515,19 +573,6 @@ fn zoom_box(computed: &Computed, i: usize) -> Option<[f64; 4]> {
     Some([r(cx - 0.5 * w), r(cy - 0.5 * h), r(w), r(h)])
 }
 
-/// The names from the root to node `i`, both included: the tooltip's text.
-fn path_labels(
-    dataset: &Dataset,
-    i: usize,
-    names: &std::collections::BTreeMap<String, String>,
-) -> Vec<String> {
-    dataset
-        .path(i)
-        .iter()
-        .map(|k| display_name(dataset, *k, names))
-        .collect()
-}
-
 /// `data` as JSON safe inside a `<script>` element: every `<` becomes the JSON
 /// escape `\u003c`, so neither `</script` nor `<!--` can appear, and the text
 /// still parses to the same value.
@@ -538,186 +583,8 @@ fn data_json(data: &HtmlData) -> String {
     json.replace('<', "\\u003c")
 }
 
+// The path first: the architecture test reads `#[cfg(test)]` as applying
+// to the `mod` line right after it.
+#[path = "page/tests.rs"]
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::render::svg::{svg, SvgStyle};
-    use crate::render::test_support::sample;
-
-    /// Page data for the sample: every node, neighbours and partners made up.
-    fn sample_data(dataset: &Dataset, title: &str) -> HtmlData {
-        let nodes = dataset
-            .nodes()
-            .iter()
-            .enumerate()
-            .map(|(i, node)| {
-                let path = path_labels(dataset, i, &Default::default());
-                let (neighbors, partners) = match node.id.as_str() {
-                    "A1" => (vec!["A2".into(), "B".into()], vec![("B".into(), true)]),
-                    "A3" => (vec!["A2".into()], vec![("A1".into(), false)]),
-                    _ => (Vec::new(), Vec::new()),
-                };
-                HtmlNode {
-                    id: node.id.clone(),
-                    label: node.label.clone(),
-                    path,
-                    weight: node.value,
-                    depth: node.depth,
-                    leaf: dataset.is_leaf(i),
-                    parent: node.parent.map(|p| dataset.node(p).id.clone()),
-                    zoom: None,
-                    neighbors,
-                    partners,
-                }
-            })
-            .collect();
-        HtmlData {
-            title: title.to_owned(),
-            nodes,
-            frames: Vec::new(),
-        }
-    }
-
-    #[test]
-    fn frames_bring_a_slider_and_travel_escaped() {
-        let (ds, layout) = sample();
-        let svg_text = svg(&ds, &layout, &SvgStyle::default());
-        let plain = html(&svg_text, &sample_data(&ds, "t"));
-        assert!(
-            !plain.contains("class=\"np-frame\""),
-            "no frames, no slider"
-        );
-        let mut data = sample_data(&ds, "t");
-        data.frames = vec![
-            HtmlFrame {
-                label: format!("level 1: {HOSTILE}"),
-                cells: vec![("A".into(), "M0,0L1,0L1,1Z".into(), "#ff0000".into())],
-            },
-            HtmlFrame {
-                label: "level 1: final".into(),
-                cells: Vec::new(),
-            },
-        ];
-        let page = html(&svg_text, &data);
-        // Two frames and the finished map: positions 0..=2, starting at the end.
-        assert!(page.contains("min=\"0\" max=\"2\" value=\"2\""));
-        assert!(page.contains("class=\"np-frame\""));
-        assert!(!page.contains(HOSTILE));
-        let block: serde_json::Value =
-            serde_json::from_str(data_block(&page)).expect("data block parses");
-        assert_eq!(block["frames"][0]["label"], format!("level 1: {HOSTILE}"));
-        assert_eq!(block["frames"][0]["cells"][0][0], "A");
-    }
-
-    const HOSTILE: &str = "<script>alert(1)</script>";
-
-    fn page() -> (String, HtmlData) {
-        let (dataset, layout) = sample();
-        let data = sample_data(&dataset, &format!("Map {HOSTILE}"));
-        (
-            html(&svg(&dataset, &layout, &SvgStyle::default()), &data),
-            data,
-        )
-    }
-
-    /// The text of the JSON data block.
-    fn data_block(page: &str) -> &str {
-        let open = format!("<script type=\"application/json\" class=\"{DATA_CLASS}\"");
-        let at = page.find(&open).expect("data block");
-        let start = at + page[at..].find('>').expect("tag end") + 1;
-        let len = page[start..].find("</script>").expect("block end");
-        &page[start..start + len]
-    }
-
-    #[test]
-    fn no_network_references() {
-        let (page, _) = page();
-        let without_ns = page.replace("xmlns=\"http://www.w3.org/2000/svg\"", "");
-        assert!(!without_ns.contains("http://"));
-        assert!(!without_ns.contains("https://"));
-        assert!(!page.contains(" src="));
-        assert!(!page.contains("<link"));
-        assert!(!page.contains("@import"));
-        assert!(!page.contains("url("));
-    }
-
-    #[test]
-    fn data_block_round_trips() {
-        let (page, data) = page();
-        let parsed: serde_json::Value =
-            serde_json::from_str(data_block(&page)).expect("valid JSON");
-        assert_eq!(parsed, serde_json::to_value(&data).expect("serialisable"));
-        assert_eq!(
-            parsed["nodes"][2]["label"],
-            "<script>alert(1)</script> \"q\""
-        );
-        assert_eq!(parsed["nodes"][5]["partners"][0][1], false);
-    }
-
-    #[test]
-    fn hostile_text_appears_only_escaped() {
-        let (page, _) = page();
-        assert!(!page.contains("<script>alert"));
-        assert!(!page.to_lowercase().contains("</script><script>alert"));
-        assert!(page.contains("<title>Map &lt;script&gt;alert(1)&lt;/script&gt;</title>"));
-        assert!(page.contains("<title>&lt;script&gt;alert(1)&lt;/script&gt; &quot;q&quot; (B)"));
-        let block = data_block(&page);
-        assert!(block.contains("\\u003cscript>alert(1)\\u003c/script>"));
-        assert!(!block.contains('<'));
-        // Exactly the two scripts of the page, plus none smuggled in.
-        assert_eq!(page.matches("<script").count(), 2);
-        assert_eq!(page.matches("</script>").count(), 2);
-    }
-
-    #[test]
-    fn identical_input_identical_bytes() {
-        assert_eq!(page().0, page().0);
-    }
-
-    #[test]
-    fn every_data_id_is_a_node() {
-        let (page, data) = page();
-        let unescape = |s: &str| {
-            s.replace("&lt;", "<")
-                .replace("&gt;", ">")
-                .replace("&quot;", "\"")
-                .replace("&apos;", "'")
-                .replace("&amp;", "&")
-        };
-        let ids: Vec<String> = page
-            .split("data-id=\"")
-            .skip(1)
-            .map(|rest| unescape(&rest[..rest.find('"').expect("closing quote")]))
-            .collect();
-        assert_eq!(ids.len(), 5, "every node but the root");
-        for id in &ids {
-            assert!(data.nodes.iter().any(|n| &n.id == id), "{id} has data");
-        }
-    }
-
-    #[test]
-    fn page_has_its_parts() {
-        let (page, _) = page();
-        assert!(page.starts_with("<!DOCTYPE html>\n"));
-        assert!(page.ends_with("</html>\n"));
-        for part in [
-            "class=\"np-tooltip\"",
-            "<input type=\"checkbox\" class=\"np-unrealized-toggle\"",
-            "Show unrealized links",
-            ".np-dim",
-            ".np-partner",
-            "<svg xmlns=",
-        ] {
-            assert!(page.contains(part), "{part}");
-        }
-        assert!(!SCRIPT.contains("innerHTML"));
-        assert!(SCRIPT.contains("part(\"data\")"));
-        // Every id carries the page's key, and two maps get two keys.
-        let key = page_key("a", "b");
-        for id in page.split(" id=\"").skip(1) {
-            let id = &id[..id.find('"').expect("quote")];
-            assert!(id.starts_with("np-") && id.len() >= 11, "{id}");
-        }
-        assert_ne!(key, page_key("a", "c"));
-    }
-}
+mod tests;

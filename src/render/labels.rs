@@ -161,8 +161,9 @@ const VALUE_SCALE: f64 = 0.85;
 /// A wrapped label must be this much larger than the one-line one to be
 /// preferred (two lines read slower than one).
 const WRAP_GAIN: f64 = 1.25;
-/// Fewest characters kept before an ellipsis.
-const MIN_KEPT: usize = 3;
+/// Fewest characters kept before an ellipsis: a stub such as `gcl…` names
+/// nothing, so a label keeps four or more, or is left out (issue 24 item 8).
+const MIN_KEPT: usize = 4;
 
 /// A text block to fit: lines (text, relative size) and their extents in ems
 /// of the first line's size.
@@ -357,7 +358,7 @@ pub fn format_value(value: f64, unit: &str) -> String {
 /// The label of leaf `node` in `polygon`, at font sizes within
 /// `[min, max]` (canvas units): the whole text on one line if it fits, on two
 /// lines if that is clearly larger, else cut with an ellipsis; `None` when not
-/// even three characters fit.
+/// even four characters and the ellipsis fit.
 pub fn place_leaf(
     node: usize,
     text: &str,

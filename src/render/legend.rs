@@ -26,7 +26,22 @@ pub enum LegendItem {
     Unlinked,
     /// How many entries did not fit.
     More(usize),
+    /// Colours by a field's value: the field's name, the lowest and highest
+    /// values as the picture writes numbers, the colours between them.
+    Scale {
+        /// The field (column) name.
+        field: String,
+        /// The lowest value, formatted.
+        low: String,
+        /// The highest value, formatted.
+        high: String,
+        /// Colours from low to high, evenly spaced.
+        stops: Vec<Rgb>,
+    },
 }
+
+/// Width of a scale's colour bar, in font sizes.
+const BAR_EM: f64 = 8.0;
 
 /// Legend font size per unit of canvas scale: 14 px on a 1,000 × 1,000 canvas,
 /// the size of body text next to the map.
@@ -42,7 +57,7 @@ const MAX_ROWS: usize = 5;
 const MAX_CHARS: usize = 40;
 
 impl LegendItem {
-    fn text(&self) -> String {
+    pub(crate) fn text(&self) -> String {
         match self {
             LegendItem::Swatch { label, .. } => {
                 if label.chars().count() > MAX_CHARS {
@@ -55,6 +70,9 @@ impl LegendItem {
             LegendItem::Tab => "similar and adjacent (tab on the shared edge)".to_string(),
             LegendItem::Unlinked => "similar cells that are not adjacent (count)".to_string(),
             LegendItem::More(n) => format!("and {n} more group{}", if *n == 1 { "" } else { "s" }),
+            LegendItem::Scale {
+                field, low, high, ..
+            } => format!("{field}: {low} to {high}"),
         }
     }
 }
@@ -85,6 +103,13 @@ pub fn legend(
         style.text_color
     );
     let entry_width = |item: &LegendItem| {
+        if let LegendItem::Scale {
+            field, low, high, ..
+        } = item
+        {
+            return font * (width_em(&format!("{field}: {low}")) + BAR_EM + 0.8)
+                + font * width_em(high);
+        }
         let glyph = if matches!(item, LegendItem::More(_)) {
             0.0
         } else {
@@ -168,6 +193,43 @@ fn push_entry(
     font: f64,
 ) {
     let (gx, gy) = (x, y + 0.5 * (row - swatch));
+    let baseline = y + 0.5 * row + 0.35 * font;
+    if let LegendItem::Scale {
+        field,
+        low,
+        high,
+        stops,
+    } = item
+    {
+        // "field: low", the bar (one rect per stop: plain shapes every
+        // renderer draws alike), "high".
+        let head = format!("{field}: {low}");
+        let bx = x + font * (width_em(&head) + 0.4);
+        let bw = BAR_EM * font;
+        let step = bw / stops.len().max(1) as f64;
+        out.push_str("<g class=\"np-legend-item np-legend-scale\">");
+        for (k, color) in stops.iter().enumerate() {
+            // Each rect overlaps the next by a hair, so no seam shows.
+            out.push_str(&format!(
+                "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{color}\"/>",
+                num(bx + step * k as f64),
+                num(gy),
+                num(step + if k + 1 < stops.len() { 0.3 } else { 0.0 }),
+                num(swatch)
+            ));
+        }
+        out.push_str("</g>\n");
+        texts.push_str(&format!(
+            "<text x=\"{}\" y=\"{}\">{}</text>\n<text x=\"{}\" y=\"{}\">{}</text>\n",
+            num(x),
+            num(baseline),
+            escape(&head),
+            num(bx + bw + 0.4 * font),
+            num(baseline),
+            escape(high)
+        ));
+        return;
+    }
     out.push_str("<g class=\"np-legend-item\">");
     match item {
         LegendItem::Swatch { color, .. } => out.push_str(&format!(
@@ -208,7 +270,7 @@ fn push_entry(
             num(0.45 * swatch),
             num(0.12 * swatch)
         )),
-        LegendItem::More(_) => {}
+        LegendItem::More(_) | LegendItem::Scale { .. } => {}
     }
     out.push_str("</g>\n");
     let tx = if matches!(item, LegendItem::More(_)) {
@@ -233,6 +295,22 @@ mod tests {
             color: Rgb::new(1, 2, 3),
             label: label.to_string(),
         }
+    }
+
+    #[test]
+    fn a_scale_draws_its_bar_between_its_low_and_high_values() {
+        let item = LegendItem::Scale {
+            field: "size <b>".into(),
+            low: "1".into(),
+            high: "9,000".into(),
+            stops: vec![Rgb::new(0, 0, 0), Rgb::new(255, 255, 255)],
+        };
+        let (text, h) = legend(&[item], 1000.0, 500.0, 1.0, &SvgStyle::default());
+        assert!(h > 0.0);
+        assert!(text.contains(">size &lt;b&gt;: 1</text>"), "{text}");
+        assert!(text.contains(">9,000</text>"), "{text}");
+        assert!(text.contains("fill=\"#000000\"") && text.contains("fill=\"#ffffff\""));
+        assert_eq!(text.matches("np-legend-scale").count(), 1);
     }
 
     #[test]

@@ -5,6 +5,8 @@
 //! identical bytes for identical input. Only PNG can fail, and then on a bug
 //! (its input is our own SVG) or an absurd pixel size.
 
+/// Colour by a numeric field: the scales and the values.
+pub mod color_by;
 /// Interactive HTML page: the SVG with inline hover script, style and node data.
 pub mod html;
 /// Leaf labels fitted into their cells and group names across their groups.
@@ -28,10 +30,11 @@ pub(crate) mod text;
 #[cfg(test)]
 pub(crate) mod test_support;
 
+pub use color_by::{ColorBy, ColorScale};
 pub use html::{html, html_page, HtmlData, HtmlFrame, HtmlNode};
 pub use labels::LabelStyle;
 pub use palette::{PaletteKind, Rgb};
-pub use picture::{picture, Border, LegendOrder, Style};
+pub use picture::{picture, Border, LegendOrder, PageFields, Style};
 #[cfg(feature = "png")]
 pub use png::{png, PngError};
 pub use svg::{svg, SvgStyle};

@@ -9,7 +9,8 @@
 
 use nptreemap_formats::Dataset;
 
-use super::labels::{display_name, place_groups, Placed};
+use super::color_by::{self, Applied, ColorBy};
+use super::labels::{display_name, format_value, place_groups, Placed};
 use super::legend::{legend, LegendItem};
 use super::overlay::{marks_svg, place_markers, place_tabs, tabs_svg, Link, OverlayStyle};
 use super::palette::{luminance, Rgb, WHITE};
@@ -17,6 +18,7 @@ use super::svg::{
     cell_colors, escape, leaf_labels, num, push_cells, push_labels, push_text, stroke_width,
     SvgStyle,
 };
+use super::text::width_em;
 use crate::geom::Point;
 use crate::layout::{Computed, Layout};
 
@@ -41,6 +43,23 @@ pub struct Style {
     pub legend_order: LegendOrder,
     /// A line around the root outline; `None` draws none. Default: `None`.
     pub border: Option<Border>,
+    /// Colour the leaves by a numeric field instead of by group; the legend
+    /// then shows the scale. Default: `None`.
+    pub color_by: Option<ColorBy>,
+    /// What the HTML page shows of the data's own columns. Default: nothing.
+    pub page: PageFields,
+}
+
+/// The data's own columns in the HTML page (issue 24 item 4).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PageFields {
+    /// Fields (carried columns) shown in the tooltip, in this order.
+    pub fields: Vec<String>,
+    /// The field holding each cell's link (`http:`, `https:` or a relative
+    /// URL; any other value is shown as text, never followed).
+    pub link: Option<String>,
+    /// Open the link in a new tab (else in the page's own).
+    pub new_tab: bool,
 }
 
 /// The order of the legend's groups.
@@ -93,6 +112,8 @@ impl Default for Style {
             legend: true,
             legend_order: LegendOrder::default(),
             border: None,
+            color_by: None,
+            page: PageFields::default(),
         }
     }
 }
@@ -102,6 +123,68 @@ impl Default for Style {
 const TITLE_EM: f64 = 28.0;
 /// Space around the title and the legend, canvas units per unit of scale.
 const PAD: f64 = 16.0;
+/// Baseline distance of a two-line title, in font sizes.
+const TITLE_LEADING: f64 = 1.2;
+/// Most lines of a title; the rest ends in an ellipsis.
+const TITLE_LINES: usize = 2;
+/// Bold text is this much wider than the regular font's metrics say
+/// (DejaVu Sans Bold against Book, a little more than the widest).
+const BOLD_WIDTH: f64 = 1.12;
+
+/// A title in at most [`TITLE_LINES`] lines of at most `width` ems (bold):
+/// broken at spaces, a word longer than a line cut, the last line ending in
+/// an ellipsis when text is left over.
+fn title_lines(text: &str, width: f64) -> Vec<String> {
+    let fits = |t: &str| BOLD_WIDTH * width_em(t) <= width;
+    // The longest prefix of `t` that fits followed by `tail` (whole chars).
+    let cut = |t: &str, tail: &str| -> String {
+        let chars: Vec<char> = t.chars().collect();
+        let (mut lo, mut hi) = (0, chars.len());
+        while lo < hi {
+            let k = (lo + hi).div_ceil(2);
+            let head: String = chars[..k].iter().collect();
+            if fits(&format!("{}{tail}", head.trim_end())) {
+                lo = k;
+            } else {
+                hi = k - 1;
+            }
+        }
+        let head: String = chars[..lo].iter().collect();
+        format!("{}{tail}", head.trim_end())
+    };
+    let mut lines = Vec::new();
+    let mut rest = text.trim().to_owned();
+    while !rest.is_empty() && lines.len() < TITLE_LINES {
+        if fits(&rest) {
+            lines.push(std::mem::take(&mut rest));
+            break;
+        }
+        if lines.len() + 1 == TITLE_LINES {
+            lines.push(cut(&rest, "…"));
+            break;
+        }
+        // The most words that fit; a first word too long is cut.
+        let mut end = 0;
+        for (at, _) in rest.match_indices(' ') {
+            if fits(&rest[..at]) {
+                end = at;
+            } else {
+                break;
+            }
+        }
+        let line = if end > 0 {
+            rest[..end].to_owned()
+        } else {
+            cut(&rest, "")
+        };
+        if line.is_empty() {
+            break;
+        }
+        rest = rest[line.len()..].trim_start().to_owned();
+        lines.push(line);
+    }
+    lines
+}
 
 /// Canvas scale: 1 on a 1,000 × 1,000 canvas, so text and padding grow with
 /// the map instead of vanishing on large canvases; never below 0.75, so the
@@ -132,10 +215,25 @@ fn deepest_links(computed: &Computed) -> Vec<Link> {
         .collect()
 }
 
-/// The fill colour of every node of the picture (see [`cell_colors`]).
+/// The fill colour of every node of the picture (see [`fills`]).
 pub(crate) fn colors(computed: &Computed, style: &Style) -> Vec<Option<Rgb>> {
     let pairs = computed.adjacency().get(1).map_or(&[][..], |a| a.pairs());
-    cell_colors(&computed.dataset, pairs, style.cells.palette)
+    fills(&computed.dataset, pairs, style).0
+}
+
+/// The fill colour of every node: by group ([`cell_colors`]), or the
+/// leaves by `style.color_by` with the scale as applied.
+pub(crate) fn fills(
+    dataset: &Dataset,
+    adjacent: &[(usize, usize)],
+    style: &Style,
+) -> (Vec<Option<Rgb>>, Option<Applied>) {
+    let mut colors = cell_colors(dataset, adjacent, style.cells.palette);
+    let applied = style
+        .color_by
+        .as_ref()
+        .and_then(|by| color_by::apply(dataset, &mut colors, by));
+    (colors, applied)
 }
 
 /// The SVG picture of a finished computation: the treemap with, when there are
@@ -166,7 +264,7 @@ pub fn compose(
 ) -> String {
     let (cw, ch) = (layout.canvas.width, layout.canvas.height);
     let u = unit(layout);
-    let colors = cell_colors(dataset, adjacent, style.cells.palette);
+    let (colors, applied) = fills(dataset, adjacent, style);
     let labels = leaf_labels(dataset, layout, &style.cells.labels);
     let groups = if style.cells.labels.groups {
         place_groups(dataset, layout, &style.cells.labels.names, &labels, u)
@@ -205,17 +303,22 @@ pub fn compose(
         Vec::new()
     };
 
+    let title_size = TITLE_EM * u;
     let title = style
         .title
         .as_deref()
         .map(super::labels::clean)
         .filter(|t| !t.is_empty())
-        .map(|t| (t, TITLE_EM * u));
-    let top = title.as_ref().map_or(0.0, |(_, size)| size + 2.0 * PAD * u);
+        .map(|t| title_lines(&t, (cw - 2.0 * PAD * u) / title_size))
+        .filter(|lines| !lines.is_empty());
+    let top = title.as_ref().map_or(0.0, |lines| {
+        (1.0 + TITLE_LEADING * (lines.len() - 1) as f64) * title_size + 2.0 * PAD * u
+    });
     let items = if style.legend {
         legend_items(
             dataset,
             &colors,
+            applied.as_ref(),
             !tabs.is_empty(),
             !markers.is_empty(),
             style,
@@ -245,16 +348,22 @@ pub fn compose(
             num(total)
         ));
     }
-    if let Some((text, size)) = &title {
-        out.push_str(&format!(
-            "<text class=\"np-title\" x=\"{}\" y=\"{}\" font-family=\"{}\" font-size=\"{}\" font-weight=\"bold\" fill=\"{}\">{}</text>\n",
-            num(PAD * u),
-            num(-PAD * u - 0.25 * size),
-            escape(&style.cells.font_family),
-            num(*size),
-            style.cells.text_color,
-            escape(text)
-        ));
+    if let Some(lines) = &title {
+        // One <text> per line, the last one's baseline where a one-line
+        // title's is.
+        let last = lines.len() - 1;
+        for (k, line) in lines.iter().enumerate() {
+            let y = -PAD * u - 0.25 * title_size - TITLE_LEADING * title_size * (last - k) as f64;
+            out.push_str(&format!(
+                "<text class=\"np-title\" x=\"{}\" y=\"{}\" font-family=\"{}\" font-size=\"{}\" font-weight=\"bold\" fill=\"{}\">{}</text>\n",
+                num(PAD * u),
+                num(y),
+                escape(&style.cells.font_family),
+                num(title_size),
+                style.cells.text_color,
+                escape(line)
+            ));
+        }
     }
     push_cells(&mut out, dataset, layout, &style.cells, &colors);
     // Tabs on the edges, group names across the groups, then the leaf labels
@@ -393,9 +502,10 @@ fn name_fill(
 /// top-level groups (when they have children of their own; otherwise every
 /// cell is labelled already) in the style's order. Two groups with the same
 /// name are told apart by their ids.
-fn legend_items(
+pub(crate) fn legend_items(
     dataset: &Dataset,
     colors: &[Option<Rgb>],
+    applied: Option<&Applied>,
     tabs: bool,
     markers: bool,
     style: &Style,
@@ -406,6 +516,27 @@ fn legend_items(
     }
     if markers {
         items.push(LegendItem::Unlinked);
+    }
+    // Coloured by a field, the colours mean its values, not the groups
+    // (whose names are on the map).
+    if let Some(a) = applied {
+        items.push(LegendItem::Scale {
+            field: if a.log {
+                format!("{} (log scale)", a.field)
+            } else {
+                a.field.clone()
+            },
+            low: format_value(a.lo, ""),
+            high: format_value(a.hi, ""),
+            stops: a.stops.clone(),
+        });
+        if a.missing {
+            items.push(LegendItem::Swatch {
+                color: color_by::MISSING,
+                label: format!("no {} value", a.field),
+            });
+        }
+        return items;
     }
     let root = dataset.node(dataset.root());
     let groups_have_children = root
@@ -520,6 +651,69 @@ mod tests {
         assert_eq!(cells(&plain), cells(&framed));
         // The legend names the two top-level groups (A has children).
         assert_eq!(framed.matches("class=\"np-legend-item\"").count(), 2);
+    }
+
+    #[test]
+    fn a_long_title_wraps_to_two_lines_within_the_canvas_then_ends_in_an_ellipsis() {
+        let (ds, layout) = sample();
+        let titles = |t: &str| -> (Vec<String>, Vec<f64>) {
+            let svg = compose(
+                &ds,
+                &layout,
+                &[],
+                &[],
+                &Style {
+                    title: Some(t.to_string()),
+                    ..Style::default()
+                },
+            );
+            let lines: Vec<&str> = svg
+                .lines()
+                .filter(|l| l.contains("class=\"np-title\""))
+                .collect();
+            let text = |l: &str| {
+                l.split('>')
+                    .nth(1)
+                    .and_then(|t| t.split('<').next())
+                    .unwrap_or("")
+                    .to_string()
+            };
+            let attr = |l: &str, a: &str| -> f64 {
+                l.split(&format!(" {a}=\""))
+                    .nth(1)
+                    .and_then(|t| t.split('"').next())
+                    .and_then(|t| t.parse().ok())
+                    .expect("number")
+            };
+            (
+                lines.iter().map(|l| text(l)).collect(),
+                lines
+                    .iter()
+                    .map(|l| attr(l, "x") + attr(l, "font-size") * width_em(&text(l)))
+                    .collect(),
+            )
+        };
+        let (short, _) = titles("Packages");
+        assert_eq!(short, vec!["Packages".to_string()]);
+        let long = "Every package of the Debian archive by section and size, with its neighbours \
+                    by the packages it depends on, drawn as a Voronoi treemap";
+        let (lines, right) = titles(long);
+        assert_eq!(lines.len(), 2, "{lines:?}");
+        // Inside the 400-unit canvas (right edges, the regular font's metrics).
+        assert!(right.iter().all(|&r| r <= 400.0), "{right:?} {lines:?}");
+        // The words in order, the second line cut with an ellipsis.
+        assert!(long.starts_with(&lines[0]), "{lines:?}");
+        let second = lines[1].strip_suffix('…').expect("ellipsis");
+        assert!(
+            long[lines[0].len()..].trim_start().starts_with(second),
+            "{lines:?}"
+        );
+        // One word longer than a line is cut, not left running off the canvas.
+        let (word, right) = titles(&"W".repeat(80));
+        assert!(
+            !word.is_empty() && right.iter().all(|&r| r <= 400.0),
+            "{word:?}"
+        );
     }
 
     #[test]

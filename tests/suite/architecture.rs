@@ -3,7 +3,9 @@
 //! measurement, layout JSON) never touch files, standard output or the clock;
 //! the import graph between top-level modules (read from `crate::…` paths in
 //! non-test code) has no cycle, keeps the pure core away from the edges, and is
-//! exactly the graph ARCHITECTURE.md draws; every file opens with a `//!` line.
+//! exactly the graph ARCHITECTURE.md draws; no two files import each other
+//! (directly or around a loop); every source path ARCHITECTURE.md names
+//! exists; every file opens with a `//!` line.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -41,8 +43,18 @@ const CORE: &[&str] = &[
     "render",
     "measure",
 ];
-/// The edges: files, config, the daemon and the orchestration.
-const EDGE: &[&str] = &["pipeline", "daemon", "config", "store", "workspace", "exec"];
+/// The edges: files, config, the daemon, the orchestration, the binary.
+const EDGE: &[&str] = &[
+    "pipeline",
+    "graph",
+    "state",
+    "daemon",
+    "config",
+    "store",
+    "workspace",
+    "exec",
+    "cli",
+];
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -199,15 +211,14 @@ fn crate_paths(code: &str) -> BTreeSet<String> {
     out
 }
 
-/// The library's import graph: top-level module → the top-level modules its
-/// non-test code names (itself left out). The binary (`main.rs`, `cli/`) and
-/// test-only files are not part of it.
-fn import_graph() -> BTreeMap<String, BTreeSet<String>> {
+/// Every non-test source file under `src/` (relative to it) with its code
+/// (comments, literals and `#[cfg(test)]` items removed). Test-only files
+/// (declared under `#[cfg(test)]`) are left out.
+fn sources() -> Vec<(PathBuf, String)> {
     let src = root().join("src");
     let mut files = Vec::new();
     rust_files(&src, &mut files);
     let mut test_only: BTreeSet<PathBuf> = BTreeSet::new();
-    let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     let mut sources = Vec::new();
     for f in &files {
         let text = std::fs::read_to_string(f).expect("read source");
@@ -218,8 +229,19 @@ fn import_graph() -> BTreeMap<String, BTreeSet<String>> {
         }
         sources.push((f.clone(), code));
     }
-    for (f, code) in sources {
-        let rel = f.strip_prefix(&src).expect("under src");
+    sources
+        .into_iter()
+        .filter(|(f, _)| !test_only.contains(f))
+        .map(|(f, code)| (f.strip_prefix(&src).expect("under src").to_path_buf(), code))
+        .collect()
+}
+
+/// The library's import graph: top-level module → the top-level modules its
+/// non-test code names (itself left out). The binary's code, `cli/`, is a
+/// module like the others; `main.rs` and `lib.rs` only declare and call.
+fn import_graph() -> BTreeMap<String, BTreeSet<String>> {
+    let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (rel, code) in sources() {
         let first = rel
             .components()
             .next()
@@ -227,13 +249,17 @@ fn import_graph() -> BTreeMap<String, BTreeSet<String>> {
             .as_os_str()
             .to_string_lossy()
             .into_owned();
-        if first == "main.rs" || first == "cli" || first == "lib.rs" || test_only.contains(&f) {
+        if first == "main.rs" || first == "lib.rs" {
             continue;
         }
         let module = first.trim_end_matches(".rs").to_string();
         let uses = graph.entry(module.clone()).or_default();
+        // Items re-exported at the crate root (`crate::Dataset`) are not modules.
+        let src = root().join("src");
         for target in crate_paths(&code) {
-            if target != module {
+            let is_module =
+                src.join(format!("{target}.rs")).is_file() || src.join(&target).is_dir();
+            if target != module && is_module {
                 uses.insert(target);
             }
         }
@@ -267,6 +293,55 @@ fn pure_modules_do_no_io() {
     assert!(
         offences.is_empty(),
         "I/O in pure modules:\n{}",
+        offences.join("\n")
+    );
+}
+
+/// Issue 22 item 1: the edges that run the stages reach files only through
+/// the one reader (`workspace.rs`) and the one writer (`store.rs`), so that
+/// every read is bounded and every write atomic in one place each.
+#[test]
+fn files_are_reached_only_through_the_reader_and_the_writer() {
+    const THROUGH_THEM: &[&str] = &[
+        "pipeline.rs",
+        "daemon/mod.rs",
+        "daemon/worker.rs",
+        "daemon/queue.rs",
+        "daemon/change.rs",
+        "daemon/event.rs",
+        "graph/",
+        "state/",
+        "cli/init/",
+        "cli/build.rs",
+    ];
+    const FILE_ACCESS: &[&str] = &[
+        "std::fs",
+        "fs::",
+        "File::",
+        ".exists()",
+        ".is_file()",
+        ".is_dir()",
+        ".metadata()",
+        "read_dir(",
+    ];
+    let mut offences = Vec::new();
+    let mut seen = 0;
+    for (rel, code) in sources() {
+        let rel = rel.to_string_lossy().replace('\\', "/");
+        if !THROUGH_THEM.iter().any(|p| rel.starts_with(p)) {
+            continue;
+        }
+        seen += 1;
+        for word in FILE_ACCESS {
+            if code.contains(word) {
+                offences.push(format!("src/{rel}: {word}"));
+            }
+        }
+    }
+    assert!(seen >= 15, "expected the edge files, found {seen}");
+    assert!(
+        offences.is_empty(),
+        "file access around workspace.rs and store.rs:\n{}",
         offences.join("\n")
     );
 }
@@ -474,4 +549,247 @@ fn neighborhood_files_have_no_cycles() {
         }
     }
     assert!(left.is_empty(), "import cycle among the files {left:?}");
+}
+
+/// The module path of a source file (`layout/compute.rs` → `layout::compute`,
+/// `layout/mod.rs` → `layout`, `lib.rs` → the crate root).
+fn module_of(rel: &Path) -> Vec<String> {
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    let file = parts.pop().expect("a file name");
+    if file != "mod.rs" && file != "lib.rs" && file != "main.rs" {
+        parts.push(file.trim_end_matches(".rs").to_string());
+    }
+    parts
+}
+
+/// The file that defines module `path`, or the nearest enclosing one that
+/// exists (an item's path resolves to the file of its module).
+fn file_of(path: &[String], files: &BTreeSet<PathBuf>) -> Option<PathBuf> {
+    for len in (1..=path.len()).rev() {
+        let dir: PathBuf = path[..len].iter().collect();
+        for candidate in [dir.with_extension("rs"), dir.join("mod.rs")] {
+            if files.contains(&candidate) {
+                return Some(candidate);
+            }
+        }
+    }
+    None
+}
+
+/// Every path a piece of code names from `crate::`, `super::` or `self::`,
+/// with `{a, b::{c, d}}` groups expanded, as absolute module paths.
+fn named_paths(code: &str, module: &[String]) -> Vec<Vec<String>> {
+    fn expand(text: &str, prefix: Vec<String>, out: &mut Vec<Vec<String>>) {
+        // `text` starts right after `prefix::`.
+        if let Some(group) = text.strip_prefix('{') {
+            let mut depth = 0;
+            let mut start = 0;
+            for (i, c) in group.char_indices() {
+                match c {
+                    '{' => depth += 1,
+                    '}' if depth == 0 => {
+                        expand(group[start..i].trim(), prefix, out);
+                        return;
+                    }
+                    '}' => depth -= 1,
+                    ',' if depth == 0 => {
+                        expand(group[start..i].trim(), prefix.clone(), out);
+                        start = i + 1;
+                    }
+                    _ => {}
+                }
+            }
+            return;
+        }
+        let name: String = text
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        let mut path = prefix;
+        if name.is_empty() || name == "self" {
+            out.push(path);
+            return;
+        }
+        path.push(name.clone());
+        match text[name.len()..].strip_prefix("::") {
+            Some(rest) => expand(rest, path, out),
+            None => out.push(path),
+        }
+    }
+    let mut out = Vec::new();
+    let bytes = code.as_bytes();
+    for (k, _) in code.match_indices("::") {
+        // The word before `::`, and what comes before it.
+        let start = code[..k]
+            .rfind(|c: char| !(c.is_alphanumeric() || c == '_'))
+            .map_or(0, |i| i + 1);
+        let word = &code[start..k];
+        let before = start.checked_sub(1).map(|i| bytes[i]);
+        let continues = matches!(before, Some(b':'));
+        if continues {
+            continue;
+        }
+        let mut base: Vec<String> = match word {
+            "crate" => Vec::new(),
+            "self" => module.to_vec(),
+            "super" => {
+                let mut m = module.to_vec();
+                m.pop();
+                m
+            }
+            _ => continue,
+        };
+        // `super::super::x`
+        let mut rest = &code[k + 2..];
+        while word == "super" && rest.starts_with("super::") {
+            base.pop();
+            rest = &rest["super::".len()..];
+        }
+        expand(rest, base, &mut out);
+    }
+    out
+}
+
+/// The import graph between files: file → the files whose modules its
+/// non-test code names (itself and the crate root left out).
+fn file_graph() -> BTreeMap<PathBuf, BTreeSet<PathBuf>> {
+    let sources = sources();
+    let files: BTreeSet<PathBuf> = sources.iter().map(|(f, _)| f.clone()).collect();
+    let mut graph = BTreeMap::new();
+    for (rel, code) in &sources {
+        let module = module_of(rel);
+        // A module's root file (`mod.rs`) naming its own children is
+        // containment, as its `mod` and `pub use` lines are: not an import.
+        let own_child = |f: &PathBuf| {
+            rel.ends_with("mod.rs") && f.parent() == rel.parent()
+                || rel.ends_with("mod.rs") && f.parent().and_then(Path::parent) == rel.parent()
+        };
+        let uses: BTreeSet<PathBuf> = named_paths(code, &module)
+            .iter()
+            .filter_map(|p| file_of(p, &files))
+            .filter(|f| f != rel && !own_child(f))
+            .collect();
+        graph.insert(rel.clone(), uses);
+    }
+    graph
+}
+
+/// Issue 22: no two files import each other, directly or around a longer
+/// loop (module-level acyclicity let `neighborhood/constraints.rs` and
+/// `filtered_rows.rs` import each other). Only `crate::`, `super::` and
+/// `self::` paths are imports, and a module's `mod.rs` naming its own
+/// children is containment (as its `mod` and `pub use` lines are), not an
+/// import; a child naming its parent's items is one.
+#[test]
+fn no_cycle_between_files() {
+    let graph = file_graph();
+    assert!(graph.len() >= 80, "only {} files read", graph.len());
+    assert!(
+        graph[Path::new("neighborhood/filtered_rows.rs")]
+            .contains(Path::new("neighborhood/similarity.rs")),
+        "the reader misses super:: imports"
+    );
+    // Depth-first search for a back edge; report the loop it closes.
+    fn visit(
+        f: &Path,
+        graph: &BTreeMap<PathBuf, BTreeSet<PathBuf>>,
+        stack: &mut Vec<PathBuf>,
+        done: &mut BTreeSet<PathBuf>,
+        cycles: &mut Vec<String>,
+    ) {
+        if done.contains(f) {
+            return;
+        }
+        if let Some(at) = stack.iter().position(|s| s == f) {
+            let cycle: Vec<String> = stack[at..]
+                .iter()
+                .chain(std::iter::once(&f.to_path_buf()))
+                .map(|p| p.display().to_string())
+                .collect();
+            cycles.push(cycle.join(" -> "));
+            return;
+        }
+        stack.push(f.to_path_buf());
+        for next in graph.get(f).into_iter().flatten() {
+            visit(next, graph, stack, done, cycles);
+        }
+        stack.pop();
+        done.insert(f.to_path_buf());
+    }
+    let mut cycles = Vec::new();
+    let mut done = BTreeSet::new();
+    for f in graph.keys() {
+        visit(f, &graph, &mut Vec::new(), &mut done, &mut cycles);
+    }
+    assert!(
+        cycles.is_empty(),
+        "import cycles between files:\n{}",
+        cycles.join("\n")
+    );
+}
+
+#[test]
+fn the_file_reader_sees_super_groups_and_nested_paths() {
+    let module: Vec<String> = vec!["neighborhood".into(), "constraints".into()];
+    let code = "use super::{bins::{a, b}, similarity};\nlet x = crate::rng::Rng::new(1);\n\
+                use self::inner::X; pub(super) fn f() {}";
+    let paths: Vec<String> = named_paths(code, &module)
+        .into_iter()
+        .map(|p| p.join("::"))
+        .collect();
+    assert_eq!(
+        paths,
+        [
+            "neighborhood::bins::a",
+            "neighborhood::bins::b",
+            "neighborhood::similarity",
+            "rng::Rng::new",
+            "neighborhood::constraints::inner::X",
+        ]
+    );
+}
+
+/// Issue 22: every source path ARCHITECTURE.md names is there (`src/…`,
+/// `layout/neighbor/`, a file name such as `treemap.rs`), so the document
+/// cannot keep naming a file that was moved or split.
+#[test]
+fn architecture_md_names_only_paths_that_exist() {
+    let text = std::fs::read_to_string(root().join("ARCHITECTURE.md")).expect("ARCHITECTURE.md");
+    let src = root().join("src");
+    let mut all = Vec::new();
+    rust_files(&src, &mut all);
+    rust_files(&root().join("formats/src"), &mut all);
+    let names: BTreeSet<String> = all
+        .iter()
+        .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    let mut missing = Vec::new();
+    let mut checked = 0;
+    for token in text.split(|c: char| !(c.is_alphanumeric() || "_./-".contains(c))) {
+        let token = token.trim_end_matches('.');
+        let is_rs = token.ends_with(".rs");
+        let is_src = token.starts_with("src/");
+        if !(is_rs || is_src) {
+            continue;
+        }
+        checked += 1;
+        let exists = if is_src {
+            root().join(token).exists()
+        } else if token.contains('/') {
+            src.join(token).exists() || root().join(token).exists()
+        } else {
+            names.contains(token)
+        };
+        if !exists {
+            missing.push(token.to_string());
+        }
+    }
+    assert!(checked >= 20, "only {checked} paths found");
+    assert!(
+        missing.is_empty(),
+        "ARCHITECTURE.md names paths that do not exist: {missing:?}"
+    );
 }

@@ -587,3 +587,87 @@ fn legibility_report() {
     }
     let _ = writeln!(std::io::stdout(), "{}", table.join("\n"));
 }
+
+/// Issue 24 item 8, on a generated 5,000-leaf map in three levels at the
+/// default 1,000 × 1,000: a leaf label cut with an ellipsis keeps at least
+/// four characters before it (`gcl…` names nothing), and with so few leaf
+/// labels the group names carry the picture at two levels: most top-level
+/// groups and many second-level groups are named on the map.
+#[test]
+fn big_maps_cut_no_stubs_and_name_two_levels() {
+    let dir = support::temp_dir("legibility-5000");
+    let input = support::generate(&dir, 5000, 3, 7);
+    // Leaf names as long as real ones (`gen.py` writes `l123`), so that
+    // many labels need cutting.
+    let mut tree: Value =
+        serde_json::from_slice(&std::fs::read(&input).expect("read")).expect("JSON");
+    fn rename(node: &mut Value, k: &mut usize) {
+        match node.get_mut("children").and_then(Value::as_array_mut) {
+            Some(children) => children.iter_mut().for_each(|c| rename(c, k)),
+            None => {
+                const STEMS: [&str; 4] = [
+                    "gcc-arm-none-eabi",
+                    "python3-matplotlib",
+                    "libreoffice-writer",
+                    "texlive-fonts",
+                ];
+                node["name"] = Value::from(format!("{}-{k}", STEMS[*k % STEMS.len()]));
+                *k += 1;
+            }
+        }
+    }
+    rename(&mut tree, &mut 0);
+    std::fs::write(&input, tree.to_string()).expect("write");
+    let (svg, json) = (dir.join("h5000.svg"), dir.join("h5000.json"));
+    support::layout(&input, &[&svg, &json], &["--method", "plain"]);
+    let (text, layout) = read(&svg);
+    let boxes = text_boxes(&text);
+    let stubs: Vec<&str> = boxes
+        .iter()
+        .filter(|b| b.class == "np-labels")
+        .filter_map(|b| b.text.split_once('\u{2026}').map(|(kept, _)| kept))
+        .filter(|kept| kept.trim_end().chars().count() < 4)
+        .collect();
+    let cut = boxes
+        .iter()
+        .filter(|b| b.class == "np-labels" && b.text.contains('\u{2026}'))
+        .count();
+    assert!(stubs.is_empty(), "labels cut to stubs: {stubs:?}");
+
+    let nodes = layout["nodes"].as_array().expect("nodes");
+    // Groups are the nodes some node names as its parent.
+    let parents: std::collections::BTreeSet<&str> =
+        nodes.iter().filter_map(|n| n["parent"].as_str()).collect();
+    let names: Vec<&str> = boxes
+        .iter()
+        .filter(|b| b.class == "np-group-labels")
+        .map(|b| b.text.as_str())
+        .collect();
+    let level = |d: usize| -> (usize, usize) {
+        let groups: Vec<&str> = nodes
+            .iter()
+            .filter(|n| n["depth"].as_u64() == Some(d as u64) && n["virtual"] != true)
+            .filter(|n| parents.contains(n["id"].as_str().expect("id")))
+            .map(|n| n["label"].as_str().expect("label"))
+            .collect();
+        let named = groups.iter().filter(|g| names.contains(g)).count();
+        (named, groups.len())
+    };
+    let (top, tops) = level(1);
+    let (second, seconds) = level(2);
+    let labels = boxes.iter().filter(|b| b.class == "np-labels").count();
+    let _ = writeln!(
+        std::io::stderr(),
+        "5,000 leaves: {cut} cut labels, {labels} labels; top-level groups named {top} of {tops}, second-level {second} of {seconds}"
+    );
+    assert!(cut > 0, "the map has cut labels to check");
+    assert!(
+        tops >= 2 && seconds > tops,
+        "three levels: {tops} {seconds}"
+    );
+    assert!(2 * top >= tops, "top-level groups named: {top} of {tops}");
+    assert!(
+        4 * second >= seconds,
+        "second-level groups named: {second} of {seconds}"
+    );
+}

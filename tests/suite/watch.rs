@@ -296,6 +296,54 @@ fn signal(child: &Child, name: &str) {
     assert!(status.success(), "could not send SIG{name}");
 }
 
+/// Issue 22 item 1: the daemon runs `build`'s stage graph and keeps the
+/// state folder as a build would: after a watch session with an edit,
+/// `build --check` passes and `build` finds the dataset up to date (no
+/// layout, no render), and a restarted daemon finds it up to date too. Fails
+/// with the caches off (`NPTREEMAP_NO_CACHE=1`), and on the daemon that
+/// stored only the layout (the build then laid out again).
+#[test]
+fn a_watch_session_leaves_state_a_build_finds_up_to_date() {
+    let (dir, config, _out) = setup("watch_state");
+    let mut daemon = Daemon::start(&config);
+    daemon.expect(&["grid: start", "wrote"]);
+    let mut leaves = initial_leaves();
+    leaves[0].1 *= 1.1;
+    std::fs::write(dir.join("data/nodes.csv"), nodes_csv(&leaves)).expect("edit");
+    daemon.expect(&["grid: data: nodes.csv", "laid out warm", "wrote"]);
+    signal(&daemon.child, "TERM");
+    daemon.expect(&["stopped"]);
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+
+    let run = |args: &[&str]| {
+        let out = support::bin()
+            .args(args)
+            .arg(&config)
+            .output()
+            .expect("run");
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        (out.status.code(), text)
+    };
+    let (code, text) = run(&["build", "--check"]);
+    assert_eq!(code, Some(0), "{text}");
+    let (code, text) = run(&["build"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("grid: up to date"), "{text}");
+
+    let mut daemon = Daemon::start(&config);
+    let line = daemon.expect(&["grid: start"]);
+    assert!(
+        line.contains("found up to date") && line.contains("no output changed"),
+        "{line}"
+    );
+    signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
+
 #[test]
 fn the_daemon_follows_edits_and_survives_bad_ones() {
     let (dir, config, out) = setup("watch_edits");

@@ -325,6 +325,52 @@ pub(super) fn fields(
     })
 }
 
+/// Columns a reader may want in the HTML page (issue 24 item 4), offered
+/// commented out: a link column by its name, and up to [`OFFERED`] text
+/// columns that the mapping leaves unused and that say something of their
+/// own row (a summary, a version: mostly distinct values; a column of few
+/// repeated values is a grouping the reader left out).
+#[derive(Debug, Default, PartialEq)]
+pub(super) struct PageOffer {
+    pub(super) fields: Vec<String>,
+    pub(super) link: Option<String>,
+}
+
+/// Most tooltip fields offered.
+const OFFERED: usize = 4;
+
+/// Names of a column of links.
+const LINK_NAMES: [&str; 6] = ["url", "link", "href", "homepage", "website", "homepage_url"];
+
+/// The page offer for node table `t` with id column `id` mapped as `f`.
+pub(super) fn page_offer(t: &Profile<'_>, id: usize, f: &Fields) -> PageOffer {
+    let used = |name: &str| {
+        name == t.columns[id].name
+            || f.label.as_deref() == Some(name)
+            || f.weight.as_deref() == Some(name)
+            || f.groups.iter().any(|g| g == name)
+            || f.genres.as_deref() == Some(name)
+    };
+    let link = t
+        .columns
+        .iter()
+        .find(|c| c.filled > 0 && LINK_NAMES.iter().any(|n| c.name.eq_ignore_ascii_case(n)))
+        .map(|c| c.name.clone())
+        .filter(|name| !used(name));
+    let free: Vec<&Column> = t
+        .columns
+        .iter()
+        .filter(|c| c.filled > 0 && !used(&c.name) && Some(&c.name) != link.as_ref())
+        .collect();
+    let fields = free
+        .iter()
+        .filter(|c| !c.numeric && 5 * c.distinct >= 4 * c.filled)
+        .take(OFFERED)
+        .map(|c| c.name.clone())
+        .collect();
+    PageOffer { fields, link }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

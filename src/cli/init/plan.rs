@@ -194,7 +194,9 @@ pub(super) fn plan(inputs: &[Input], request: &Request<'_>) -> anyhow::Result<Pl
         ));
     }
     let name = dataset_name(path);
+    let page = guess::page_offer(&nodes.known.profile, nodes.id, &fields);
     Ok(Plan {
+        page,
         command_line: request.command_line.clone(),
         why,
         outputs: output_paths(&name),

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use super::guess::Fields;
+use super::guess::{Fields, PageOffer};
 
 /// Everything the config says, decided.
 pub(super) struct Plan {
@@ -27,6 +27,8 @@ pub(super) struct Plan {
     pub(super) strength: Option<String>,
     /// The output paths.
     pub(super) outputs: Vec<String>,
+    /// Columns offered (commented out) for the HTML page.
+    pub(super) page: PageOffer,
 }
 
 /// `text` on one line: characters that would end a comment's line or that
@@ -178,6 +180,26 @@ pub(super) fn config_text(plan: &Plan) -> Result<String, serde_yaml::Error> {
     if let Some(strength) = &plan.strength {
         w.at(f, "strength", strength, None)?;
     }
+    if !plan.page.fields.is_empty() || plan.page.link.is_some() {
+        // Written by the YAML crate, then commented out line by line: the
+        // reader removes the `# ` and has valid YAML.
+        let mut page = Writer::default();
+        page.text.push_str("page:\n");
+        if !plan.page.fields.is_empty() {
+            page.at("  ", "fields", &plan.page.fields, None)?;
+        }
+        if let Some(link) = &plan.page.link {
+            page.at("  ", "link", link, None)?;
+            page.at("  ", "link_target", "new-tab", None)?;
+        }
+        w.comment(
+            d,
+            "Your own columns in the HTML page's tooltip, and a link on click (remove the #):",
+        );
+        for line in page.text.lines() {
+            w.comment(d, line);
+        }
+    }
     w.text.push_str("    outputs:\n");
     for path in &plan.outputs {
         w.entry(("      - ", "        "), "path", path, None)?;
@@ -196,6 +218,7 @@ mod tests {
             name: name.to_owned(),
             format: "genre-table",
             files: vec![("nodes", path.to_owned())],
+            page: PageOffer::default(),
             fields: Fields {
                 id: "id".to_owned(),
                 label: Some(column.to_owned()),

@@ -1,7 +1,8 @@
 //! A minimal Chrome DevTools Protocol driver for the browser test: finds and
 //! starts headless Chromium with a fresh profile, attaches to one tab over the
-//! DevTools websocket, sends commands, evaluates JavaScript, records every event
-//! and kills the browser when dropped. Every wait is bounded by one deadline.
+//! DevTools websocket, sends commands (mouse, keys, taps, typed text),
+//! evaluates JavaScript, records every event and kills the browser when
+//! dropped. Every wait is bounded by one deadline.
 
 use std::fs::File;
 use std::io::ErrorKind;
@@ -199,6 +200,24 @@ impl Browser {
                 json!({"type": kind, "x": x, "y": y, "button": "left", "buttons": 1, "clickCount": 1}),
             );
         }
+    }
+
+    /// Taps the touch screen at viewport point (`x`, `y`): one finger down
+    /// and up (the page must have touch emulation on to see a tap).
+    pub(crate) fn tap(&mut self, x: f64, y: f64) {
+        self.call(
+            "Input.dispatchTouchEvent",
+            json!({"type": "touchStart", "touchPoints": [{"x": x, "y": y}]}),
+        );
+        self.call(
+            "Input.dispatchTouchEvent",
+            json!({"type": "touchEnd", "touchPoints": []}),
+        );
+    }
+
+    /// Types `text` into the focused element, as an input method would.
+    pub(crate) fn insert_text(&mut self, text: &str) {
+        self.call("Input.insertText", json!({ "text": text }));
     }
 
     /// The events received so far whose method is `method`.

@@ -1,0 +1,172 @@
+// The page's events and start (last part of the page's script, see
+// src/render/html.rs): mouse and pen hover, keyboard focus, touch (a first
+// tap shows the tooltip, a second tap on the same cell zooms), clicks and
+// keys for the zoom, the optimisation slider, the unrealised-links toggle,
+// the picture's size within the window, and the mark `nptreemap-ready`
+// once everything answers.
+var pointer = "mouse";
+var tapped = -1;
+
+map.addEventListener("pointerdown", function (e) { pointer = e.pointerType || "mouse"; });
+// Pointer events, not mouse events: the mouse events a browser sends after
+// a tap must not count as hovering (they would turn the first tap into a
+// zoom).
+map.addEventListener("pointerover", function (e) {
+  if (e.pointerType === "touch") { return; }
+  pointer = e.pointerType || "mouse";
+  var i = leafOf(e.target);
+  if (i === current) { return; }
+  if (i < 0) { clear(); return; }
+  highlight(i, false);
+  place(e.clientX, e.clientY);
+});
+map.addEventListener("pointermove", function (e) {
+  if (e.pointerType !== "touch" && current >= 0) { place(e.clientX, e.clientY); }
+});
+map.addEventListener("pointerleave", function (e) {
+  if (e.pointerType !== "touch") { clear(); }
+});
+
+// Keyboard: Tab moves through the cells, the focused one behaves as
+// hovered and wears the focus ring.
+map.addEventListener("focusin", function (e) {
+  var i = leafOf(e.target);
+  if (i < 0) { return; }
+  var el = cells[i];
+  if (!el.hasAttribute("role")) {
+    el.setAttribute("role", "img");
+    el.setAttribute("aria-label", pathLabels(i).join(" \u203a ") + ", weight " + weights[i] + (data.unit || ""));
+  }
+  // The ring for keyboard focus; a click focuses the cell too, quietly.
+  var ring = true;
+  try { ring = el.matches(":focus-visible"); } catch (err) { ring = true; }
+  highlight(i, ring);
+  placeAt(i);
+});
+map.addEventListener("focusout", function (e) {
+  if (!map.contains(e.relatedTarget)) { clear(); }
+});
+
+map.addEventListener("click", function (e) {
+  if (e.target === outsideVeil) { zoomOut(); return; }
+  var i = nodeOf(e.target);
+  if (i < 0) { return; }
+  if (pointer === "touch" && isLeaf(i) && tapped !== i) {
+    // Touch: the first tap acts as hover.
+    tapped = i;
+    highlight(i, false);
+    placeAt(i);
+    return;
+  }
+  tapped = -1;
+  if (isLeaf(i)) { showLink(i); }
+  zoomInto(i);
+});
+// A tap elsewhere on the page ends the touch hover.
+document.addEventListener("click", function (e) {
+  if (pointer === "touch" && !map.contains(e.target) && current >= 0) { tapped = -1; clear(); }
+});
+map.addEventListener("keydown", function (e) {
+  var i = leafOf(e.target);
+  if ((e.key === "Enter" || e.key === " ") && i >= 0) { e.preventDefault(); showLink(i); zoomInto(i); }
+});
+root.addEventListener("keydown", function (e) {
+  if (e.key === "Escape" && (view.node !== 0 || view.leaf >= 0) && !e.defaultPrevented) { zoomOut(); }
+});
+
+// The optimisation slider: frame k drawn over the map, the last position
+// the finished picture.
+(function () {
+  var slider = part("frame");
+  if (!slider || !data.frames) { return; }
+  var frameLayer = document.createElementNS(NS, "g");
+  frameLayer.setAttribute("class", "np-frame-layer");
+  frameLayer.setAttribute("pointer-events", "none");
+  frameLayer.setAttribute("stroke", "#ffffff");
+  frameLayer.setAttribute("stroke-width", "1");
+  svg.appendChild(frameLayer);
+  var caption = part("frame-label");
+  function showFrame() {
+    var k = parseInt(slider.value, 10);
+    while (frameLayer.firstChild) { frameLayer.removeChild(frameLayer.firstChild); }
+    var frame = data.frames[k];
+    if (!frame) { caption.textContent = "final layout"; return; }
+    frame.cells.forEach(function (c) {
+      var p = document.createElementNS(NS, "path");
+      p.setAttribute("d", c[1]);
+      p.setAttribute("fill", c[2]);
+      p.setAttribute("data-frame-id", c[0]);
+      frameLayer.appendChild(p);
+    });
+    caption.textContent = (k + 1) + " / " + data.frames.length + ": " + frame.label;
+  }
+  slider.addEventListener("input", showFrame);
+  showFrame();
+})();
+
+// The unrealised links: dashed lines between the centres of similar cells
+// that do not touch, drawn from the data into the picture's (empty) group
+// the first time the checkbox asks for them.
+(function () {
+  var toggleBox = part("unrealized-toggle");
+  var group = svg.querySelector(".np-unrealized");
+  var drawn = false;
+  function toggle() {
+    if (toggleBox.checked && group && !drawn) {
+      drawn = true;
+      var frag = document.createDocumentFragment();
+      for (var i = 0; i < N; i++) {
+        partners[i].forEach(function (p) {
+          var j = p[0];
+          if (p[1] || j < i || !cells[i] || !cells[j]) { return; }
+          var a = centroid(i), b = centroid(j);
+          var l = document.createElementNS(NS, "line");
+          l.setAttribute("x1", a[0].toFixed(2)); l.setAttribute("y1", a[1].toFixed(2));
+          l.setAttribute("x2", b[0].toFixed(2)); l.setAttribute("y2", b[1].toFixed(2));
+          frag.appendChild(l);
+        });
+      }
+      group.appendChild(frag);
+    }
+    root.classList.toggle("np-hide-unrealized", !toggleBox.checked);
+  }
+  toggleBox.addEventListener("change", toggle);
+  toggle();
+})();
+
+// As wide as the container allows, and no wider than keeps the whole
+// picture in the window below what stands above it.
+(function () {
+  var aspect = parseFloat(map.getAttribute("data-aspect")) || 1;
+  function fit() {
+    var above = map.getBoundingClientRect().top - root.getBoundingClientRect().top;
+    var room = Math.max(240, window.innerHeight - above - 16);
+    map.style.maxWidth = Math.round(room * aspect) + "px";
+    unitPxKnown = 0;
+  }
+  fit();
+  window.addEventListener("resize", fit);
+})();
+
+// glue: issue 25. The live preview (src/serve/live.js) replaces this map
+// with its rebuilt one and carries the view across: the zoomed group and
+// leaf, the search text, the hovered cell.
+root.npView = {
+  get: function () {
+    return { node: ids[view.node], leaf: view.leaf >= 0 ? ids[view.leaf] : null,
+      current: current >= 0 ? ids[current] : null, search: box.value };
+  },
+  set: function (s) {
+    var g = index.get(s.node), l = s.leaf === null ? -1 : index.get(s.leaf);
+    if (g !== undefined && (g !== 0 || l !== -1)) {
+      instantZoom = true;
+      zoomTo(g, l === undefined ? -1 : l);
+      instantZoom = false;
+    }
+    if (s.search) { box.value = s.search; }
+    var c = s.current === null ? undefined : index.get(s.current);
+    if (c !== undefined && isLeaf(c)) { highlight(c, false); placeAt(c); }
+  }
+};
+
+if (window.performance && performance.mark) { performance.mark("nptreemap-ready"); }

@@ -1,0 +1,227 @@
+//! Which file a request path names, if any: the preview's path safety. Owns
+//! the route table (every output of the config under `/<dataset>/<file
+//! name>`, nothing else), the strict decoding of a request path, and the
+//! check that the file found is still inside its output folder (a symlink
+//! placed there pointing out of it is refused). There is no directory
+//! listing and no path arithmetic: a decoded path is looked up as a whole in
+//! the table, so `..`, absolute paths and encoded tricks can only miss.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::SystemTime;
+
+use crate::config::{Config, OutputKind};
+
+/// One servable file.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Route {
+    /// The dataset it belongs to.
+    pub(crate) dataset: String,
+    /// The output file, as the config resolves it.
+    pub(crate) file: PathBuf,
+    /// What it is (decides the content type and whether the live script goes in).
+    pub(crate) kind: OutputKind,
+}
+
+/// The config's outputs by URL path, read again when the config file changes.
+#[derive(Debug, Default)]
+pub(crate) struct Routes {
+    config_path: PathBuf,
+    stamp: Option<SystemTime>,
+    /// URL path (decoded, starting with `/`) to file.
+    pub(crate) by_path: BTreeMap<String, Route>,
+    /// Dataset names in config order, each with its URL paths.
+    pub(crate) datasets: Vec<(String, Vec<String>)>,
+    /// The config's `history:`.
+    pub(crate) history: usize,
+}
+
+impl Routes {
+    /// The routes of the config at `config_path` (empty if it cannot be read:
+    /// the daemon reports why).
+    pub(crate) fn new(config_path: &Path) -> Routes {
+        let mut routes = Routes {
+            config_path: config_path.to_path_buf(),
+            ..Routes::default()
+        };
+        routes.refresh();
+        routes
+    }
+
+    /// Reads the config again if its modification time changed; a config
+    /// that does not parse keeps the last good routes (as the daemon keeps
+    /// the last good config).
+    pub(crate) fn refresh(&mut self) {
+        let stamp = std::fs::metadata(&self.config_path)
+            .and_then(|m| m.modified())
+            .ok();
+        if stamp.is_some() && stamp == self.stamp {
+            return;
+        }
+        self.stamp = stamp;
+        if let Ok(config) = Config::from_path(&self.config_path) {
+            self.set(&config);
+        }
+    }
+
+    fn set(&mut self, config: &Config) {
+        self.by_path.clear();
+        self.datasets.clear();
+        self.history = config.history;
+        for d in &config.datasets {
+            let mut urls = Vec::new();
+            for out in &d.outputs {
+                let (Some(kind), Some(name)) = (out.kind, out.path.file_name()) else {
+                    continue;
+                };
+                let url = format!("/{}/{}", d.name, name.to_string_lossy());
+                // Two outputs of one dataset with one file name (in two
+                // folders): the first is served.
+                if self.by_path.contains_key(&url) {
+                    continue;
+                }
+                self.by_path.insert(
+                    url.clone(),
+                    Route {
+                        dataset: d.name.clone(),
+                        file: out.path.clone(),
+                        kind,
+                    },
+                );
+                urls.push(url);
+            }
+            self.datasets.push((d.name.clone(), urls));
+        }
+    }
+
+    /// The route a raw request target (path and query, as sent) names.
+    pub(crate) fn find(&self, target: &str) -> Option<&Route> {
+        self.by_path.get(&decode(target)?)
+    }
+}
+
+/// The path of a request target, percent-decoded, or `None` for anything
+/// that is not a plain absolute path: no query is kept; a bad escape, a
+/// non-UTF-8 result, a NUL, a backslash, an empty, `.` or `..` segment (a
+/// `//`), are refused outright rather than normalised.
+pub(crate) fn decode(target: &str) -> Option<String> {
+    let path = target.split(['?', '#']).next()?;
+    if !path.starts_with('/') {
+        return None;
+    }
+    let raw = path.as_bytes();
+    let mut bytes = Vec::with_capacity(raw.len());
+    let mut i = 0;
+    while i < raw.len() {
+        if raw[i] == b'%' {
+            let hex = std::str::from_utf8(raw.get(i + 1..i + 3)?).ok()?;
+            bytes.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            bytes.push(raw[i]);
+            i += 1;
+        }
+    }
+    let text = String::from_utf8(bytes).ok()?;
+    if text.contains(['\0', '\\']) {
+        return None;
+    }
+    let ok = text[1..].is_empty()
+        || text[1..]
+            .split('/')
+            .all(|seg| !seg.is_empty() && seg != "." && seg != "..");
+    ok.then_some(text)
+}
+
+/// The file of `route` if it is a regular file inside its own output folder
+/// once every symlink is resolved; `None` otherwise (a symlink placed there
+/// pointing elsewhere, a folder, a missing file).
+pub(crate) fn inside(route: &Route) -> Option<PathBuf> {
+    let folder = route.file.parent()?.canonicalize().ok()?;
+    let real = route.file.canonicalize().ok()?;
+    (real.starts_with(&folder) && real.is_file()).then_some(real)
+}
+
+/// A URL path segment of `text`, percent-encoded where needed.
+pub(crate) fn encode(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for b in text.bytes() {
+        if b.is_ascii_alphanumeric() || b"-._~/".contains(&b) {
+            out.push(char::from(b));
+        } else {
+            out.push_str(&format!("%{b:02X}"));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plain_paths_decode_and_tricks_do_not() {
+        assert_eq!(decode("/a/b.html?x=1").as_deref(), Some("/a/b.html"));
+        assert_eq!(decode("/a%20b/c.svg").as_deref(), Some("/a b/c.svg"));
+        assert_eq!(decode("/").as_deref(), Some("/"));
+        for bad in [
+            "/../etc/passwd",
+            "/a/../b",
+            "/%2e%2e/etc/passwd",
+            "/%2E%2E/x",
+            "/a/%2e/b",
+            "//etc/passwd",
+            "/a\\..\\b",
+            "/a%5c..%5cb",
+            "/a%00b",
+            "/a%zz",
+            "/a%2",
+            "etc/passwd",
+            "http://x/a",
+            "/%ff",
+        ] {
+            assert_eq!(decode(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn only_outputs_are_routes() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let config = dir.path().join("c.yaml");
+        std::fs::write(
+            &config,
+            "datasets:\n  - name: d\n    format: hierarchy-json\n    files: {hierarchy: h.json}\n    outputs: [out/d.html, out/d.svg]\n",
+        )
+        .expect("write");
+        let routes = Routes::new(&config);
+        assert_eq!(
+            routes.datasets,
+            vec![(
+                "d".to_string(),
+                vec!["/d/d.html".to_string(), "/d/d.svg".to_string()]
+            )]
+        );
+        assert!(routes.find("/d/d.html").is_some());
+        assert!(routes.find("/d/h.json").is_none());
+        assert!(routes.find("/d/../c.yaml").is_none());
+        assert!(routes.find("/d/%64.html").is_some(), "an escaped letter is the letter");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_symlink_out_of_the_folder_is_refused() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let out = dir.path().join("out");
+        std::fs::create_dir(&out).expect("mkdir");
+        std::fs::write(dir.path().join("secret"), "x").expect("write");
+        std::os::unix::fs::symlink(dir.path().join("secret"), out.join("d.svg")).expect("link");
+        std::fs::write(out.join("d.html"), "x").expect("write");
+        let route = |name: &str| Route {
+            dataset: "d".to_string(),
+            file: out.join(name),
+            kind: OutputKind::Svg,
+        };
+        assert_eq!(inside(&route("d.svg")), None);
+        assert!(inside(&route("d.html")).is_some());
+    }
+}

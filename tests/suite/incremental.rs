@@ -1,0 +1,241 @@
+//! Issue 22: a rebuild costs what the change costs, and outputs follow from
+//! committed files. Builds run as `nptreemap build` runs them (a new stage
+//! graph per dataset and run, state from the state folder) and the
+//! assertions read the stage counts of its report. Each reuse test fails
+//! with the caches off (`NPTREEMAP_NO_CACHE=1 cargo test --test suite
+//! incremental::`), which is how they were checked.
+
+use std::path::{Path, PathBuf};
+
+use nptreemap::config::Config;
+use nptreemap::graph::{DatasetBuild, DatasetGraph, GraphOptions, Job, LayoutStep, Stage};
+
+use crate::support;
+
+/// Builds every dataset of `config` and writes what changed, as the binary
+/// does; returns each dataset's build (with its stage report).
+fn build(config: &Path) -> Vec<DatasetBuild> {
+    let c = Config::from_path(config).expect("config");
+    c.datasets
+        .iter()
+        .map(|d| {
+            let job = Job {
+                dataset: d,
+                request: c.request(d),
+                style: c.style(d),
+                cold: false,
+            };
+            let mut graph = DatasetGraph::new(GraphOptions::from_env());
+            let mut built = graph.build(&job).expect("build");
+            let written = graph.commit(&job, &mut built);
+            assert!(written.failed.is_empty(), "{:?}", written.failed);
+            built
+        })
+        .collect()
+}
+
+/// The countries example in a fresh folder.
+fn countries(tag: &str) -> PathBuf {
+    support::example("countries", &format!("incremental_{tag}"))
+}
+
+/// Multiplies the population of the first country by `factor`.
+fn edit_weight(config: &Path, factor: f64) {
+    let csv = config.with_file_name("countries.csv");
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut cells: Vec<String> = lines[1].split(',').map(str::to_string).collect();
+    let population: f64 = cells[2].parse().expect("a number");
+    cells[2] = format!("{}", (population * factor).round());
+    lines[1] = cells.join(",");
+    std::fs::write(&csv, lines.join("\n") + "\n").expect("write csv");
+}
+
+/// Replaces `from` by `to` in the config (which must contain it).
+fn edit_config(config: &Path, from: &str, to: &str) {
+    let text = std::fs::read_to_string(config).expect("config");
+    assert!(text.contains(from), "{from:?} not in the config");
+    std::fs::write(config, text.replacen(from, to, 1)).expect("write config");
+}
+
+fn out(config: &Path, name: &str) -> Vec<u8> {
+    std::fs::read(config.with_file_name("out").join(name)).expect("output")
+}
+
+#[test]
+fn a_weight_edit_recomputes_no_constraint() {
+    let config = countries("weight");
+    let first = build(&config);
+    assert_eq!(first[0].stages.ran(Stage::Constraints), 1);
+    let svg = out(&config, "countries.svg");
+    edit_weight(&config, 1.1);
+    let second = build(&config);
+    let s = &second[0].stages;
+    assert_eq!(s.ran(Stage::Constraints), 0, "{s:?}");
+    assert_eq!(s.reused(Stage::Constraints), 1, "{s:?}");
+    assert_eq!(second[0].layout, LayoutStep::Warm, "{s:?}");
+    assert_ne!(out(&config, "countries.svg"), svg, "the edit shows");
+}
+
+#[test]
+fn a_render_edit_runs_no_layout() {
+    let config = countries("render");
+    build(&config);
+    let svg = out(&config, "countries.svg");
+    let json = out(&config, "countries.json");
+    edit_config(
+        &config,
+        "layout:\n",
+        "render:\n  border_width: 4\nlayout:\n",
+    );
+    let second = build(&config);
+    let s = &second[0].stages;
+    assert_eq!(s.ran(Stage::Layout), 0, "{s:?}");
+    assert_eq!(s.ran(Stage::Constraints), 0, "{s:?}");
+    assert_eq!(second[0].layout, LayoutStep::Reused, "{s:?}");
+    // The SVG and PNG are drawn again; the layout JSON has no style.
+    assert_eq!(s.ran(Stage::Render), 2, "{s:?}");
+    assert_ne!(out(&config, "countries.svg"), svg);
+    assert_eq!(out(&config, "countries.json"), json);
+}
+
+#[test]
+fn a_no_op_build_runs_neither_layout_nor_render_and_writes_nothing() {
+    let config = countries("noop");
+    build(&config);
+    let dir = config.with_file_name("out");
+    let before = snapshot(&dir);
+    let second = build(&config);
+    let s = &second[0].stages;
+    assert_eq!(second[0].layout, LayoutStep::UpToDate, "{s:?}");
+    for stage in [
+        Stage::Parse,
+        Stage::Constraints,
+        Stage::Layout,
+        Stage::Render,
+        Stage::Write,
+    ] {
+        assert_eq!(s.ran(stage), 0, "{stage:?} ran: {s:?}");
+    }
+    assert_eq!(snapshot(&dir), before, "a no-op build touched a file");
+
+    // The binary: building twice writes nothing and prints the same.
+    let run = || {
+        let o = support::build(&config);
+        String::from_utf8(o.stdout).expect("utf-8")
+    };
+    let (a, b) = (run(), run());
+    assert_eq!(a, b);
+    assert!(a.contains("up to date") && !a.contains("wrote"), "{a}");
+    assert_eq!(snapshot(&dir), before, "a no-op build touched a file");
+}
+
+#[test]
+fn a_seed_edit_lays_out_cold_and_changes_the_picture() {
+    let config = countries("seed");
+    build(&config);
+    edit_weight(&config, 1.1);
+    let warm = build(&config);
+    assert_eq!(warm[0].layout, LayoutStep::Warm, "{:?}", warm[0].stages);
+    let seed1 = out(&config, "countries.svg");
+    edit_config(&config, "layout:\n", "layout:\n  seed: 2\n");
+    let cold = build(&config);
+    match &cold[0].layout {
+        LayoutStep::Cold(why) => assert!(why.contains("settings changed"), "{why}"),
+        other => panic!("a seed edit laid out {other:?}"),
+    }
+    assert_eq!(cold[0].stages.ran(Stage::Layout), 1);
+    let seed2 = out(&config, "countries.svg");
+    assert_ne!(seed2, seed1, "a seed change must change the picture");
+    // It is the picture a cold build with seed 2 draws from scratch.
+    let fresh = countries("seed_fresh");
+    edit_weight(&fresh, 1.1);
+    edit_config(&fresh, "layout:\n", "layout:\n  seed: 2\n");
+    build(&fresh);
+    assert_eq!(out(&fresh, "countries.svg"), seed2);
+}
+
+/// A docs repository commits its outputs and the state folder, not the
+/// state folder's `cache/` (README, "What to commit"); a fresh clone's
+/// `build --check` passes. The outputs went through a warm edit, so a cold
+/// layout would not reproduce them.
+#[test]
+fn a_fresh_clone_passes_build_check() {
+    let config = countries("clone_src");
+    build(&config);
+    edit_weight(&config, 1.1);
+    build(&config);
+    let src = config.parent().expect("folder");
+    let clone = support::temp_dir("incremental_clone");
+    copy_tree(src, &clone, &|p: &Path| p.ends_with("out/.nptreemap/cache"));
+    assert!(clone.join("out/.nptreemap/countries.layout.json").is_file());
+    assert!(!clone.join("out/.nptreemap/cache").exists());
+    let check = |dir: &Path| {
+        support::bin()
+            .args(["build", "--check"])
+            .arg(dir.join("nptreemap.yaml"))
+            .output()
+            .expect("run")
+    };
+    let o = check(&clone);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // Without the manifests too, the stored layout reproduces the outputs.
+    for f in std::fs::read_dir(clone.join("out/.nptreemap")).expect("state") {
+        let p = f.expect("entry").path();
+        if p.to_string_lossy().ends_with(".manifest.json") {
+            std::fs::remove_file(p).expect("rm");
+        }
+    }
+    let o = check(&clone);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+}
+
+fn copy_tree(from: &Path, to: &Path, skip: &dyn Fn(&Path) -> bool) {
+    std::fs::create_dir_all(to).expect("mkdir");
+    for entry in std::fs::read_dir(from).expect("read_dir") {
+        let path = entry.expect("entry").path();
+        if skip(&path) {
+            continue;
+        }
+        let target = to.join(path.file_name().expect("name"));
+        if path.is_dir() {
+            copy_tree(&path, &target, skip);
+        } else {
+            std::fs::copy(&path, &target).expect("copy");
+        }
+    }
+}
+
+/// Every file under `dir` with its bytes and modification time.
+fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>, std::time::SystemTime)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("read_dir") {
+            let p = e.expect("entry").path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let meta = std::fs::metadata(&p).expect("meta");
+                out.push((
+                    p.clone(),
+                    std::fs::read(&p).expect("read"),
+                    meta.modified().expect("mtime"),
+                ));
+            }
+        }
+    }
+    out.sort();
+    out
+}
