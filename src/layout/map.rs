@@ -60,6 +60,11 @@ pub struct MapSimulation {
     rng: Rng,
     /// Share of the Newton step taken, lowered while the error oscillates.
     damping: f64,
+    /// How far the targets' shares are from the weights' (a floor for tiny
+    /// weights, `treemap::floored_targets`): the convergence test leaves it
+    /// out of the ratio, so a converged diagram is within the ratio of its
+    /// real weights.
+    slack: f64,
 }
 
 /// A saved state of a [`MapSimulation`]: its sites and counters, not its
@@ -164,6 +169,7 @@ impl MapSimulation {
             settings,
             rng,
             damping: 1.0,
+            slack: 0.0,
         };
         sim.repair();
         sim.error = sim.area_error();
@@ -192,8 +198,8 @@ impl MapSimulation {
         } else {
             (self.damping * 2.0).min(1.0)
         };
-        let converged = self.error <= self.settings.convergence_ratio
-            && self.iteration >= self.settings.min_iterations;
+        let converged =
+            self.error <= self.area_target() && self.iteration >= self.settings.min_iterations;
         if converged || self.iteration >= self.settings.max_iterations {
             self.ended = true;
         }
@@ -462,7 +468,28 @@ impl MapSimulation {
 
     /// True when the last evaluation met the convergence target.
     pub fn converged(&self) -> bool {
-        self.error <= self.settings.convergence_ratio
+        self.error <= self.area_target()
+    }
+
+    /// The area error at which this diagram counts as converged: the
+    /// convergence ratio less the slack ([`Self::set_slack`]).
+    pub fn area_target(&self) -> f64 {
+        (self.settings.convergence_ratio - self.slack).max(0.0)
+    }
+
+    /// The targets' own distance from the real weights' shares (Σ |share
+    /// difference|), left out of the convergence ratio from now on; clears
+    /// the ended flag when that moves the goal.
+    pub fn set_slack(&mut self, slack: f64) {
+        if slack != self.slack {
+            self.slack = slack;
+            self.ended = false;
+        }
+    }
+
+    /// See [`Self::set_slack`].
+    pub fn slack(&self) -> f64 {
+        self.slack
     }
 
     /// The final sites and diagram.

@@ -94,7 +94,7 @@ pub(crate) fn layout_warm_with(
         match warm_start(dataset, params, previous, similarity, parent, &polygon) {
             Some(start) => {
                 let children = &dataset.node(parent).children;
-                let targets = child_targets(dataset, parent, &polygon, params);
+                let (targets, slack) = child_targets(dataset, parent, &polygon, params);
                 let rng = Rng::for_key(params.seed, &dataset.node(parent).id);
                 let mut sim = MapSimulation::new(
                     polygon.clone(),
@@ -104,10 +104,11 @@ pub(crate) fn layout_warm_with(
                     settings,
                     rng,
                 );
+                sim.set_slack(slack);
                 let target = if start.unchanged {
-                    settings.convergence_ratio
+                    sim.area_target()
                 } else {
-                    CHANGED_TARGET_SHARE * settings.convergence_ratio
+                    CHANGED_TARGET_SHARE * sim.area_target()
                 };
                 settle(&mut sim, target);
                 division_of(children, sim, &polygon)
@@ -154,7 +155,7 @@ fn reused(
             },
         ));
     }
-    let targets = child_targets(dataset, parent, polygon, params);
+    let (targets, slack) = child_targets(dataset, parent, polygon, params);
     let area = polygon.area();
     let error = if area > 0.0 {
         cells
@@ -170,7 +171,7 @@ fn reused(
         cells,
         iterations: 0,
         error,
-        converged: error <= params.convergence_ratio,
+        converged: error + slack <= params.convergence_ratio,
         optimized: true,
         degenerate: 0,
     })
@@ -206,7 +207,7 @@ fn warm_start(
     }
     let weights_known = carried.iter().flatten().all(|(_, w)| w.is_some())
         && sane_weights(carried.iter().flatten().filter_map(|(_, w)| *w), polygon);
-    let targets = child_targets(dataset, parent, polygon, params);
+    let (targets, _) = child_targets(dataset, parent, polygon, params);
     let mut positions = Vec::with_capacity(children.len());
     let mut weights = Vec::with_capacity(children.len());
     for (k, &child) in children.iter().enumerate() {
@@ -298,7 +299,7 @@ fn settle(sim: &mut MapSimulation, target: f64) {
         }
         error = next;
     }
-    if error > settings.convergence_ratio && sim.state().iteration_count < settings.max_iterations {
+    if error > sim.area_target() && sim.state().iteration_count < settings.max_iterations {
         sim.run();
     }
 }

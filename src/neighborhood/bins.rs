@@ -1,13 +1,16 @@
-//! The similarity bins of one node (method-reference §3.1–3.2): d3.bin's
-//! thresholds, the bin of a score, and each bin's best entries in list order.
-//! Shared by the exact rows (`constraints.rs`) and the f32-filtered rows
-//! (`filtered_rows.rs`); its own file so that neither of those imports the other.
+//! A node's similarity bins (method-reference §3.1–3.2): the d3.bin thresholds
+//! over a row's scores, each bin's size and best entries, from a full row
+//! ([`bin_row`]) or a sparse one ([`bin_sparse`]), and the strength a link
+//! taken from a bin carries.
+
+use super::similarity::{score, SimilarityKind};
+use super::sparse_rows::SparseRow;
 
 /// Number of bins before empty thresholds are dropped (§3.2).
 const BIN_COUNT: usize = 5;
 /// How many of each bin's best entries are kept. Stage A reads at most
-/// `TOP_BIN_CAP` (constraints.rs); Stage C enters a bin only while the node holds at most
-/// `STAGE_C_STOP_ABOVE` links, so among a bin's first 4 entries one is new.
+/// `TOP_BIN_CAP` (6); Stage C enters a bin only while the node holds at most
+/// `STAGE_C_STOP_ABOVE` (3) links, so among a bin's first 4 entries one is new.
 pub(super) const BIN_HEAD: usize = super::sparse_rows::HEAD;
 
 /// The similarity bins of one node, top bin first, each with its best entries.
@@ -54,7 +57,7 @@ fn bin_from_top(score: u8, thresholds: &[f64]) -> usize {
 /// Keeps `head` as the first [`BIN_HEAD`] candidates by (similarity descending,
 /// node ascending). Candidates arrive in breadth-first order, so on equal
 /// similarity the one already present stays ahead: the stable sort of §3.1.
-pub(super) fn push_head(head: &mut Vec<Candidate>, candidate: Candidate) {
+fn push_head(head: &mut Vec<Candidate>, candidate: Candidate) {
     if head.len() == BIN_HEAD
         && head
             .last()
@@ -65,6 +68,106 @@ pub(super) fn push_head(head: &mut Vec<Candidate>, candidate: Candidate) {
     let position = head.partition_point(|c| c.similarity >= candidate.similarity);
     head.insert(position, candidate);
     head.truncate(BIN_HEAD);
+}
+
+/// The bins of node `level[i]` (§3.1–3.2; the neighbour-list variant has one bin,
+/// the nodes it lists, all at score 100) from its filled similarity `row`.
+pub(super) fn bin_row(
+    kind: SimilarityKind,
+    level: &[usize],
+    i: usize,
+    row: &[f64],
+    scores: &mut Vec<u8>,
+) -> Bins {
+    if level.len() < 2 {
+        return Bins::default();
+    }
+    // Scores once per pair; `u8::MAX` marks the node itself.
+    scores.clear();
+    scores.extend(row.iter().map(|&s| score(s)));
+    scores[i] = u8::MAX;
+    let candidate = |j: usize| Candidate {
+        similarity: row[j],
+        node: level[j],
+        score: scores[j],
+    };
+    if kind == SimilarityKind::NeighborList {
+        let mut bin = Bin::default();
+        for j in (0..level.len()).filter(|&j| j != i && scores[j] > 0) {
+            bin.len += 1;
+            push_head(&mut bin.head, candidate(j));
+        }
+        return Bins { bins: vec![bin] };
+    }
+    let (mut lo, mut hi) = (u8::MAX, 0u8);
+    for (j, &s) in scores.iter().enumerate() {
+        if j != i {
+            lo = lo.min(s);
+            hi = hi.max(s);
+        }
+    }
+    let bin_of = bin_table(lo, hi);
+    let mut bins = vec![Bin::default(); usize::from(bin_of[usize::from(lo)]) + 1];
+    for (j, &s) in scores.iter().enumerate() {
+        if j != i {
+            let bin = &mut bins[usize::from(bin_of[usize::from(s)])];
+            bin.len += 1;
+            push_head(&mut bin.head, candidate(j));
+        }
+    }
+    Bins { bins }
+}
+
+/// The bins of a node from its sparse row (the measures of [`SparseLevel`]): the same
+/// bins as [`bin_row`] gives from the full row, bit for bit. Entries go in level order,
+/// shown ones before the zeros; they never tie (shown similarities are non-zero), so
+/// every head gets the order of the full scan.
+pub(super) fn bin_sparse(kind: SimilarityKind, row: &SparseRow, level: &[usize]) -> Bins {
+    if level.len() < 2 {
+        return Bins::default();
+    }
+    let candidate = |j: usize, similarity: f64| Candidate {
+        similarity,
+        node: level[j],
+        score: score(similarity),
+    };
+    if kind == SimilarityKind::NeighborList {
+        let mut bin = Bin::default();
+        for &(j, s) in row.shown.iter().filter(|&&(_, s)| score(s) > 0) {
+            bin.len += 1;
+            push_head(&mut bin.head, candidate(j, s));
+        }
+        return Bins { bins: vec![bin] };
+    }
+    let (mut lo, mut hi) = (u8::MAX, 0u8);
+    let scores = row
+        .shown
+        .iter()
+        .map(|&(_, s)| score(s))
+        .chain(row.hidden.filter(|h| h.1 > 0).map(|h| score(h.0)))
+        .chain((row.zeros > 0).then_some(0));
+    for s in scores {
+        lo = lo.min(s);
+        hi = hi.max(s);
+    }
+    let bin_of = bin_table(lo, hi);
+    let mut bins = vec![Bin::default(); usize::from(bin_of[usize::from(lo)]) + 1];
+    for &(j, s) in &row.shown {
+        let bin = &mut bins[usize::from(bin_of[usize::from(score(s))])];
+        bin.len += 1;
+        push_head(&mut bin.head, candidate(j, s));
+    }
+    if let Some((s, count)) = row.hidden {
+        bins[usize::from(bin_of[usize::from(score(s))])].len += count;
+    }
+    if row.zeros > 0 {
+        let bin = &mut bins[usize::from(bin_of[0])];
+        bin.len += row.zeros;
+        for &j in &row.zero_head {
+            push_head(&mut bin.head, candidate(j, 0.0));
+        }
+    }
+    Bins { bins }
 }
 
 /// The bin (from the top) of every possible score for a row with scores in `lo..=hi`,
@@ -78,10 +181,20 @@ pub(super) fn bin_table(lo: u8, hi: u8) -> [u8; 101] {
     bin_of
 }
 
+/// Strength of a link taken from bin `bin` (0 = top) with this score.
+pub(super) fn strength_for(bin: usize, score: u8) -> u8 {
+    if score == 100 || bin == 0 {
+        3
+    } else if bin == 1 {
+        2
+    } else {
+        1
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::neighborhood::similarity::score;
 
     #[test]
     fn binning_follows_d3_bin() {

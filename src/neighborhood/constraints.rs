@@ -3,25 +3,20 @@
 //! (Stage A), propagation to parents (Stage B), one extra link per following bin
 //! (Stage C) and symmetrisation (Stage D), ending in the unordered pairs with
 //! score > 1 that the paper counts. Stage E (the optimiser's per-round reordering)
-//! is left to the optimiser; it can be derived from `ConstraintLists`.
+//! is left to the optimiser; it can be derived from `ConstraintLists`. This file
+//! holds the results and runs the parts in order: a level's bins (`rows`,
+//! `bins`), then the stages (`stages`).
 
 use std::collections::BTreeMap;
 
 use nptreemap_formats::Dataset;
-use rayon::prelude::*;
 
-use super::dot_kernel::kernel;
-use super::bins::{bin_table, push_head, Bin, Bins, Candidate};
-use super::filtered_rows::{Filter, RowState};
-use super::similarity::{
-    clamp_unit, cosine_from_parts, norm_of, pair_similarity, score, NodeFeatures, SimilarityKind,
-};
-use super::sparse_rows::{SparseLevel, SparseRow};
+use super::bins::Bins;
+use super::rows::level_bins;
+use super::similarity::{clamp_unit, pair_similarity, NodeFeatures, SimilarityKind};
+use super::stages;
+pub use super::stages::ListEntry;
 
-/// Stage A keeps at most this many links from the top bin (`slice(0, 6)`, §3.3).
-const TOP_BIN_CAP: usize = 6;
-/// Stage C stops once a node holds more than this many links (§3.5).
-const STAGE_C_STOP_ABOVE: usize = 3;
 /// A pair is a constraint when its score exceeds this (§3.6: `s > 1`).
 const MIN_PAIR_SCORE: u8 = 1;
 
@@ -46,17 +41,6 @@ pub struct Constraint {
     pub strength: u8,
 }
 
-/// One entry of a node's constraint list.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ListEntry {
-    /// Index of the linked node (same depth) in the prepared dataset.
-    pub target: usize,
-    /// Integer score 1..=100 (never 0: such links are not created, §3.5).
-    pub score: u8,
-    /// Strength 1..=3, as for [`Constraint::strength`].
-    pub strength: u8,
-}
-
 /// Per-node ordered constraint lists, indexed like the prepared dataset.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConstraintLists {
@@ -66,352 +50,6 @@ pub struct ConstraintLists {
     /// After Stage D: `directed` plus the reverse of every link the node lacked,
     /// appended in level order. Undirected from here on; may exceed the caps.
     pub symmetric: Vec<Vec<ListEntry>>,
-}
-
-/// Lanes per block of the transposed layout: eight dot products advance together,
-/// each still its own left-to-right sum, so the CPU can vectorise across pairs
-/// without changing a single bit of any result (§1.4).
-const LANES: usize = 8;
-
-/// A level's vectors for the dot-product measures, transposed in blocks of
-/// [`LANES`] nodes: `blocks[(block · d + k) · LANES + lane]` is coordinate `k` of
-/// node `block · LANES + lane`. Built only when every node of the level has a
-/// vector of the same length `d`; padding lanes are zero.
-struct Transposed {
-    d: usize,
-    blocks: Vec<f64>,
-    norms: Vec<f64>,
-}
-
-impl Transposed {
-    /// The layout for these nodes, or `None` when a vector is missing, lengths
-    /// differ, or the measure is not a dot product.
-    fn new(kind: SimilarityKind, features: &[NodeFeatures<'_>]) -> Option<Self> {
-        if !matches!(kind, SimilarityKind::Cosine | SimilarityKind::Pearson) {
-            return None;
-        }
-        let d = features.first()?.values()?.len();
-        let block_count = features.len().div_ceil(LANES);
-        let mut blocks = vec![0.0; block_count * d * LANES];
-        for (j, f) in features.iter().enumerate() {
-            let v = f.values().filter(|v| v.len() == d)?;
-            let (block, lane) = (j / LANES, j % LANES);
-            for (k, &x) in v.iter().enumerate() {
-                blocks[(block * d + k) * LANES + lane] = x;
-            }
-        }
-        let norms = features.iter().map(norm_of).collect();
-        Some(Transposed { d, blocks, norms })
-    }
-
-    /// Dot products of each vector of `rows` (length `d`) with the nodes of block
-    /// `block`, into `acc[r]`. Every sum still runs over `k` in order from 0.0, as
-    /// one row alone would, with a multiply and an add (never a fused
-    /// multiply-add), so tiling and the vector width change no bit. Tiles keep
-    /// their sums in registers: the one-row loop stored every partial sum to
-    /// memory and ran scalar (a 20,000-leaf level's constraints: 14.6 s before,
-    /// 3.8 s after; BENCHMARKS.md, "Scale after tiled constraints").
-    fn dot_block_tile(&self, rows: &[&[f64]], block: usize, acc: &mut [[f64; LANES]]) {
-        let columns = &self.blocks[block * self.d * LANES..(block + 1) * self.d * LANES];
-        let mut r = 0;
-        while r + KERNEL_ROWS <= rows.len() {
-            let tile: &[&[f64]; KERNEL_ROWS] = rows[r..r + KERNEL_ROWS]
-                .try_into()
-                .expect("invariant: the slice has KERNEL_ROWS rows");
-            let sums = kernel_dispatch(tile, columns);
-            acc[r..r + KERNEL_ROWS].copy_from_slice(&sums);
-            r += KERNEL_ROWS;
-        }
-        for (a, row) in acc[r..].iter_mut().zip(&rows[r..]) {
-            *a = kernel::<f64, 1, LANES>(&[row], columns)[0];
-        }
-    }
-}
-
-/// Rows one kernel call sums at once: 4 rows × 8 lanes are 8 AVX registers.
-const KERNEL_ROWS: usize = 4;
-
-
-/// [`kernel`] compiled for AVX where the CPU has it (checked once per call by
-/// the standard library's cached detection), else for the baseline. AVX's
-/// multiplies and adds round exactly as SSE2's, so the choice changes no bit.
-fn kernel_dispatch(rows: &[&[f64]; KERNEL_ROWS], columns: &[f64]) -> [[f64; LANES]; KERNEL_ROWS] {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU supports AVX, checked just above.
-            return unsafe { kernel_avx(rows, columns) };
-        }
-    }
-    kernel::<f64, KERNEL_ROWS, LANES>(rows, columns)
-}
-
-/// [`kernel`] in AVX intrinsics: the four rows' eight sums stay in eight
-/// registers (the compiler's own vectorisation of [`kernel`] spilled them to the
-/// stack every step). Multiplies and adds in the same order as [`kernel`].
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-unsafe fn kernel_avx(rows: &[&[f64]; KERNEL_ROWS], columns: &[f64]) -> [[f64; LANES]; KERNEL_ROWS] {
-    use std::arch::x86_64::{
-        _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_setzero_pd,
-        _mm256_storeu_pd,
-    };
-    let d = columns.len() / LANES;
-    let rows: [&[f64]; KERNEL_ROWS] = rows.map(|row| &row[..d]);
-    let mut acc = [[_mm256_setzero_pd(); 2]; KERNEL_ROWS];
-    for k in 0..d {
-        let column = &columns[k * LANES..(k + 1) * LANES];
-        // SAFETY: `column` holds LANES = 8 values, two loads of four.
-        let (lo, hi) = unsafe {
-            (
-                _mm256_loadu_pd(column.as_ptr()),
-                _mm256_loadu_pd(column.as_ptr().add(4)),
-            )
-        };
-        for r in 0..KERNEL_ROWS {
-            let x = _mm256_set1_pd(rows[r][k]);
-            acc[r][0] = _mm256_add_pd(acc[r][0], _mm256_mul_pd(x, lo));
-            acc[r][1] = _mm256_add_pd(acc[r][1], _mm256_mul_pd(x, hi));
-        }
-    }
-    let mut out = [[0.0f64; LANES]; KERNEL_ROWS];
-    for (o, a) in out.iter_mut().zip(&acc) {
-        // SAFETY: `o` holds 8 values, two stores of four.
-        unsafe {
-            _mm256_storeu_pd(o.as_mut_ptr(), a[0]);
-            _mm256_storeu_pd(o.as_mut_ptr().add(4), a[1]);
-        }
-    }
-    out
-}
-
-/// Rows of similarities computed together (see [`Transposed::dot_block_tile`]).
-const TILE_ROWS: usize = 64;
-
-/// Similarities of `level[i]` for every `i` of `rows` (at most [`TILE_ROWS`]) to
-/// every node of the level, into `out[0..rows.len()]` (`out[r][i]` is unused), as
-/// [`pair_similarity`] gives them, bit for bit.
-fn similarity_rows(
-    kind: SimilarityKind,
-    features: &[NodeFeatures<'_>],
-    transposed: Option<&Transposed>,
-    level: &[usize],
-    rows: std::ops::Range<usize>,
-    out: &mut [Vec<f64>],
-) {
-    let vectors: Option<Vec<&[f64]>> = transposed.and_then(|_| {
-        rows.clone()
-            .map(|i| features[i].values())
-            .collect::<Option<_>>()
-    });
-    let (Some(t), Some(vectors)) = (transposed, vectors) else {
-        for (i, row) in rows.zip(out.iter_mut()) {
-            similarity_row(kind, features, None, level, i, row);
-        }
-        return;
-    };
-    for row in out.iter_mut().take(vectors.len()) {
-        row.clear();
-        row.resize(level.len(), 0.0);
-    }
-    let mut acc = vec![[0.0f64; LANES]; vectors.len()];
-    for block in 0..level.len().div_ceil(LANES) {
-        t.dot_block_tile(&vectors, block, &mut acc);
-        let first = block * LANES;
-        let last = (first + LANES).min(level.len());
-        for ((i, row), dots) in rows.clone().zip(out.iter_mut()).zip(&acc) {
-            let norm_a = t.norms[i];
-            for (j, &d) in (first..last).zip(dots) {
-                row[j] = cosine_from_parts(d, norm_a, t.norms[j]);
-            }
-        }
-    }
-}
-
-/// Similarities of `level[i]` to every node of the level (`out[i]` is unused),
-/// as [`pair_similarity`] gives them, bit for bit.
-fn similarity_row(
-    kind: SimilarityKind,
-    features: &[NodeFeatures<'_>],
-    transposed: Option<&Transposed>,
-    level: &[usize],
-    i: usize,
-    out: &mut Vec<f64>,
-) {
-    if let Some(t) = transposed.filter(|_| features[i].values().is_some()) {
-        similarity_rows(
-            kind,
-            features,
-            Some(t),
-            level,
-            i..i + 1,
-            std::slice::from_mut(out),
-        );
-        return;
-    }
-    out.clear();
-    out.resize(level.len(), 0.0);
-    for (j, &node) in level.iter().enumerate() {
-        if j != i {
-            out[j] = pair_similarity(kind, &features[i], &features[j], node);
-        }
-    }
-}
-
-/// The bins of node `level[i]` (§3.1–3.2; the neighbour-list variant has one bin,
-/// the nodes it lists, all at score 100) from its filled similarity `row`.
-fn bin_row(
-    kind: SimilarityKind,
-    level: &[usize],
-    i: usize,
-    row: &[f64],
-    scores: &mut Vec<u8>,
-) -> Bins {
-    if level.len() < 2 {
-        return Bins::default();
-    }
-    // Scores once per pair; `u8::MAX` marks the node itself.
-    scores.clear();
-    scores.extend(row.iter().map(|&s| score(s)));
-    scores[i] = u8::MAX;
-    let candidate = |j: usize| Candidate {
-        similarity: row[j],
-        node: level[j],
-        score: scores[j],
-    };
-    if kind == SimilarityKind::NeighborList {
-        let mut bin = Bin::default();
-        for j in (0..level.len()).filter(|&j| j != i && scores[j] > 0) {
-            bin.len += 1;
-            push_head(&mut bin.head, candidate(j));
-        }
-        return Bins { bins: vec![bin] };
-    }
-    let (mut lo, mut hi) = (u8::MAX, 0u8);
-    for (j, &s) in scores.iter().enumerate() {
-        if j != i {
-            lo = lo.min(s);
-            hi = hi.max(s);
-        }
-    }
-    let bin_of = bin_table(lo, hi);
-    let mut bins = vec![Bin::default(); usize::from(bin_of[usize::from(lo)]) + 1];
-    for (j, &s) in scores.iter().enumerate() {
-        if j != i {
-            let bin = &mut bins[usize::from(bin_of[usize::from(s)])];
-            bin.len += 1;
-            push_head(&mut bin.head, candidate(j));
-        }
-    }
-    Bins { bins }
-}
-
-/// The bins of `level[i]` from its exact similarity row (the reference the
-/// filter is tested against).
-#[cfg(test)]
-pub(super) fn exact_bins(
-    kind: SimilarityKind,
-    features: &[NodeFeatures<'_>],
-    level: &[usize],
-    i: usize,
-) -> Bins {
-    let mut row = Vec::new();
-    similarity_row(kind, features, None, level, i, &mut row);
-    bin_row(kind, level, i, &row, &mut Vec::new())
-}
-
-/// The bins of the rows `span` of a level through the f32 [`Filter`]; its exact
-/// nodes get the full exact row (`row` and `scores` are scratch space).
-fn filtered_tile(
-    kind: SimilarityKind,
-    filter: &Filter,
-    features: &[NodeFeatures<'_>],
-    level: &[usize],
-    span: std::ops::Range<usize>,
-    (row, scores, state): (&mut Vec<f64>, &mut Vec<u8>, &mut Vec<RowState>),
-) -> Vec<Bins> {
-    let filtered: Vec<usize> = span.clone().filter(|&i| !filter.is_exact(i)).collect();
-    let mut fast = filter
-        .bin_rows(kind, features, level, &filtered, state)
-        .into_iter();
-    span.map(|i| {
-        if filter.is_exact(i) {
-            similarity_row(kind, features, None, level, i, row);
-            bin_row(kind, level, i, row, scores)
-        } else {
-            fast.next()
-                .expect("invariant: one bin set per filtered row")
-        }
-    })
-    .collect()
-}
-
-/// The bins of a node from its sparse row (the measures of [`SparseLevel`]): the same
-/// bins as [`bin_row`] gives from the full row, bit for bit. Entries go in level order,
-/// shown ones before the zeros; they never tie (shown similarities are non-zero), so
-/// every head gets the order of the full scan.
-fn bin_sparse(kind: SimilarityKind, row: &SparseRow, level: &[usize]) -> Bins {
-    if level.len() < 2 {
-        return Bins::default();
-    }
-    let candidate = |j: usize, similarity: f64| Candidate {
-        similarity,
-        node: level[j],
-        score: score(similarity),
-    };
-    if kind == SimilarityKind::NeighborList {
-        let mut bin = Bin::default();
-        for &(j, s) in row.shown.iter().filter(|&&(_, s)| score(s) > 0) {
-            bin.len += 1;
-            push_head(&mut bin.head, candidate(j, s));
-        }
-        return Bins { bins: vec![bin] };
-    }
-    let (mut lo, mut hi) = (u8::MAX, 0u8);
-    let scores = row
-        .shown
-        .iter()
-        .map(|&(_, s)| score(s))
-        .chain(row.hidden.filter(|h| h.1 > 0).map(|h| score(h.0)))
-        .chain((row.zeros > 0).then_some(0));
-    for s in scores {
-        lo = lo.min(s);
-        hi = hi.max(s);
-    }
-    let bin_of = bin_table(lo, hi);
-    let mut bins = vec![Bin::default(); usize::from(bin_of[usize::from(lo)]) + 1];
-    for &(j, s) in &row.shown {
-        let bin = &mut bins[usize::from(bin_of[usize::from(score(s))])];
-        bin.len += 1;
-        push_head(&mut bin.head, candidate(j, s));
-    }
-    if let Some((s, count)) = row.hidden {
-        bins[usize::from(bin_of[usize::from(score(s))])].len += count;
-    }
-    if row.zeros > 0 {
-        let bin = &mut bins[usize::from(bin_of[0])];
-        bin.len += row.zeros;
-        for &j in &row.zero_head {
-            push_head(&mut bin.head, candidate(j, 0.0));
-        }
-    }
-    Bins { bins }
-}
-
-/// Strength of a link taken from bin `bin` (0 = top) with this score.
-fn strength_for(bin: usize, score: u8) -> u8 {
-    if score == 100 || bin == 0 {
-        3
-    } else if bin == 1 {
-        2
-    } else {
-        1
-    }
-}
-
-/// True when `list` already links to `target`.
-fn has(list: &[ListEntry], target: usize) -> bool {
-    list.iter().any(|e| e.target == target)
 }
 
 /// Runs Stages A to D (method-reference §3.1–3.6) on a prepared dataset (uniform
@@ -443,155 +81,19 @@ fn constraint_lists_with(
         levels[node.depth].push(index);
     }
 
-    // §3.1–3.2: bins per non-root node.
+    // §3.1–3.2: bins per non-root node, level by level, rows in parallel.
     let mut bins: Vec<Bins> = vec![Bins::default(); nodes.len()];
     for level in levels.iter().skip(1) {
-        // Norms, supports and centred vectors once per node, not per pair.
-        let level_features: Vec<NodeFeatures<'_>> = level
-            .iter()
-            .map(|&n| NodeFeatures::new(kind, prepared, n))
-            .collect();
-        let sparse_level = SparseLevel::new(kind, &level_features).filter(|_| sparse);
-        let filter = match sparse_level {
-            Some(_) => None,
-            None => Filter::new(kind, &level_features),
-        };
-        let transposed = match (&sparse_level, &filter) {
-            (None, None) => Transposed::new(kind, &level_features),
-            _ => None,
-        };
-        let level_bins: Vec<Bins> = match &sparse_level {
-            Some(index) => (0..level.len())
-                .into_par_iter()
-                .map_init(Vec::new, |counts, i| {
-                    let row = index.row(&level_features, level, i, counts);
-                    bin_sparse(kind, &row, level)
-                })
-                .collect(),
-            None => {
-                let tiles: Vec<Vec<Bins>> = (0..level.len().div_ceil(TILE_ROWS))
-                    .into_par_iter()
-                    .map_init(
-                        || (vec![Vec::new(); TILE_ROWS], Vec::new(), Vec::new()),
-                        |(rows, scores, filter_state), tile| {
-                            let span = tile * TILE_ROWS..((tile + 1) * TILE_ROWS).min(level.len());
-                            if let Some(filter) = &filter {
-                                return filtered_tile(
-                                    kind,
-                                    filter,
-                                    &level_features,
-                                    level,
-                                    span,
-                                    (&mut rows[0], scores, filter_state),
-                                );
-                            }
-                            similarity_rows(
-                                kind,
-                                &level_features,
-                                transposed.as_ref(),
-                                level,
-                                span.clone(),
-                                rows,
-                            );
-                            span.zip(rows.iter())
-                                .map(|(i, row)| bin_row(kind, level, i, row, scores))
-                                .collect()
-                        },
-                    )
-                    .collect();
-                tiles.into_iter().flatten().collect()
-            }
-        };
-        for (&node, node_bins) in level.iter().zip(level_bins) {
+        for (&node, node_bins) in level.iter().zip(level_bins(prepared, kind, level, sparse)) {
             bins[node] = node_bins;
         }
     }
 
-    // Stage A (§3.3): the top bin, capped; nothing when the best score is 0.
-    let mut lists: Vec<Vec<ListEntry>> = vec![Vec::new(); nodes.len()];
-    for (node, node_bins) in bins.iter().enumerate() {
-        let Some(top) = node_bins.bins.first() else {
-            continue;
-        };
-        if top.head.first().is_none_or(|c| c.score == 0) {
-            continue;
-        }
-        lists[node] = top
-            .head
-            .iter()
-            .take(TOP_BIN_CAP)
-            .map(|c| ListEntry {
-                target: c.node,
-                score: c.score,
-                strength: strength_for(0, c.score),
-            })
-            .collect();
-    }
-
-    // Stage B (§3.4): children's links become links between their parents. Children
-    // come after their parent in breadth-first order, so the reverse sweep sees
-    // every child's list complete, as the prototype's post-order walk does.
-    for d in (0..nodes.len()).rev() {
-        for &p in &nodes[d].children {
-            for k in 0..lists[p].len() {
-                let link = lists[p][k];
-                let parent = nodes[link.target].parent.unwrap_or(0);
-                if parent == d || has(&lists[d], parent) {
-                    continue;
-                }
-                // A perfect child link always propagates; a weaker one only gives
-                // the parent its first link.
-                if link.score == 100 || lists[d].is_empty() {
-                    lists[d].push(ListEntry {
-                        target: parent,
-                        score: link.score,
-                        strength: strength_for(usize::MAX, link.score),
-                    });
-                }
-            }
-        }
-    }
-
-    // Stage C (§3.5): one more link from each following non-empty bin while the
-    // node holds at most 3, stopping at the first empty bin. Skipped when the top
-    // bin is empty; score-0 links are never created (§3.5, §10 #2).
-    for (node, node_bins) in bins.iter().enumerate() {
-        if node_bins.bins.first().is_none_or(|top| top.len == 0) {
-            continue;
-        }
-        for (b, bin) in node_bins.bins.iter().enumerate() {
-            if lists[node].len() > STAGE_C_STOP_ABOVE || bin.len == 0 {
-                break;
-            }
-            if let Some(c) = bin.head.iter().find(|c| !has(&lists[node], c.node)) {
-                if c.score > 0 {
-                    lists[node].push(ListEntry {
-                        target: c.node,
-                        score: c.score,
-                        strength: strength_for(b, c.score),
-                    });
-                }
-            }
-        }
-    }
+    let mut lists = stages::top_bin(&bins);
+    stages::propagate(nodes, &mut lists);
+    stages::following_bins(&bins, &mut lists);
     let directed = lists.clone();
-
-    // Stage D (§3.6): per level, parents in order and their children in order,
-    // i.e. breadth-first order; links only join nodes of one level, so one sweep
-    // over all nodes is the same as one sweep per level.
-    for c in 0..nodes.len() {
-        for k in 0..lists[c].len() {
-            let link = lists[c][k];
-            if !has(&lists[link.target], c) {
-                lists[link.target].push(ListEntry {
-                    target: c,
-                    score: link.score,
-                    strength: link.strength,
-                });
-            }
-        }
-    }
-
+    stages::symmetrise(&mut lists);
     ConstraintLists {
         directed,
         symmetric: lists,
@@ -794,73 +296,6 @@ mod tests {
         assert!(build_constraints(&p, SimilarityKind::Cosine).is_empty());
     }
 
-    #[test]
-    fn fast_path_matches_the_slow_path() {
-        use nptreemap_formats::{DatasetBuilder, NodeSpec};
-        // A pseudo-random level of 37 nodes (not a multiple of the 8 lanes),
-        // checked against `pair_similarity` bit for bit.
-        let mut builder = DatasetBuilder::new();
-        builder.add(NodeSpec::new("r"));
-        let mut state = 12345u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 33) as f64) / f64::from(u32::MAX) - 0.25
-        };
-        for i in 0..37 {
-            let v: Vec<f64> = (0..13).map(|_| next()).collect();
-            builder.add(
-                NodeSpec::new(format!("n{i}"))
-                    .parent("r")
-                    .weight(1.0)
-                    .features(v),
-            );
-        }
-        let p = builder.build().expect("valid");
-        let level: Vec<usize> = (1..p.len()).collect();
-        for kind in [SimilarityKind::Cosine, SimilarityKind::Pearson] {
-            let features: Vec<NodeFeatures<'_>> = level
-                .iter()
-                .map(|&n| NodeFeatures::new(kind, &p, n))
-                .collect();
-            let transposed = Transposed::new(kind, &features);
-            assert!(transposed.is_some());
-            let mut row = Vec::new();
-            for i in 0..level.len() {
-                similarity_row(kind, &features, transposed.as_ref(), &level, i, &mut row);
-                for j in 0..level.len() {
-                    if i != j {
-                        let slow = pair_similarity(kind, &features[i], &features[j], level[j]);
-                        assert_eq!(row[j].to_bits(), slow.to_bits());
-                    }
-                }
-            }
-            // Tiles of every length up to 9 rows (the 4-row kernel, its
-            // remainder, and both together), from every start.
-            let mut rows = vec![Vec::new(); 9];
-            for len in 1..=9 {
-                for first in 0..=level.len() - len {
-                    let span = first..first + len;
-                    similarity_rows(
-                        kind,
-                        &features,
-                        transposed.as_ref(),
-                        &level,
-                        span.clone(),
-                        &mut rows,
-                    );
-                    for (i, row) in span.zip(&rows) {
-                        for j in (0..level.len()).filter(|&j| j != i) {
-                            let slow = pair_similarity(kind, &features[i], &features[j], level[j]);
-                            assert_eq!(row[j].to_bits(), slow.to_bits(), "tile {len} at {first}");
-                        }
-                    }
-                }
-            }
-        }
-    }
-
     /// Random two- and three-level datasets for the sparse measures: short 0/1-ish
     /// vectors (many equal, many disjoint), some missing, some of another length, some
     /// with −0, and relations to any node (own level or not, itself, repeated).
@@ -931,25 +366,5 @@ mod tests {
                 "{name}"
             );
         }
-    }
-
-    #[test]
-    fn mixed_lengths_use_the_pair_path() {
-        use nptreemap_formats::{DatasetBuilder, NodeSpec};
-        let mut builder = DatasetBuilder::new();
-        builder
-            .add(NodeSpec::new("r"))
-            .add(NodeSpec::new("a").parent("r").features(vec![1.0, 0.0]))
-            .add(NodeSpec::new("b").parent("r").features(vec![1.0, 0.1]))
-            .add(NodeSpec::new("c").parent("r").features(vec![1.0]));
-        let p = builder.build().expect("valid");
-        let features: Vec<NodeFeatures<'_>> = (1..4)
-            .map(|n| NodeFeatures::new(SimilarityKind::Cosine, &p, n))
-            .collect();
-        assert!(Transposed::new(SimilarityKind::Cosine, &features).is_none());
-        let pairs = build_constraints(&p, SimilarityKind::Cosine);
-        let ids: Vec<(usize, usize)> = pairs.iter().map(|c| (c.a, c.b)).collect();
-        // a–b are similar; c has a different length, so similarity 0 to both.
-        assert_eq!(ids, [(1, 2)]);
     }
 }

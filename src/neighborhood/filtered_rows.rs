@@ -3,7 +3,7 @@
 //! exact f64 similarity ([`pair_similarity`]) is computed only where the f32 value
 //! could change a decision (a score near an integer step, a candidate that might
 //! enter a bin's head). The bins come out bit for bit as the all-pairs f64 scan
-//! gives them (`bin_row` of `constraints`); the unit test checks it.
+//! gives them (`bin_row` of `bins`); the unit test checks it.
 //!
 //! Why: the all-pairs scan is the one `O(n²·d)` step of the method. On a
 //! 100,000-leaf level it took 44.8 s of the whole method's 75 s, most of it not in
@@ -13,18 +13,17 @@
 //! look, the rest are only counted in the row's histogram of scores, and per score
 //! only the few candidates that may still be among its best are kept; their exact
 //! similarities are computed at the end, for the top scores of each bin alone.
-//! The kernel does twice the pairs per instruction in f32 (BENCHMARKS.md,
+//! The kernel (`kernels`, shared with the exact rows) does twice the pairs
+//! per instruction in f32 (BENCHMARKS.md,
 //! "Constraints through an f32 filter"). Written by hand: no crate does filtered
 //! exact binning.
 
 use super::bins::{bin_table, Bin, Bins, Candidate, BIN_HEAD};
-use super::dot_kernel::kernel;
+use super::kernels::{dot_tile, KERNEL_ROWS};
 use super::similarity::{pair_similarity, score, NodeFeatures, SimilarityKind};
 
 /// Lanes per column block: two AVX registers of f32.
 const LANES: usize = 16;
-/// Rows one kernel call sums at once (4 rows × 2 registers = 8 accumulators).
-const KERNEL_ROWS: usize = 4;
 /// Possible scores, 0..=100 (§3.2).
 const SCORES: usize = 101;
 /// Norms outside this range could overflow or underflow the exact path's
@@ -130,7 +129,7 @@ impl Filter {
                     let i = group[r.min(group.len() - 1)];
                     &self.rows[i * self.d..(i + 1) * self.d]
                 });
-                let dots = kernel_dispatch(&vectors, columns);
+                let dots = dot_tile::<f32, LANES>(&vectors, columns);
                 for ((&i, row), dots) in group.iter().zip(states.iter_mut()).zip(&dots) {
                     let clean = last - first == LANES
                         && !self.exact_in_block[block]
@@ -366,59 +365,9 @@ unsafe fn classify_avx2(
 }
 
 
-/// The dot-product kernel in AVX where the CPU has it. The choice changes no output: the
-/// filter's bound holds for either, and every decision near it is exact.
-fn kernel_dispatch(rows: &[&[f32]; KERNEL_ROWS], columns: &[f32]) -> [[f32; LANES]; KERNEL_ROWS] {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU supports AVX, checked just above.
-            return unsafe { kernel_avx(rows, columns) };
-        }
-    }
-    kernel::<f32, KERNEL_ROWS, LANES>(rows, columns)
-}
-
-/// The kernel in AVX intrinsics, the eight sums in eight registers.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-unsafe fn kernel_avx(rows: &[&[f32]; KERNEL_ROWS], columns: &[f32]) -> [[f32; LANES]; KERNEL_ROWS] {
-    use std::arch::x86_64::{
-        _mm256_add_ps, _mm256_loadu_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps,
-        _mm256_storeu_ps,
-    };
-    let d = columns.len() / LANES;
-    let rows: [&[f32]; KERNEL_ROWS] = rows.map(|row| &row[..d]);
-    let mut acc = [[_mm256_setzero_ps(); 2]; KERNEL_ROWS];
-    for k in 0..d {
-        let column = &columns[k * LANES..(k + 1) * LANES];
-        // SAFETY: `column` holds LANES = 16 values, two loads of eight.
-        let (lo, hi) = unsafe {
-            (
-                _mm256_loadu_ps(column.as_ptr()),
-                _mm256_loadu_ps(column.as_ptr().add(8)),
-            )
-        };
-        for r in 0..KERNEL_ROWS {
-            let x = _mm256_set1_ps(rows[r][k]);
-            acc[r][0] = _mm256_add_ps(acc[r][0], _mm256_mul_ps(x, lo));
-            acc[r][1] = _mm256_add_ps(acc[r][1], _mm256_mul_ps(x, hi));
-        }
-    }
-    let mut out = [[0.0f32; LANES]; KERNEL_ROWS];
-    for (o, a) in out.iter_mut().zip(&acc) {
-        // SAFETY: `o` holds 16 values, two stores of eight.
-        unsafe {
-            _mm256_storeu_ps(o.as_mut_ptr(), a[0]);
-            _mm256_storeu_ps(o.as_mut_ptr().add(8), a[1]);
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
-    use super::super::constraints::exact_bins;
+    use super::super::rows::exact_bins;
     use super::*;
     use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
 

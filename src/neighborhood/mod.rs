@@ -4,12 +4,12 @@
 //! (Kuhn–Munkres). Knows datasets, not layouts (adjacency of cells is
 //! [`crate::geom::adjacency`]'s, the paper's metrics [`crate::measure`]'s).
 //! Pure: no I/O.
-/// The similarity bins of one node (d3.bin thresholds, best entries per bin).
+/// A node's similarity bins (§3.1–3.2).
 mod bins;
-/// Binning and filtering of similarities into constraints (stages A to E).
+/// The constraint pipeline's results and its order (stages A to E).
 pub mod constraints;
-/// The portable dot-product kernel of the dense similarity rows.
-mod dot_kernel;
+/// The dot-product kernels of the dense similarity rows (one AVX dispatch).
+mod kernels;
 /// Exact bins of dense cosine and Pearson rows through an f32 filter.
 mod filtered_rows;
 /// Assignment: Kuhn–Munkres, and recursive bisection for large groups.
@@ -20,8 +20,12 @@ pub mod prepare;
 pub mod projection;
 /// Similarity functions between two nodes.
 pub mod similarity;
+/// A level's similarity rows, binned: sparse, filtered or exact dense.
+mod rows;
 /// Exact similarity rows without all-pairs work for the sparse measures.
 mod sparse_rows;
+/// Stages A to D: from bins to directed and symmetric lists.
+mod stages;
 
 pub use constraints::{build_constraints, Constraint};
 pub use prepare::prepare;

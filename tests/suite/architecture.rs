@@ -495,6 +495,62 @@ fn every_source_file_opens_with_a_module_doc() {
     );
 }
 
+/// Issue 23: the files of `neighborhood/` (bins, kernels, rows, stages, …)
+/// import one another without a cycle (`constraints.rs` and
+/// `filtered_rows.rs` imported each other).
+#[test]
+fn neighborhood_files_have_no_cycles() {
+    let dir = root().join("src/neighborhood");
+    let mut files = Vec::new();
+    rust_files(&dir, &mut files);
+    let names: BTreeSet<String> = files
+        .iter()
+        .filter_map(|f| f.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .filter(|n| n != "mod")
+        .collect();
+    assert!(names.len() >= 8, "files of neighborhood/: {names:?}");
+    let mut left: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for f in &files {
+        let name = f
+            .file_stem()
+            .expect("a name")
+            .to_string_lossy()
+            .into_owned();
+        if !names.contains(&name) {
+            continue;
+        }
+        let text = std::fs::read_to_string(f).expect("read source");
+        let (code, _) = without_tests(code_only(&text));
+        let uses = names
+            .iter()
+            .filter(|n| **n != name)
+            .filter(|n| {
+                code.contains(&format!("super::{n}::")) || code.contains(&format!("super::{n};"))
+            })
+            .cloned()
+            .collect();
+        left.insert(name, uses);
+    }
+    assert!(
+        left["constraints"].contains("stages"),
+        "the scan sees imports: {left:?}"
+    );
+    loop {
+        let free: Vec<String> = left
+            .iter()
+            .filter(|(_, uses)| uses.iter().all(|u| !left.contains_key(u)))
+            .map(|(m, _)| m.clone())
+            .collect();
+        if free.is_empty() {
+            break;
+        }
+        for m in &free {
+            left.remove(m);
+        }
+    }
+    assert!(left.is_empty(), "import cycle among the files {left:?}");
+}
+
 /// The module path of a source file (`layout/compute.rs` → `layout::compute`,
 /// `layout/mod.rs` → `layout`, `lib.rs` → the crate root).
 fn module_of(rel: &Path) -> Vec<String> {

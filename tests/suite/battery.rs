@@ -5,10 +5,11 @@
 //! weights spanning 1:10⁶, many identical vectors, all-identical vectors, zero
 //! vectors, isolated nodes, a group in which every pair is a constraint, one
 //! huge leaf among hundreds of tiny ones, and the real Debian packages that
-//! failed with "cells stayed empty" before (seeds 1 and 2). Where weights
-//! span more than the layout's `min_weight_ratio` (1:1000), the areas are
-//! judged against the weights as floored (`check_layout.py
-//! --min-weight-ratio`).
+//! failed with "cells stayed empty" before (seeds 1 and 2). Every diagram's
+//! area error is judged against the real weights, also where they span more
+//! than the layout's `min_weight_ratio` (1:1000): the floor that keeps tiny
+//! leaves visible may not cost a diagram its areas (issue 23 item 6; before,
+//! `/usr/bin` ended at 0.1355 with no diagram reported unconverged).
 //!
 //! The inputs are generated here (hierarchy JSON with `embeddings`, or with
 //! `neighbors` lists for relation data) from a fixed seed, so they are the
@@ -23,10 +24,6 @@ use nptreemap::rng::Rng;
 
 const SEEDS: [u64; 5] = [1, 2, 3, 4, 5];
 
-/// The layout's default `min_weight_ratio` (README, "Zero weights"): a child
-/// lighter than this share of its heaviest sibling is drawn at this share.
-const MIN_WEIGHT_RATIO: &str = "0.001";
-
 /// Lays `input` out at every seed (extra flags after), checking each layout;
 /// `checker` flags go to `check_layout.py`.
 fn lay_out_at_every_seed(name: &str, input: &Path, extra: &[&str], checker: &[&str]) {
@@ -39,18 +36,21 @@ fn lay_out_at_every_seed(name: &str, input: &Path, extra: &[&str], checker: &[&s
         support::layout(input, &[&out], &args);
         let report = support::check_layout_with(&out, checker);
         support::assert_area_error(&report, 0.01);
+        assert_diagram_error_max(&report, 0.01);
     }
+}
+
+/// Every diagram, not only the mean, within `limit` of its weights.
+fn assert_diagram_error_max(report: &Value, limit: f64) {
+    let err = report["area_error_diagram_max"]
+        .as_f64()
+        .expect("area_error_diagram_max is a number");
+    assert!(err <= limit, "area_error_diagram_max {err} > {limit}");
 }
 
 /// Writes a hierarchy JSON file (root flags merged in) and lays it out.
 fn run(name: &str, root: Value) {
     run_checked(name, root, &[]);
-}
-
-/// [`run`], judging areas against the weights as floored by the default
-/// `min_weight_ratio`.
-fn run_floored(name: &str, root: Value) {
-    run_checked(name, root, &["--min-weight-ratio", MIN_WEIGHT_RATIO]);
 }
 
 /// [`run`] with flags for the checker.
@@ -126,10 +126,35 @@ fn weights_spanning_a_million() {
         let w = 10f64.powf(6.0 * rng.next_f64());
         (w, near(&centers[g], 0.5, &mut rng))
     });
-    // Leaves under a thousandth of the heaviest are drawn at that share, so
-    // the areas are judged against the floored weights (against the raw ones
-    // the error is the floor's by design: 0.011 here).
-    run_floored("weights_1e6", Value::Object(root));
+    // Leaves under a thousandth of the heaviest: the floor may not cost the
+    // diagram its areas (it did: 0.011 against the real weights).
+    run("weights_1e6", Value::Object(root));
+}
+
+/// `/usr/bin`'s shape (issue 23 item 6): one flat level, sizes from a few
+/// bytes to 10⁸, most of them under the 1:1000 floor of the heaviest.
+#[test]
+fn a_flat_level_of_sizes_spanning_1e8() {
+    let mut rng = Rng::new(23);
+    let centers: Vec<Vec<f64>> = (0..6).map(|_| random_vector(8, &mut rng)).collect();
+    let leaves: Vec<Value> = (0..400)
+        .map(|i| {
+            let w = if i == 0 {
+                1.3e8
+            } else {
+                10f64.powf(1.0 + 6.0 * rng.next_f64())
+            };
+            let v = near(&centers[i % 6], 0.5, &mut rng);
+            json!({"id": format!("p{i}"), "weight": w, "embeddings": v})
+        })
+        .collect();
+    let root = json!({
+        "id": "root",
+        "weightAttribute": "weight",
+        "similarityMeasure": "cosine",
+        "children": leaves,
+    });
+    run("flat_1e8", root);
 }
 
 #[test]
@@ -242,10 +267,10 @@ fn one_huge_leaf_among_hundreds_of_tiny_ones() {
         let w = if g == 0 && i == 7 { 1e6 } else { 1.0 };
         (w, near(&centers[g], 0.5, &mut rng))
     });
-    // The 300 tiny leaves are floored to a thousandth of the huge one each
-    // (their raw share, 1e-6, is under a pixel on a 1000 × 1000 canvas), so
-    // the areas are judged against the floored weights.
-    run_floored("huge_leaf", Value::Object(root));
+    // The 300 tiny leaves (a raw share of 1e-6 each, under a pixel on a
+    // 1000 × 1000 canvas) were floored to a thousandth of the huge one each,
+    // 0.3 of the area in all; the floor now stays within the area target.
+    run("huge_leaf", Value::Object(root));
 }
 
 #[test]

@@ -6,7 +6,7 @@
 use crate::support;
 use nptreemap::geom::{ConvexPolygon, Point};
 use nptreemap::layout::map::{MapSettings, MapSimulation};
-use nptreemap::layout::{layout, Outline, Params};
+use nptreemap::layout::{layout, Outline, Params, Report};
 use nptreemap::measure;
 use nptreemap::rng::Rng;
 use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
@@ -99,6 +99,59 @@ fn weight_ratio_of_a_million() {
     assert!(share(&ds, &l, "n0") > 0.0);
     let q = measure::quality(&ds, &l);
     assert!(q.area_error_diagram_mean <= 0.01, "{q:?}");
+}
+
+/// Issue 23 item 6: `/usr/bin` (one 127 MB binary beside hundreds of
+/// scripts of a few kB) ended at a diagram area error of 0.1355 against its
+/// weights while the report said `unconverged: 0`: the 1:1000 floor of
+/// `min_weight_ratio` alone moved 13% of the area. Every diagram's error
+/// against the real weights stays within the convergence ratio, or the
+/// report counts it as unconverged.
+#[test]
+fn many_leaves_below_the_weight_floor_keep_the_areas_of_their_weights() {
+    // One heavy leaf, 600 sizes spread log-uniformly over 10 to 10⁸ (as
+    // `/usr/bin`'s), a few zeros. The 1:1000 floor alone moved 2.2% here.
+    let mut weights = vec![1.3e8];
+    weights.extend((0..600).map(|i| 10f64.powf(1.0 + 7.0 * ((i * 7919) % 600) as f64 / 600.0)));
+    weights.extend([0.0; 5]);
+    let ds = flat(&weights);
+    let params = Params::default();
+    let (l, report) = layout(&ds, &params).expect("layout");
+    l.sanity_check(&ds).expect("sane");
+    let q = measure::quality(&ds, &l);
+    assert_converged_or_says_so(&q, &report, &params);
+    assert!(q.area_error_diagram_max <= 0.01, "{q:?} {report:?}");
+    // The zero-weight leaves still have a cell.
+    for i in 601..606 {
+        assert!(share(&ds, &l, &format!("n{i}")) > 0.0);
+    }
+}
+
+/// A diagram above the convergence ratio against its real weights is counted
+/// in `unconverged`.
+fn assert_converged_or_says_so(q: &measure::Quality, report: &Report, params: &Params) {
+    assert!(
+        q.area_error_diagram_max <= params.convergence_ratio || report.unconverged > 0,
+        "area error {} above {} while unconverged is 0: {report:?}",
+        q.area_error_diagram_max,
+        params.convergence_ratio
+    );
+}
+
+/// One leaf of 10⁸ beside 600 of 100 to 50,000: 13% of the area for 600
+/// cells beside one of 87%. The optimiser does not reach 1% here in 200 (or
+/// 1,000) ticks; the report must say so (it said `unconverged: 0` at an
+/// error of 0.49, the floor's).
+#[test]
+fn a_diagram_that_misses_its_areas_is_reported_unconverged() {
+    let mut weights = vec![1.0e8];
+    weights.extend((0..600).map(|i| 100.0 + (i * 7919 % 50_000) as f64));
+    weights.extend([0.0; 5]);
+    let ds = flat(&weights);
+    let params = Params::default();
+    let (l, report) = layout(&ds, &params).expect("layout");
+    l.sanity_check(&ds).expect("sane");
+    assert_converged_or_says_so(&measure::quality(&ds, &l), &report, &params);
 }
 
 #[test]

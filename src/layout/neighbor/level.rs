@@ -219,7 +219,7 @@ pub(super) fn settle_to(d: &mut Diagram, np: &NeighborParams, target: f64) {
 /// [`settle_to`] the run's own area target.
 pub(super) fn settle(d: &mut Diagram, np: &NeighborParams) {
     if let Diagram::Sim { sim, .. } = d {
-        let target = sim.settings().convergence_ratio;
+        let target = sim.area_target();
         settle_to(d, np, target);
     }
 }

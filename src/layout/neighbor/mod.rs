@@ -44,7 +44,7 @@ use self::links::LevelLinks;
 use self::optimize::optimize_level;
 use self::params::{prototype_root_area, Distances};
 use self::prototype::optimize_prototype;
-use self::secure::secure_level;
+use self::secure::{retarget, secure_level};
 use self::start::{init_diagram, sim_targets, starts_for};
 use super::frames::{Frame, Recorder};
 use super::map::MapSettings;
@@ -303,6 +303,7 @@ fn descend(
         if ctx.method == Method::Neighbor && !ctx.np.prototype {
             swap::exhaustive_polish(&mut diagrams, &lv);
         }
+        retarget(&mut diagrams, dataset, ctx.params, ctx.np);
         let repairs = secure_level(
             &mut diagrams,
             &initial,
@@ -310,6 +311,10 @@ fn descend(
             ctx.settings,
             ctx.params.seed,
         );
+        if repairs.fallbacks > 0 {
+            // A fallback is a start, optimised with the floored areas.
+            retarget(&mut diagrams, dataset, ctx.params, ctx.np);
+        }
         let mut cells = cells.clone();
         let (mut report, error_sum) = apply_level(diagrams, &mut cells);
         report.repaired = repairs.repaired;
@@ -521,8 +526,9 @@ fn run_level(
     // their real areas.
     diagrams.par_iter_mut().for_each(|d| {
         if let Diagram::Sim { children, sim } = d {
-            let targets = sim_targets(dataset, sim.clip(), children, params);
-            sim.set_targets(targets);
+            if let Some(parent) = children.first().and_then(|c| dataset.node(*c).parent) {
+                sim.set_targets(sim_targets(dataset, sim.clip(), parent, params));
+            }
         }
     });
     let initial = diagrams.clone();

@@ -164,7 +164,7 @@ pub(super) fn optimize_level(
     polish(&mut diagrams, score, lv);
     diagrams.par_iter_mut().for_each(|d| {
         if let Diagram::Sim { sim, .. } = d {
-            let target = FINAL_SHARE * sim.settings().convergence_ratio;
+            let target = (FINAL_SHARE * sim.settings().convergence_ratio).min(sim.area_target());
             settle_to(d, np, target);
         }
     });

@@ -9,7 +9,7 @@ use super::NeighborParams;
 use crate::geom::{ConvexPolygon, Point};
 use crate::layout::map::{MapSettings, MapSimulation};
 use crate::layout::method::Method;
-use crate::layout::treemap::target_areas;
+use crate::layout::treemap::{child_targets, child_targets_within};
 use crate::layout::{seed, Params};
 use crate::neighborhood::matching;
 use crate::rng::Rng;
@@ -27,15 +27,17 @@ pub(super) fn starts_for(level_size: usize, np: &NeighborParams) -> usize {
     (np.start_budget / level_size.max(1)).clamp(1, np.max_starts.max(1))
 }
 
-/// The real target areas of `children` inside `clip`.
+/// The target areas of `parent`'s children inside `clip` while a level is
+/// optimised: the configured floor for light children, whatever it costs the
+/// areas (their cells keep room for neighbours; `retarget` gives them their
+/// real areas once the arrangement is chosen).
 pub(super) fn sim_targets(
     dataset: &Dataset,
     clip: &ConvexPolygon,
-    children: &[usize],
+    parent: usize,
     params: &Params,
 ) -> Vec<f64> {
-    let values: Vec<f64> = children.iter().map(|c| dataset.node(*c).value).collect();
-    target_areas(&values, clip.area(), params.min_weight_ratio)
+    child_targets_within(dataset, parent, clip, params, f64::INFINITY).0
 }
 
 /// Builds one parent's diagram in its starting state for `method`.
@@ -59,7 +61,8 @@ pub(super) fn init_diagram(
     }
     let k = children.len();
     let mut rng = Rng::for_key(params.seed, &dataset.node(parent).id);
-    let targets = sim_targets(dataset, &polygon, &children, params);
+    // The baseline that starts at its areas has them final from the start.
+    let (targets, slack) = child_targets(dataset, parent, &polygon, params);
     let (positions, weights) = if method == Method::ProjScale {
         let points: Vec<Point> = children.iter().map(|c| projected[*c]).collect();
         (project_and_scale(&polygon, &points, &mut rng), None)
@@ -88,7 +91,10 @@ pub(super) fn init_diagram(
     } else {
         vec![polygon.area() / k as f64; k]
     };
-    let sim = MapSimulation::new(polygon, start_targets, positions, weights, settings, rng);
+    let mut sim = MapSimulation::new(polygon, start_targets, positions, weights, settings, rng);
+    if method == Method::ProjScale {
+        sim.set_slack(slack);
+    }
     Diagram::Sim {
         children,
         sim: Box::new(sim),
