@@ -687,7 +687,7 @@ impl LimitsSection {
 
 /// Past layouts a served page keeps when the config does not say (`history:`).
 const fn default_history() -> usize {
-    8
+    0
 }
 
 /// Most past layouts a served page may keep.

@@ -46,7 +46,8 @@ pub(crate) fn weights() -> Vec<f64> {
     (0..LEAVES).map(|i| 10.0 + (i * 7 % 13) as f64).collect()
 }
 
-const CONFIG: &str = "datasets:
+const CONFIG: &str = "history: 8
+datasets:
   - name: grid
     format: border-list
     files: {nodes: data/nodes.csv, pairs: data/pairs.csv}
