@@ -74,7 +74,7 @@ pub struct Applied {
     pub stops: Vec<Rgb>,
     /// True when some leaf has no value (the legend then names the grey).
     pub missing: bool,
-    /// True when the scale is logarithmic (see [`LOG_SPAN`]).
+    /// True when the scale is logarithmic (see `LOG_SPAN`).
     pub log: bool,
 }
 
