@@ -31,6 +31,14 @@ pub(super) enum Diagram {
 }
 
 impl Diagram {
+    /// How many children the diagram lays out.
+    pub(super) fn len(&self) -> usize {
+        match self {
+            Diagram::Single { .. } => 1,
+            Diagram::Sim { children, .. } => children.len(),
+        }
+    }
+
     /// The parent's cell.
     pub(super) fn clip(&self) -> &ConvexPolygon {
         match self {
@@ -209,7 +217,14 @@ pub(super) fn frame_cells(diagrams: &[Diagram]) -> Vec<(usize, ConvexPolygon)> {
 pub(super) fn settle_to(d: &mut Diagram, np: &NeighborParams, target: f64) {
     if let Diagram::Sim { sim, .. } = d {
         for _ in 0..np.settle_iterations {
-            if sim.state().convergence_ratio <= target || sim.settle_weights() <= target {
+            let before = sim.state().convergence_ratio;
+            if before <= target {
+                break;
+            }
+            let after = sim.settle_weights();
+            // A step that found no better weights keeps them, and the next
+            // would search from the same weights to the same end.
+            if after <= target || after >= before {
                 break;
             }
         }

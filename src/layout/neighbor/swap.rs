@@ -21,6 +21,18 @@ const EXHAUSTIVE_BUDGET: usize = 400;
 /// gain first, each cell swapped at most once and its neighbours left alone.
 /// Returns the number of swaps made.
 pub(super) fn swap_round(diagrams: &mut [Diagram], lv: &LevelCtx<'_>) -> usize {
+    swap_round_within(diagrams, lv, f64::INFINITY)
+}
+
+/// [`swap_round`] among pairs of cells whose target areas are within
+/// `max_ratio` of each other: exchanging two sites with their weights
+/// exchanges their cells, and cells of similar targets settle back to their
+/// own areas in a few weight steps with the sites held in place.
+pub(super) fn swap_round_within(
+    diagrams: &mut [Diagram],
+    lv: &LevelCtx<'_>,
+    max_ratio: f64,
+) -> usize {
     let links = lv.links;
     let snap = lv.snapshot(diagrams);
     let adj = &snap.adjacency;
@@ -47,7 +59,7 @@ pub(super) fn swap_round(diagrams: &mut [Diagram], lv: &LevelCtx<'_>) -> usize {
             let now = realized(a, a) + realized(b, b);
             let after = realized(a, b) + realized(b, a);
             let gain = after - now;
-            if gain > 0 {
+            if gain > 0 && target_ratio(&diagrams[snap.diagram[a]], snap.slot[a], snap.slot[b]) <= max_ratio {
                 let (x, y) = if a < b { (a, b) } else { (b, a) };
                 candidates.push((gain, x, y));
             }
@@ -80,6 +92,17 @@ pub(super) fn swap_round(diagrams: &mut [Diagram], lv: &LevelCtx<'_>) -> usize {
             }
         });
     applied
+}
+
+/// The ratio of the larger to the smaller target area of slots `a` and `b`.
+fn target_ratio(d: &Diagram, a: usize, b: usize) -> f64 {
+    match d {
+        Diagram::Sim { sim, .. } => {
+            let t = sim.targets();
+            t[a].max(t[b]) / t[a].min(t[b]).max(f64::MIN_POSITIVE)
+        }
+        Diagram::Single { .. } => 1.0,
+    }
 }
 
 /// On small levels, try every same-parent swap, each measured on the settled
