@@ -37,9 +37,10 @@ use super::similarity::{pair_similarity, score, NodeFeatures, SimilarityKind};
 /// Entries the search finds per row: the top bin's first [`BIN_HEAD`] and
 /// room for a second bin's head behind a small top bin.
 const WANTED: usize = BIN_HEAD + STAGE_VIEW_FULL_TOP;
-/// Levels smaller than this are scanned over all pairs: below it building the
-/// caps and bounding each row costs more than the filter's scan saves
-/// (BENCHMARKS.md, "Nearest-neighbour constraints").
+/// Levels smaller than this are scanned over all pairs: the caps and the
+/// sample cost about a tenth of the filter's scan where the search is then
+/// refused (64-d noise, 10,000 rows), and the scan of a smaller level takes
+/// under a second (BENCHMARKS.md, "Nearest-neighbour constraints").
 pub(super) const MIN_LEVEL: usize = 8_000;
 /// The search is used when a sample of rows visits at most this share of the
 /// level per row (centres and members); above it the filter's scan, which
@@ -229,12 +230,8 @@ impl Search<'_> {
         let mut gamma = vec![[0.0f64; KERNEL_ROWS]; caps];
         for block in 0..caps.div_ceil(LANES) {
             let dots = dot_tile::<f32, LANES>(&rows, index.block(&index.centre_blocks, block));
-            for lane in 0..LANES {
-                if let Some(g) = gamma.get_mut(block * LANES + lane) {
-                    for r in 0..KERNEL_ROWS {
-                        g[r] = f64::from(dots[r][lane]);
-                    }
-                }
+            for (lane, g) in gamma.iter_mut().skip(block * LANES).take(LANES).enumerate() {
+                *g = std::array::from_fn(|r| f64::from(dots[r][lane]));
             }
         }
         let upper: Vec<[f64; KERNEL_ROWS]> = index
@@ -290,7 +287,8 @@ impl Search<'_> {
                 break;
             }
             let cap = &index.caps[c];
-            let mut span = usize::MAX..0;
+            // The union of the rows' reaches (members are in `rho` order).
+            let mut span: Option<(usize, usize)> = None;
             for (r, row) in state.iter().enumerate() {
                 let reach = if is_farthest {
                     0..cap.rho.len()
@@ -298,12 +296,14 @@ impl Search<'_> {
                     index.reach(cap, gamma[c][r], threshold(row))
                 };
                 if !reach.is_empty() {
-                    span = span.start.min(reach.start)..span.end.max(reach.end);
+                    span = Some(span.map_or((reach.start, reach.end), |(a, b)| {
+                        (a.min(reach.start), b.max(reach.end))
+                    }));
                 }
             }
-            if span.is_empty() {
+            let Some(span) = span.map(|(a, b)| a..b) else {
                 continue;
-            }
+            };
             for block in span.start / LANES..span.end.div_ceil(LANES) {
                 let block = cap.first_block + block;
                 let dots = dot_tile::<f32, LANES>(&rows, index.block(&index.member_blocks, block));
@@ -499,9 +499,12 @@ mod tests {
         (directed, lists)
     }
 
+    /// A head entry as (similarity bits, node, score).
+    type HeadBits = (u64, usize, u8);
+
     /// Bins with every similarity as its bits, so that the comparison is
     /// bit for bit (−0 and 0 differ).
-    fn bits(bins: &Bins) -> Vec<(usize, Vec<(u64, usize, u8)>)> {
+    fn bits(bins: &Bins) -> Vec<(usize, Vec<HeadBits>)> {
         bins.bins
             .iter()
             .map(|b| {

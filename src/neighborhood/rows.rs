@@ -1,8 +1,10 @@
 //! A level's similarity rows, binned (method-reference §3.1–3.2): sparse rows
 //! for the set and relation measures (`sparse_rows`), the f32 filter for dense
 //! cosine and Pearson levels it can serve (`filtered_rows`), else exact dense
-//! rows over all pairs, tiled through [`dot_tile`]. Every path gives the same
-//! bins as the plain scan of [`pair_similarity`], bit for bit.
+//! rows over all pairs, tiled through [`dot_tile`]; large dense levels through
+//! the nearest-neighbour search of `knn_rows` where it pays. Every path gives
+//! the same bins as the plain scan of [`pair_similarity`], bit for bit (the
+//! search: their stage views, all the stages read).
 
 use rayon::prelude::*;
 
