@@ -118,6 +118,45 @@ pub(super) fn bin_row(
     Bins { bins }
 }
 
+/// What Stages A and C (method-reference §3.3, §3.5) read of a node's bins,
+/// and nothing more: none when the best score is 0 (no link is ever made);
+/// the top bin alone when it holds at least [`STAGE_VIEW_FULL_TOP`] entries
+/// (Stage A then gives the node 4 or more links and Stage C stops before its
+/// first bin); else every bin up to and including the first empty one (Stage
+/// C stops there). Each bin counted and listed up to its first [`BIN_HEAD`]
+/// entries: Stage A reads at most 6, Stage C at most 4, and only whether a
+/// bin is empty. Two rows with the same view give the same lists; the
+/// nearest-neighbour rows (`knn_rows`) produce views only.
+pub(super) fn stage_view(bins: &Bins) -> Bins {
+    let Some(top) = bins.bins.first() else {
+        return Bins::default();
+    };
+    if top.head.first().is_none_or(|c| c.score == 0) {
+        return Bins::default();
+    }
+    let capped = |bin: &Bin| Bin {
+        len: bin.len.min(BIN_HEAD),
+        head: bin.head.iter().take(BIN_HEAD).copied().collect(),
+    };
+    if top.len >= STAGE_VIEW_FULL_TOP {
+        return Bins {
+            bins: vec![capped(top)],
+        };
+    }
+    let reach = bins
+        .bins
+        .iter()
+        .position(|b| b.len == 0)
+        .map_or(bins.bins.len(), |empty| empty + 1);
+    Bins {
+        bins: bins.bins[..reach].iter().map(capped).collect(),
+    }
+}
+
+/// A top bin this large gives Stage A more than `STAGE_C_STOP_ABOVE` (3)
+/// links, so Stage C reads no bin of the node.
+pub(super) const STAGE_VIEW_FULL_TOP: usize = 4;
+
 /// The bins of a node from its sparse row (the measures of [`SparseLevel`]): the same
 /// bins as [`bin_row`] gives from the full row, bit for bit. Entries go in level order,
 /// shown ones before the zeros; they never tie (shown similarities are non-zero), so

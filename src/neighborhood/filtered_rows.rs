@@ -94,6 +94,22 @@ impl Filter {
         })
     }
 
+    /// The length of the level's vectors.
+    pub(super) fn dim(&self) -> usize {
+        self.d
+    }
+
+    /// Node `i`'s unit vector in f32 (zeros for a [`Filter::is_exact`] node).
+    pub(super) fn unit(&self, i: usize) -> &[f32] {
+        &self.rows[i * self.d..(i + 1) * self.d]
+    }
+
+    /// Bound on |(f32 dot of two unit vectors + 1)/2 − exact similarity|, the
+    /// dot summed by the kernels of `kernels` (k ascending from zero).
+    pub(super) fn eps(&self) -> f64 {
+        self.eps
+    }
+
     /// True when node `i` of the level is always computed exactly.
     pub(super) fn is_exact(&self, i: usize) -> bool {
         self.exact[i]

@@ -6,12 +6,16 @@
 //! Pure: no I/O.
 /// A node's similarity bins (§3.1–3.2).
 mod bins;
+/// An exact nearest-neighbour index of unit vectors: spherical caps.
+mod cap_index;
 /// The constraint pipeline's results and its order (stages A to E).
 pub mod constraints;
 /// The dot-product kernels of the dense similarity rows (one AVX dispatch).
 mod kernels;
 /// Exact bins of dense cosine and Pearson rows through an f32 filter.
 mod filtered_rows;
+/// Stage views of large dense levels from the nearest-neighbour index.
+mod knn_rows;
 /// Assignment: Kuhn–Munkres, and recursive bisection for large groups.
 pub mod matching;
 /// Virtual nodes for uniform depth and bottom-up aggregation (paper §4).

@@ -1,14 +1,17 @@
 //! A level's similarity rows, binned (method-reference §3.1–3.2): sparse rows
 //! for the set and relation measures (`sparse_rows`), the f32 filter for dense
 //! cosine and Pearson levels it can serve (`filtered_rows`), else exact dense
-//! rows over all pairs, tiled through [`dot_tile`]. Every path gives the same
-//! bins as the plain scan of [`pair_similarity`], bit for bit.
+//! rows over all pairs, tiled through [`dot_tile`]; large dense levels through
+//! the nearest-neighbour search of `knn_rows` where it pays. Every path gives
+//! the same bins as the plain scan of [`pair_similarity`], bit for bit (the
+//! search: their stage views, all the stages read).
 
 use rayon::prelude::*;
 
 use super::bins::{bin_row, bin_sparse, Bins};
 use super::filtered_rows::{Filter, RowState};
 use super::kernels::{dot_tile, kernel, KERNEL_ROWS};
+use super::knn_rows::knn_level_bins;
 use super::similarity::{cosine_from_parts, norm_of, pair_similarity, NodeFeatures, SimilarityKind};
 use super::sparse_rows::SparseLevel;
 use nptreemap_formats::Dataset;
@@ -32,6 +35,13 @@ pub(super) fn level_bins(
         Some(_) => None,
         None => Filter::new(kind, &level_features),
     };
+    // Large levels: the nearest-neighbour search, where a sample shows it pays.
+    if let Some(bins) = filter
+        .as_ref()
+        .and_then(|f| knn_level_bins(kind, f, &level_features, level))
+    {
+        return bins;
+    }
     let transposed = match (&sparse_level, &filter) {
         (None, None) => Transposed::new(kind, &level_features),
         _ => None,

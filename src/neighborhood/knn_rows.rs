@@ -1,0 +1,603 @@
+//! The bins of a large dense cosine or Pearson level from an exact
+//! nearest-neighbour search (`cap_index`) instead of all pairs: per row, what
+//! Stages A and C read ([`stage_view`]), bit for bit as the all-pairs scan
+//! gives it, or the all-pairs row where the search cannot settle it.
+//!
+//! What a row's stages read (method-reference §3.2–3.5): the thresholds, from
+//! the row's lowest and highest score; the top bin's first 6 entries; and, only
+//! when the top bin holds fewer than 4, the first 4 entries of each following
+//! bin up to the first empty one. So a row needs its best entries in exact
+//! order, its highest score, and its lowest score only as far as it moves a
+//! threshold across one of those entries. The search gives:
+//! - `best`: every entry whose exact similarity is at least a bound `floor`,
+//!   sorted as the bins' heads are (similarity descending, level order), at
+//!   least [`WANTED`] of them: the caps are visited best bound first, members
+//!   in reach of the current `floor` only, until no cap can hold a better one;
+//! - the lowest score, between a lower bound (the caps' bounds) and an upper
+//!   one (the lowest entry seen, the farthest cap being always visited).
+//! The row is settled when every lowest score in that range gives the same
+//! view from `best`, each bin of which `best` holds in full or to its first
+//! [`BIN_HEAD`] entries. Otherwise (a small top bin over a crowded second bin,
+//! or a lowest score that moves a threshold across a best entry) the row is
+//! binned over all pairs through the filter.
+//!
+//! Why: the all-pairs scan is O(n²·d): 10¹⁰ pairs on a 100,000-leaf level.
+//! Whether the search pays depends on the data (clustered vectors prune, noise
+//! in 64 dimensions does not), so a sample of rows decides it by the vectors
+//! they visit, a count, not a clock: the result is the same either way.
+
+use rayon::prelude::*;
+
+use super::bins::{bin_table, stage_view, Bin, Bins, Candidate, BIN_HEAD, STAGE_VIEW_FULL_TOP};
+use super::cap_index::{CapIndex, LANES};
+use super::filtered_rows::{Filter, RowState};
+use super::kernels::{dot_tile, KERNEL_ROWS};
+use super::similarity::{pair_similarity, score, NodeFeatures, SimilarityKind};
+
+/// Entries the search finds per row: the top bin's first [`BIN_HEAD`] and
+/// room for a second bin's head behind a small top bin.
+const WANTED: usize = BIN_HEAD + STAGE_VIEW_FULL_TOP;
+/// Levels smaller than this are scanned over all pairs: the caps and the
+/// sample cost about a tenth of the filter's scan where the search is then
+/// refused (64-d noise, 10,000 rows), and the scan of a smaller level takes
+/// under a second (BENCHMARKS.md, "Nearest-neighbour constraints").
+pub(super) const MIN_LEVEL: usize = 8_000;
+/// The search is used when a sample of rows visits at most this share of the
+/// level per row (centres and members); above it the filter's scan, which
+/// needs no bounds, is faster.
+const MAX_VISITED_SHARE: f64 = 0.35;
+/// One query tile in this many makes the sample.
+const SAMPLE_EVERY: usize = 64;
+
+/// The stage views of every row of `level`, or `None` where the search would
+/// not pay (then the caller scans all pairs).
+pub(super) fn knn_level_bins(
+    kind: SimilarityKind,
+    filter: &Filter,
+    features: &[NodeFeatures<'_>],
+    level: &[usize],
+) -> Option<Vec<Bins>> {
+    if level.len() < MIN_LEVEL {
+        return None;
+    }
+    search_level(kind, filter, features, level, MAX_VISITED_SHARE).map(|(bins, _)| bins)
+}
+
+/// [`knn_level_bins`] at any size, used when a sample of rows visits at most
+/// `max_share` of the level; also gives how many rows the search left to the
+/// scan.
+fn search_level(
+    kind: SimilarityKind,
+    filter: &Filter,
+    features: &[NodeFeatures<'_>],
+    level: &[usize],
+    max_share: f64,
+) -> Option<(Vec<Bins>, usize)> {
+    let n = level.len();
+    let (points, exact): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| !filter.is_exact(i));
+    let index = CapIndex::build(filter, &points);
+    // Queries cap by cap, so a tile's rows share their nearest caps.
+    let mut tiles: Vec<Vec<usize>> = Vec::new();
+    for cap in &index.caps {
+        let first = cap.first_block * LANES;
+        let members = &index.slots[first..first + cap.rho.len()];
+        tiles.extend(members.chunks(KERNEL_ROWS).map(<[usize]>::to_vec));
+    }
+    let search = Search {
+        kind,
+        filter,
+        index: &index,
+        features,
+        level,
+        exact: &exact,
+    };
+    let sample: Vec<usize> = (0..tiles.len()).step_by(SAMPLE_EVERY).collect();
+    let visited: usize = sample
+        .par_iter()
+        .map(|&t| search.tile(&tiles[t]).1)
+        .sum();
+    let rows: usize = sample.iter().map(|&t| tiles[t].len()).sum();
+    let share = visited as f64 / (rows.max(1) as f64 * n as f64);
+    tracing::debug!(n, caps = index.caps.len(), share, "nearest-neighbour rows: visited share");
+    if share > max_share {
+        return None;
+    }
+    let settled: Vec<(Vec<(usize, Bins)>, usize)> =
+        tiles.par_iter().map(|tile| search.tile(tile)).collect();
+    let mut out: Vec<Option<Bins>> = vec![None; n];
+    for (row, bins) in settled.into_iter().flat_map(|(rows, _)| rows) {
+        out[row] = Some(bins);
+    }
+    // Rows the search left open, and the exact nodes' rows, over all pairs.
+    let open: Vec<usize> = (0..n).filter(|&i| out[i].is_none()).collect();
+    tracing::debug!(n, open = open.len(), "nearest-neighbour rows: left to the scan");
+    let scanned: Vec<(usize, Bins)> = open
+        .par_chunks(KERNEL_ROWS)
+        .map_init(Vec::new, |state: &mut Vec<RowState>, group| {
+            let (filtered, exact_rows): (Vec<usize>, Vec<usize>) =
+                group.iter().partition(|&&i| !filter.is_exact(i));
+            let mut rows: Vec<(usize, Bins)> = filtered
+                .iter()
+                .copied()
+                .zip(filter.bin_rows(kind, features, level, &filtered, state))
+                .collect();
+            rows.extend(exact_rows.into_iter().map(|i| (i, exact_row(kind, features, level, i))));
+            rows
+        })
+        .flatten_iter()
+        .collect();
+    for (row, bins) in scanned {
+        out[row] = Some(stage_view(&bins));
+    }
+    let bins = out.into_iter().map(Option::unwrap_or_default).collect();
+    Some((bins, open.len()))
+}
+
+/// The bins of an exact node's row from its exact similarities.
+fn exact_row(
+    kind: SimilarityKind,
+    features: &[NodeFeatures<'_>],
+    level: &[usize],
+    i: usize,
+) -> Bins {
+    let row: Vec<f64> = (0..level.len())
+        .map(|j| {
+            if j == i {
+                0.0
+            } else {
+                pair_similarity(kind, &features[i], &features[j], level[j])
+            }
+        })
+        .collect();
+    super::bins::bin_row(kind, level, i, &row, &mut Vec::new())
+}
+
+/// What a tile's search needs, shared by all tiles.
+struct Search<'a> {
+    kind: SimilarityKind,
+    filter: &'a Filter,
+    index: &'a CapIndex,
+    features: &'a [NodeFeatures<'a>],
+    level: &'a [usize],
+    /// Level positions of the exact nodes (not in the index).
+    exact: &'a [usize],
+}
+
+/// One row's search state.
+struct RowSearch {
+    /// Entries that may be among the [`WANTED`] best: (f32 similarity, level
+    /// position).
+    kept: Vec<(f64, usize)>,
+    /// A lower bound on the [`WANTED`]-th best exact similarity.
+    floor: f64,
+    /// Kept entries at which `kept` is pruned next.
+    prune_at: usize,
+    /// An upper bound on the row's lowest similarity.
+    lowest: f64,
+}
+
+impl RowSearch {
+    fn new() -> Self {
+        RowSearch {
+            kept: Vec::new(),
+            floor: f64::NEG_INFINITY,
+            prune_at: 2 * WANTED,
+            lowest: f64::INFINITY,
+        }
+    }
+
+    /// Takes entry `j` with similarity `s`, within `eps` of the exact one.
+    #[inline]
+    fn take(&mut self, s: f64, j: usize, eps: f64) {
+        self.lowest = self.lowest.min(s + eps);
+        if s + eps < self.floor {
+            return;
+        }
+        self.kept.push((s, j));
+        if self.kept.len() >= self.prune_at {
+            self.prune(eps);
+        }
+    }
+
+    /// Raises `floor` to the [`WANTED`]-th best kept value less `eps` (that
+    /// many entries are at least that good) and drops what is below it.
+    fn prune(&mut self, eps: f64) {
+        if self.kept.len() < WANTED {
+            return;
+        }
+        let (_, &mut (nth, _), _) = self
+            .kept
+            .select_nth_unstable_by(WANTED - 1, |a, b| b.0.total_cmp(&a.0));
+        self.floor = self.floor.max(nth - eps);
+        let floor = self.floor;
+        self.kept.retain(|&(s, _)| s + eps >= floor);
+        self.prune_at = (2 * self.kept.len()).max(2 * WANTED);
+    }
+}
+
+impl Search<'_> {
+    /// The settled rows of a tile (up to [`KERNEL_ROWS`] level positions) with
+    /// their views, and the vectors the tile visited per row (centres and
+    /// members) summed over its rows.
+    fn tile(&self, tile: &[usize]) -> (Vec<(usize, Bins)>, usize) {
+        let index = self.index;
+        let eps = self.filter.eps();
+        let slack = index.slack();
+        let rows: [&[f32]; KERNEL_ROWS] =
+            std::array::from_fn(|r| self.filter.unit(tile[r.min(tile.len() - 1)]));
+        let caps = index.caps.len();
+        // Cosines to every centre.
+        let mut gamma = vec![[0.0f64; KERNEL_ROWS]; caps];
+        for block in 0..caps.div_ceil(LANES) {
+            let dots = dot_tile::<f32, LANES>(&rows, index.block(&index.centre_blocks, block));
+            for (lane, g) in gamma.iter_mut().skip(block * LANES).take(LANES).enumerate() {
+                *g = std::array::from_fn(|r| f64::from(dots[r][lane]));
+            }
+        }
+        let upper: Vec<[f64; KERNEL_ROWS]> = index
+            .caps
+            .iter()
+            .zip(&gamma)
+            .map(|(cap, g)| std::array::from_fn(|r| index.upper(cap, g[r])))
+            .collect();
+        let mut lowest_bound = [f64::INFINITY; KERNEL_ROWS];
+        let mut farthest = [0usize; KERNEL_ROWS];
+        for (c, (cap, g)) in index.caps.iter().zip(&gamma).enumerate() {
+            for r in 0..tile.len() {
+                let lower = index.lower(cap, g[r]);
+                if lower < lowest_bound[r] {
+                    lowest_bound[r] = lower;
+                    farthest[r] = c;
+                }
+            }
+        }
+        let mut order: Vec<usize> = (0..caps).collect();
+        let best_upper = |c: usize| {
+            upper[c][..tile.len()]
+                .iter()
+                .fold(f64::NEG_INFINITY, |m, &u| m.max(u))
+        };
+        order.sort_by(|&a, &b| best_upper(b).total_cmp(&best_upper(a)).then(a.cmp(&b)));
+
+        let mut state: Vec<RowSearch> = tile.iter().map(|_| RowSearch::new()).collect();
+        for (&i, row) in tile.iter().zip(state.iter_mut()) {
+            for &j in self.exact {
+                let s = pair_similarity(
+                    self.kind,
+                    &self.features[i],
+                    &self.features[j],
+                    self.level[j],
+                );
+                row.take(s, j, eps);
+            }
+        }
+        // The cosine (of directions) an entry must reach to matter to a row.
+        let threshold = |row: &RowSearch| 2.0 * (row.floor - eps) - 1.0 - slack;
+        let mut visited = caps * tile.len();
+        let mut seen = vec![false; caps];
+        let farthest_first = farthest[..tile.len()].to_vec();
+        for c in farthest_first.into_iter().chain(order) {
+            if std::mem::replace(&mut seen[c], true) {
+                continue;
+            }
+            let is_farthest = farthest[..tile.len()].contains(&c);
+            if !is_farthest && state.iter().all(|row| best_upper(c) < threshold(row)) {
+                // Caps come best bound first and floors only rise: no later
+                // cap matters to any row.
+                break;
+            }
+            let cap = &index.caps[c];
+            // The union of the rows' reaches (members are in `rho` order).
+            let mut span: Option<(usize, usize)> = None;
+            for (r, row) in state.iter().enumerate() {
+                let reach = if is_farthest {
+                    0..cap.rho.len()
+                } else {
+                    index.reach(cap, gamma[c][r], threshold(row))
+                };
+                if !reach.is_empty() {
+                    span = Some(span.map_or((reach.start, reach.end), |(a, b)| {
+                        (a.min(reach.start), b.max(reach.end))
+                    }));
+                }
+            }
+            let Some(span) = span.map(|(a, b)| a..b) else {
+                continue;
+            };
+            for block in span.start / LANES..span.end.div_ceil(LANES) {
+                let block = cap.first_block + block;
+                let dots = dot_tile::<f32, LANES>(&rows, index.block(&index.member_blocks, block));
+                visited += LANES * tile.len();
+                for ((&i, row), dots) in tile.iter().zip(state.iter_mut()).zip(&dots) {
+                    for (lane, &dot) in dots.iter().enumerate() {
+                        let j = index.slots[block * LANES + lane];
+                        if j != usize::MAX && j != i {
+                            row.take((f64::from(dot) + 1.0) / 2.0, j, eps);
+                        }
+                    }
+                }
+            }
+        }
+        let settled = tile
+            .iter()
+            .zip(state)
+            .zip(lowest_bound)
+            .filter_map(|((&i, mut row), bound)| {
+                row.prune(eps);
+                // Lowest similarity from below: the caps' bound in cosines of
+                // directions, less the f32 and exact paths' differences.
+                let below = (bound - slack + 1.0) / 2.0 - eps;
+                let below = self
+                    .exact
+                    .iter()
+                    .map(|&j| {
+                        pair_similarity(self.kind, &self.features[i], &self.features[j], self.level[j])
+                    })
+                    .fold(below, f64::min);
+                self.settle(i, row, below).map(|bins| (i, bins))
+            })
+            .collect();
+        (settled, visited)
+    }
+
+    /// The view of row `i` from its search, when every lowest score in range
+    /// gives the same one.
+    fn settle(&self, i: usize, row: RowSearch, below: f64) -> Option<Bins> {
+        let floor = row.floor;
+        let mut best: Vec<(f64, usize)> = row
+            .kept
+            .iter()
+            .filter(|&&(s, _)| s + self.filter.eps() >= floor)
+            .map(|&(_, j)| {
+                let s = pair_similarity(self.kind, &self.features[i], &self.features[j], self.level[j]);
+                (s, j)
+            })
+            .filter(|&(s, _)| s >= floor)
+            .collect();
+        best.sort_by(|a, b| {
+            b.0.partial_cmp(&a.0)
+                .unwrap_or(std::cmp::Ordering::Equal)
+                .then(a.1.cmp(&b.1))
+        });
+        let hi = score(best.first()?.0);
+        let lowest_best = best.iter().map(|&(s, _)| score(s)).min()?;
+        let lo_from = score(below);
+        let lo_to = score(row.lowest).min(lowest_best);
+        let mut view: Option<Bins> = None;
+        for lo in lo_from..=lo_to {
+            let v = view_from_best(&best, floor, lo, hi, self.level)?;
+            if view.as_ref().is_some_and(|w| *w != v) {
+                return None;
+            }
+            view = Some(v);
+        }
+        view
+    }
+}
+
+/// The stage view of a row whose lowest score is `lo` and highest `hi`, from
+/// `best`: every entry of similarity at least `floor`, in head order. `None`
+/// when the view needs an entry or a count beyond `best`.
+fn view_from_best(
+    best: &[(f64, usize)],
+    floor: f64,
+    lo: u8,
+    hi: u8,
+    level: &[usize],
+) -> Option<Bins> {
+    if hi == 0 {
+        return Some(Bins::default());
+    }
+    let bin_of = bin_table(lo, hi);
+    let count = usize::from(bin_of[usize::from(lo)]) + 1;
+    // Entries not in `best` are below `floor`, so score at most score(floor):
+    // bins above that score's bin are complete in `best`.
+    let complete_below = if floor == f64::NEG_INFINITY {
+        count
+    } else {
+        usize::from(bin_of[usize::from(score(floor))])
+    };
+    let mut bins = vec![Bin::default(); count];
+    for &(s, j) in best {
+        let sc = score(s);
+        let bin = &mut bins[usize::from(bin_of[usize::from(sc)])];
+        bin.len += 1;
+        if bin.head.len() < BIN_HEAD {
+            bin.head.push(Candidate {
+                similarity: s,
+                node: level[j],
+                score: sc,
+            });
+        }
+    }
+    let known = |b: usize, bins: &[Bin]| b < complete_below || bins[b].len >= BIN_HEAD;
+    // The top bin's size decides how far the stages read: certain when `best`
+    // holds enough of it, or all of it.
+    if bins[0].len < STAGE_VIEW_FULL_TOP && complete_below == 0 {
+        return None;
+    }
+    let view = stage_view(&Bins { bins: bins.clone() });
+    (0..view.bins.len())
+        .all(|b| known(b, &bins))
+        .then_some(view)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::rows::exact_bins;
+    use super::super::stages::{self, ListEntry};
+    use super::*;
+    use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
+
+    /// A seeded stream of values in [-0.5, 0.5).
+    fn stream(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) as f64) / f64::from(u32::MAX) - 0.5
+        }
+    }
+
+    /// Leaves under `groups` × `subgroups` inner nodes, `per` each, with
+    /// vectors that share their group's and subgroup's directions
+    /// (`spread` = 0 gives noise alone). Every 7th leaf repeats the previous
+    /// one's vector and every 11th is it times 3 (ties broken by level order),
+    /// and the last three are a zero vector, another zero vector and one of
+    /// norm 1e-150 (nodes of the exact path).
+    fn tree(groups: usize, subgroups: usize, per: usize, d: usize, spread: f64, seed: u64) -> Dataset {
+        let mut next = stream(seed);
+        let mut builder = DatasetBuilder::new();
+        builder.add(NodeSpec::new("r"));
+        let mut previous: Vec<f64> = vec![1.0; d];
+        let mut leaf = 0;
+        for g in 0..groups {
+            let gc: Vec<f64> = (0..d).map(|_| spread * next()).collect();
+            builder.add(NodeSpec::new(format!("g{g}")).parent("r"));
+            for s in 0..subgroups {
+                let sc: Vec<f64> = gc.iter().map(|x| x + spread * next()).collect();
+                builder.add(NodeSpec::new(format!("g{g}s{s}")).parent(format!("g{g}")));
+                for _ in 0..per {
+                    let mut v: Vec<f64> = sc.iter().map(|x| x + next()).collect();
+                    if leaf % 7 == 6 {
+                        v.clone_from(&previous);
+                    } else if leaf % 11 == 10 {
+                        v = previous.iter().map(|x| 3.0 * x).collect();
+                    }
+                    previous.clone_from(&v);
+                    builder.add(
+                        NodeSpec::new(format!("l{leaf}"))
+                            .parent(format!("g{g}s{s}"))
+                            .weight(1.0)
+                            .features(v),
+                    );
+                    leaf += 1;
+                }
+            }
+        }
+        let tail = [vec![0.0; d], vec![0.0; d], (0..d).map(|k| 1e-150 * (k as f64 + 1.0)).collect()];
+        for v in tail {
+            builder.add(
+                NodeSpec::new(format!("l{leaf}"))
+                    .parent("g0s0")
+                    .weight(1.0)
+                    .features(v),
+            );
+            leaf += 1;
+        }
+        super::super::prepare::prepare(&builder.build().expect("valid"))
+    }
+
+    /// The directed and symmetric lists of Stages A–D from per-node bins.
+    fn lists(p: &Dataset, bins: &[Bins]) -> (Vec<Vec<ListEntry>>, Vec<Vec<ListEntry>>) {
+        let mut lists = stages::top_bin(bins);
+        stages::propagate(p.nodes(), &mut lists);
+        stages::following_bins(bins, &mut lists);
+        let directed = lists.clone();
+        stages::symmetrise(&mut lists);
+        (directed, lists)
+    }
+
+    /// A head entry as (similarity bits, node, score).
+    type HeadBits = (u64, usize, u8);
+
+    /// Bins with every similarity as its bits, so that the comparison is
+    /// bit for bit (−0 and 0 differ).
+    fn bits(bins: &Bins) -> Vec<(usize, Vec<HeadBits>)> {
+        bins.bins
+            .iter()
+            .map(|b| {
+                let head = b.head.iter().map(|c| (c.similarity.to_bits(), c.node, c.score));
+                (b.len, head.collect())
+            })
+            .collect()
+    }
+
+    /// Every level through the search and through the all-pairs scan: the
+    /// same view of every row, bit for bit, and the same lists. Returns the
+    /// rows the search settled itself and all rows.
+    fn compare(p: &Dataset, kind: SimilarityKind) -> (usize, usize) {
+        let nodes = p.nodes();
+        let mut levels: Vec<Vec<usize>> = vec![Vec::new(); p.max_depth() + 1];
+        for (index, node) in nodes.iter().enumerate() {
+            levels[node.depth].push(index);
+        }
+        let mut full = vec![Bins::default(); nodes.len()];
+        let mut searched = vec![Bins::default(); nodes.len()];
+        let (mut settled, mut rows) = (0, 0);
+        for level in levels.iter().skip(1) {
+            let features: Vec<NodeFeatures<'_>> =
+                level.iter().map(|&n| NodeFeatures::new(kind, p, n)).collect();
+            let filter = Filter::new(kind, &features).expect("a filter for this level");
+            let (bins, open) =
+                search_level(kind, &filter, &features, level, f64::INFINITY).expect("the search runs");
+            settled += level.len() - open;
+            rows += level.len();
+            for (i, &node) in level.iter().enumerate() {
+                full[node] = exact_bins(kind, &features, level, i);
+                searched[node] = bins[i].clone();
+                assert_eq!(
+                    bits(&searched[node]),
+                    bits(&stage_view(&full[node])),
+                    "{kind:?}: row {i} of a level of {}",
+                    level.len()
+                );
+            }
+        }
+        assert_eq!(lists(p, &searched), lists(p, &full), "{kind:?}: the lists");
+        // The views alone give the lists the full bins give.
+        let views: Vec<Bins> = full.iter().map(stage_view).collect();
+        assert_eq!(lists(p, &views), lists(p, &full), "{kind:?}: the views' lists");
+        (settled, rows)
+    }
+
+    /// Clustered vectors in three levels, with duplicates, scaled copies and
+    /// exact-path nodes: the search's views and lists equal the all-pairs
+    /// scan's, and the search settles most rows itself.
+    #[test]
+    fn clustered_levels_equal_the_all_pairs_scan() {
+        for kind in [SimilarityKind::Cosine, SimilarityKind::Pearson] {
+            for (d, seed) in [(12, 1), (40, 2)] {
+                let p = tree(10, 8, 25, d, 4.0, seed);
+                let (settled, rows) = compare(&p, kind);
+                assert!(
+                    settled * 10 >= rows * 9,
+                    "{kind:?} d={d}: only {settled} of {rows} rows settled by the search"
+                );
+            }
+        }
+    }
+
+    /// Unclustered vectors (noise, in 3 and 24 dimensions), where the bounds
+    /// prune little and more rows fall back: still the all-pairs scan's views.
+    #[test]
+    fn noise_equals_the_all_pairs_scan() {
+        for kind in [SimilarityKind::Cosine, SimilarityKind::Pearson] {
+            for (d, seed) in [(3, 3), (24, 4)] {
+                let p = tree(1, 1, 1500, d, 0.0, seed);
+                compare(&p, kind);
+            }
+        }
+    }
+
+    /// Vectors on a circle, each twice: exact ties everywhere, and 2-d
+    /// cosines that put many pairs on score steps.
+    #[test]
+    fn ties_on_a_circle_equal_the_all_pairs_scan() {
+        let mut builder = DatasetBuilder::new();
+        builder.add(NodeSpec::new("r"));
+        for k in 0..1400 {
+            let angle = (k / 2) as f64 * std::f64::consts::TAU / 700.0;
+            builder.add(
+                NodeSpec::new(format!("n{k}"))
+                    .parent("r")
+                    .weight(1.0)
+                    .features(vec![angle.cos(), angle.sin()]),
+            );
+        }
+        let p = super::super::prepare::prepare(&builder.build().expect("valid"));
+        let (settled, rows) = compare(&p, SimilarityKind::Cosine);
+        assert!(settled * 2 >= rows, "{settled} of {rows}");
+    }
+}
