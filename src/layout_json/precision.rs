@@ -117,6 +117,7 @@ pub(super) fn choose(
     let base = base_places(layout.canvas);
     let n = layout.cells.len();
     let mut level = vec![0u8; n];
+    let chain = chain_tops(dataset);
     let places_of = |l: u8| (l + 1 < LEVELS).then(|| base + REFINE_STEP * i32::from(l));
     for _ in 0..MAX_PASSES {
         let cells: Vec<Spelled> = layout
@@ -136,6 +137,16 @@ pub(super) fn choose(
                 raised = true;
             }
         }
+        // An only child has its parent's cell: the whole chain takes one
+        // grid, or each refinement would only move the mismatch a level up
+        // (a pass per level of a chain of virtual copies).
+        let mut top_level = vec![0u8; n];
+        for (i, &t) in chain.iter().enumerate() {
+            top_level[t] = top_level[t].max(level[i]);
+        }
+        for (i, &t) in chain.iter().enumerate() {
+            level[i] = top_level[t];
+        }
         if !raised {
             // Only cells already in full precision fail: the layout itself
             // breaks a margin. Nothing finer exists; write it as it is.
@@ -143,6 +154,21 @@ pub(super) fn choose(
         }
     }
     exact(layout)
+}
+
+/// Per node, the highest node of the chain of only children it belongs to
+/// (itself when it is not an only child). A dataset lists its nodes
+/// breadth-first, parents first, so one pass suffices.
+fn chain_tops(dataset: &Dataset) -> Vec<usize> {
+    let mut top: Vec<usize> = (0..dataset.len()).collect();
+    for (i, node) in dataset.nodes().iter().enumerate() {
+        if let Some(p) = node.parent {
+            if dataset.node(p).children.len() == 1 {
+                top[i] = top[p];
+            }
+        }
+    }
+    top
 }
 
 fn spell(polygon: &ConvexPolygon, site: Point, places: Option<i32>) -> Spelled {
