@@ -52,8 +52,10 @@ const COORD: usize = "1000.0000,".len();
 /// [`COORD`] each; per constraint the same. Only the constraints no only
 /// child repeats count: the others are the same pair one level down.
 fn needed_bytes(doc: &Value) -> usize {
-    let repeated: std::collections::HashSet<usize> =
-        repeated_constraints(doc).into_iter().map(|(i, _)| i).collect();
+    let repeated: std::collections::HashSet<usize> = repeated_constraints(doc)
+        .into_iter()
+        .map(|(i, _)| i)
+        .collect();
     let node_keys = r#"{"id":"","label":"","parent":"","depth":,"weight":,"virtual":false,"site":[],"power_weight":,"polygon":[]},"#.len() + "\n".len();
     let number = "-1234567.1234".len();
     let mut total = 200; // format, canvas, metrics, brackets
@@ -67,7 +69,12 @@ fn needed_bytes(doc: &Value) -> usize {
         r#"{"a":"","b":"","similarity":0.1234,"strength":1,"realized":false,"also_above":10},"#
             .len()
             + 1;
-    for (i, c) in doc["constraints"].as_array().expect("constraints").iter().enumerate() {
+    for (i, c) in doc["constraints"]
+        .as_array()
+        .expect("constraints")
+        .iter()
+        .enumerate()
+    {
         if repeated.contains(&i) {
             continue;
         }
@@ -104,11 +111,22 @@ fn repeated_constraints(doc: &Value) -> Vec<(usize, String)> {
     };
     let listed: std::collections::HashMap<(String, String), &Value> = cons
         .iter()
-        .map(|c| (key(c["a"].as_str().unwrap(), c["b"].as_str().unwrap()), c))
+        .map(|c| {
+            (
+                key(
+                    c["a"].as_str().expect("layout json shape"),
+                    c["b"].as_str().expect("layout json shape"),
+                ),
+                c,
+            )
+        })
         .collect();
     let mut out = Vec::new();
     for (i, c) in cons.iter().enumerate() {
-        let (a, b) = (c["a"].as_str().unwrap(), c["b"].as_str().unwrap());
+        let (a, b) = (
+            c["a"].as_str().expect("layout json shape"),
+            c["b"].as_str().expect("layout json shape"),
+        );
         if let (Some(ca), Some(cb)) = (only(a), only(b)) {
             if let Some(down) = listed.get(&key(ca, cb)) {
                 let same = ["similarity", "strength", "realized"]
@@ -138,7 +156,7 @@ fn the_layout_json_is_as_light_as_the_contract_needs_and_checker_clean() {
     let doc = read(&out);
     let virtuals = doc["nodes"]
         .as_array()
-        .unwrap()
+        .expect("layout json shape")
         .iter()
         .filter(|n| n["virtual"] == true)
         .count();
@@ -155,7 +173,7 @@ fn the_layout_json_is_as_light_as_the_contract_needs_and_checker_clean() {
     assert!(
         doc["constraints"]
             .as_array()
-            .unwrap()
+            .expect("layout json shape")
             .iter()
             .any(|c| c["also_above"].as_u64().is_some_and(|k| k >= 1)),
         "the leaf constraints say which levels above repeat them"
@@ -177,8 +195,8 @@ fn a_warm_start_from_the_rounded_file_gives_the_same_picture() {
     support::check_layout(&warm);
     let (a, b) = (read(&first), read(&warm));
     let (na, nb) = (
-        a["nodes"].as_array().unwrap(),
-        b["nodes"].as_array().unwrap(),
+        a["nodes"].as_array().expect("layout json shape"),
+        b["nodes"].as_array().expect("layout json shape"),
     );
     assert_eq!(na.len(), nb.len());
     // Same data, same previous layout: every cell as the file had it, within
@@ -186,13 +204,15 @@ fn a_warm_start_from_the_rounded_file_gives_the_same_picture() {
     for (x, y) in na.iter().zip(nb) {
         assert_eq!(x["id"], y["id"]);
         let (px, py) = (
-            x["polygon"].as_array().unwrap(),
-            y["polygon"].as_array().unwrap(),
+            x["polygon"].as_array().expect("layout json shape"),
+            y["polygon"].as_array().expect("layout json shape"),
         );
         assert_eq!(px.len(), py.len(), "{}", x["id"]);
         for (p, q) in px.iter().zip(py) {
             for k in 0..2 {
-                let d = (p[k].as_f64().unwrap() - q[k].as_f64().unwrap()).abs();
+                let d = (p[k].as_f64().expect("layout json shape")
+                    - q[k].as_f64().expect("layout json shape"))
+                .abs();
                 assert!(d <= 1e-4, "{}: {p} against {q}", x["id"]);
             }
         }
