@@ -20,7 +20,6 @@ use serde::Serialize;
 
 use crate::layout::Computed;
 use crate::measure;
-use crate::neighborhood::Constraint;
 
 /// One neighbourhood constraint as written to the `constraints` array.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -62,7 +61,12 @@ impl JsonExtras {
     pub fn of(computed: &Computed) -> JsonExtras {
         let ds = &computed.dataset;
         let q = measure::quality(ds, &computed.layout);
-        let above = repeats_above(ds, &computed.constraints, &computed.realized);
+        let links: Vec<Link> = computed
+            .constraints
+            .iter()
+            .map(|c| (c.a, c.b, c.similarity, c.strength))
+            .collect();
+        let above = repeats_above(ds, &links, &computed.realized);
         JsonExtras {
             constraints: computed
                 .constraints
@@ -96,25 +100,24 @@ impl JsonExtras {
     }
 }
 
+/// A constraint as the fold compares it: nodes `a` and `b`, similarity and
+/// strength (a tuple, so this format does not depend on the constraint
+/// pipeline's types).
+type Link = (usize, usize, f64, u8);
+
 /// Per constraint: `None` when it repeats the one between the only children
 /// of its two nodes (it is then left out), else how many levels above it
 /// repeat it. Walks each run once, upward from its lowest constraint.
-fn repeats_above(
-    ds: &Dataset,
-    constraints: &[Constraint],
-    realized: &[bool],
-) -> Vec<Option<usize>> {
+fn repeats_above(ds: &Dataset, constraints: &[Link], realized: &[bool]) -> Vec<Option<usize>> {
     let key = |a: usize, b: usize| (a.min(b), a.max(b));
     let index: HashMap<(usize, usize), usize> = constraints
         .iter()
         .enumerate()
-        .map(|(i, c)| (key(c.a, c.b), i))
+        .map(|(i, c)| (key(c.0, c.1), i))
         .collect();
     let same = |i: usize, j: usize| {
         let (x, y) = (&constraints[i], &constraints[j]);
-        x.similarity.to_bits() == y.similarity.to_bits()
-            && x.strength == y.strength
-            && realized.get(i) == realized.get(j)
+        x.2.to_bits() == y.2.to_bits() && x.3 == y.3 && realized.get(i) == realized.get(j)
     };
     // The constraint between the parents of `i`'s nodes when each is their
     // parent's only child and it carries the same values: `i` one level up.
@@ -124,7 +127,7 @@ fn repeats_above(
             let p = ds.node(n).parent?;
             (ds.node(p).children.len() == 1).then_some(p)
         };
-        let j = *index.get(&key(only_child_of(c.a)?, only_child_of(c.b)?))?;
+        let j = *index.get(&key(only_child_of(c.0)?, only_child_of(c.1)?))?;
         same(i, j).then_some(j)
     };
     let mut out = vec![Some(0); constraints.len()];
