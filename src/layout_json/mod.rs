@@ -6,6 +6,9 @@
 
 /// What a document carries beyond the geometry: constraints and metrics.
 pub mod extras;
+/// How precisely each cell is spelled: a grid from the canvas, refined where
+/// the checker's rules need it.
+mod precision;
 /// The reader: a document back into a previous layout, naming the bad field.
 pub mod read;
 /// The writer: a finished layout into a document, deterministic bytes.
@@ -21,7 +24,8 @@ pub use write::layout_json;
 pub const FORMAT: &str = "nptreemap-layout/1";
 
 /// The document of a finished computation, as the `.json` output: its
-/// constraints and quality figures, coordinates rounded to six places.
+/// constraints and quality figures, coordinates rounded to a grid chosen from
+/// the canvas (four places on 1000 × 1000) and finer where a cell needs it.
 pub fn document(computed: &Computed) -> String {
     layout_json(
         &computed.dataset,
@@ -31,7 +35,8 @@ pub fn document(computed: &Computed) -> String {
 }
 
 /// The document kept beside the outputs for the next warm start: the same as
-/// [`document`] but in full precision, so the cells come back bit for bit.
+/// [`document`] but in full precision, so the cells come back bit for bit
+/// (a rebuild that reuses every diagram then writes the same bytes).
 pub fn state(computed: &Computed) -> String {
     let mut extras = JsonExtras::of(computed);
     extras.exact = true;

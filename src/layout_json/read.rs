@@ -34,8 +34,10 @@ pub enum ReadError {
 /// Reads layout JSON (`nptreemap-layout/1`) text, as written by
 /// [`super::write`]. Each node needs `id`, `parent`, `weight`, `site` and
 /// `polygon`; `power_weight` is used when present (files from before it
-/// existed still warm-start, in more steps). `constraints` is optional; only
-/// its `a`, `b` and `realized` are read.
+/// existed still warm-start, in more steps; an only child needs none).
+/// `constraints` is optional; only its `a`, `b`, `realized` and
+/// `also_above` are read: a realised constraint with `also_above: k` gives
+/// its pair and the pairs of the two nodes' ancestors k levels up.
 ///
 /// A layout made for another canvas or outline reads fine; it is then not
 /// used, and the layout starts cold ([`Previous::fits`]). Values no layout of
@@ -73,7 +75,7 @@ pub fn previous(text: &str) -> Result<Previous, ReadError> {
     }
     let realized = match top.get("constraints") {
         None | Some(Value::Null) => Vec::new(),
-        Some(v) => realized_pairs(v)?,
+        Some(v) => realized_pairs(v, &nodes)?,
     };
     Ok(Previous::new(canvas, nodes, realized))
 }
@@ -187,8 +189,13 @@ fn check_tree(nodes: &[PreviousNode]) -> Result<(), ReadError> {
     Ok(())
 }
 
-/// The `(a, b)` id pairs of the constraints marked realised.
-fn realized_pairs(v: &Value) -> Result<Vec<(String, String)>, ReadError> {
+/// The `(a, b)` id pairs of the constraints marked realised, with those
+/// their `also_above` repeats on the levels above.
+fn realized_pairs(v: &Value, nodes: &[PreviousNode]) -> Result<Vec<(String, String)>, ReadError> {
+    let parent: std::collections::HashMap<&str, Option<&str>> = nodes
+        .iter()
+        .map(|n| (n.id.as_str(), n.parent.as_deref()))
+        .collect();
     let mut out = Vec::new();
     for (i, c) in array(v, "constraints")?.iter().enumerate() {
         let at = format!("constraints[{i}]");
@@ -203,8 +210,38 @@ fn realized_pairs(v: &Value) -> Result<Vec<(String, String)>, ReadError> {
         let realized = field(obj, "realized", &format!("{at}.realized"))?
             .as_bool()
             .ok_or_else(|| bad(format!("{at}.realized"), "expected true or false"))?;
-        if realized {
-            out.push((a, b));
+        let above = match obj.get("also_above") {
+            None | Some(Value::Null) => 0,
+            Some(k) => k
+                .as_u64()
+                .and_then(|k| usize::try_from(k).ok())
+                .filter(|&k| k < nodes.len())
+                .ok_or_else(|| {
+                    bad(
+                        format!("{at}.also_above"),
+                        "expected a count of levels (0 or more, below the node count)",
+                    )
+                })?,
+        };
+        if !realized {
+            continue;
+        }
+        // Bounded: each step climbs a level, at most `nodes.len()` of them.
+        let (mut x, mut y) = (a.clone(), b.clone());
+        out.push((a, b));
+        for _ in 0..above {
+            match (parent.get(x.as_str()), parent.get(y.as_str())) {
+                (Some(Some(px)), Some(Some(py))) => {
+                    (x, y) = (px.to_string(), py.to_string());
+                    out.push((x.clone(), y.clone()));
+                }
+                _ => {
+                    return Err(bad(
+                        format!("{at}.also_above"),
+                        format!("reaches above the root from {x:?} or {y:?}"),
+                    ))
+                }
+            }
         }
     }
     Ok(out)
@@ -250,9 +287,17 @@ mod tests {
         let a1 = prev.get("A1").expect("A1");
         assert_eq!(a1.parent.as_deref(), Some("A"));
         let i = ds.find("A1").expect("A1");
-        // Power weights are written in full precision, sites to 6 places.
-        assert_eq!(a1.power_weight, Some(c.layout.cells[i].power_weight));
-        assert!(a1.site.distance(c.layout.cells[i].site) < 1e-6);
+        // Power weights and sites on the canvas's grid (1e-4 on 1000 × 1000),
+        // and bit for bit from the stored state.
+        let exact = c.layout.cells[i].power_weight;
+        assert!((a1.power_weight.expect("written") - exact).abs() <= 0.5e-4);
+        assert!(a1.site.distance(c.layout.cells[i].site) <= 0.71e-4);
+        let stored = previous(&super::super::state(&c)).expect("reads");
+        assert_eq!(stored.get("A1").and_then(|n| n.power_weight), Some(exact));
+        assert_eq!(
+            stored.get("A1").map(|n| n.site),
+            Some(c.layout.cells[i].site)
+        );
         prev.fits(&ds, &Params::default())
             .expect("fits its own dataset");
     }
@@ -274,9 +319,9 @@ mod tests {
         };
         error_names(&edit("nptreemap-layout/1", "other/2"), "format");
         error_names(&edit("\"format\": \"nptreemap-layout/1\",", ""), "format");
-        error_names(&edit("\"width\":1000.0", "\"width\":-1"), "canvas.width");
+        error_names(&edit("\"width\":1000", "\"width\":-1"), "canvas.width");
         error_names(
-            &edit("\"height\":1000.0", "\"height\":\"tall\""),
+            &edit("\"height\":1000", "\"height\":\"tall\""),
             "canvas.height",
         );
         error_names(&edit("\"id\":\"A\"", "\"id\":7"), "nodes[1].id");
@@ -291,18 +336,15 @@ mod tests {
         );
         error_names(&edit("\"site\":[", "\"site\":[1,"), "nodes[0].site");
         error_names(
-            &edit("\"power_weight\":0.0", "\"power_weight\":\"x\""),
+            &edit("\"power_weight\":0,", "\"power_weight\":\"x\","),
             "nodes[0].power_weight",
         );
         error_names(
-            &edit("\"polygon\":[[0.0,0.0],", "\"polygon\":[[0.0],"),
+            &edit("\"polygon\":[[0,0],", "\"polygon\":[[0],"),
             "nodes[0].polygon[0]",
         );
         error_names(
-            &edit(
-                "\"polygon\":[[0.0,0.0],",
-                "\"polygon\":[[0.0,0.0],[5,5],[2,2],",
-            ),
+            &edit("\"polygon\":[[0,0],", "\"polygon\":[[0,0],[5,5],[2,2],"),
             "nodes[0].polygon",
         );
         error_names(&edit("\"nodes\": [", "\"nodes\": 3, \"x\": ["), "nodes");
@@ -373,5 +415,43 @@ mod tests {
         // diagonals (the prototype's reach 2.3), sites on the border.
         previous(&with(3, "power_weight", serde_json::json!(-5e6))).expect("reads");
         previous(&with(2, "site", serde_json::json!([0.0, 1000.0]))).expect("reads");
+    }
+
+    /// `also_above: k` stands for the same realised pair between the two
+    /// nodes' ancestors on the k levels above; a count that climbs past the
+    /// root is an error naming the field.
+    #[test]
+    fn also_above_gives_back_the_pairs_of_the_levels_above() {
+        let doc = |above: u64| {
+            let node = |id: &str, parent: Value, x: f64| {
+                serde_json::json!({"id": id, "parent": parent, "weight": 1, "site": [x + 2.5, 5],
+                    "polygon": [[x, 0], [x + 5.0, 0], [x + 5.0, 10], [x, 10]]})
+            };
+            serde_json::json!({
+                "format": FORMAT,
+                "canvas": {"width": 10, "height": 10},
+                "nodes": [
+                    {"id": "r", "parent": null, "weight": 2, "site": [5, 5],
+                     "polygon": [[0, 0], [10, 0], [10, 10], [0, 10]]},
+                    node("a", "r".into(), 0.0), node("b", "r".into(), 5.0),
+                    node("a2", "a".into(), 0.0), node("b2", "b".into(), 5.0),
+                ],
+                "constraints": [{"a": "a2", "b": "b2", "similarity": 0.5, "strength": 2,
+                                 "realized": true, "also_above": above}],
+            })
+            .to_string()
+        };
+        let pairs = |p: Previous| p.realized().to_vec();
+        let pair = |a: &str, b: &str| (a.to_string(), b.to_string());
+        assert_eq!(pairs(previous(&doc(0)).unwrap()), [pair("a2", "b2")]);
+        assert_eq!(
+            pairs(previous(&doc(1)).unwrap()),
+            [pair("a2", "b2"), pair("a", "b")]
+        );
+        error_names(&doc(3), "constraints[0].also_above");
+        error_names(
+            &doc(1).replace("\"also_above\":1", "\"also_above\":-1"),
+            "constraints[0].also_above",
+        );
     }
 }

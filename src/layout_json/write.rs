@@ -11,49 +11,67 @@ use nptreemap_formats::Dataset;
 use serde::{Serialize, Serializer};
 
 use super::extras::JsonExtras;
+use super::precision::{self, Spelled};
 use super::FORMAT;
 use crate::geom::Point;
 use crate::layout::Layout;
 
-/// Decimal places kept in coordinates. Rounding gives stable diffs (round-off
-/// noise in the last bits does not show up as a change) and smaller files; 1e-6
-/// canvas units is far below the checker's containment and shared-edge tolerances.
-const COORD_DECIMALS: i32 = 6;
+/// Decimals of a constraint's `similarity`: the bins it fell into were
+/// chosen from the exact value; a reader sees which pairs are alike and how
+/// much, for which four places (0.8333) are plenty.
+const SIMILARITY_DECIMALS: i32 = 4;
 
 /// Writes the layout JSON document for `layout`, whose cells are indexed like
 /// `dataset`'s nodes. Ends with a newline. Identical input gives identical bytes.
+///
+/// Coordinates (and power weights) are rounded to a grid chosen from the
+/// canvas, finer for the cells that need it ([`precision`]), or written in
+/// full precision when `extra.exact`. An only child's `power_weight` is left
+/// out: its cell is its parent's whatever the weight (always 0).
 pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> String {
     debug_assert_eq!(dataset.len(), layout.cells.len(), "one cell per node");
+    let spelled = if extra.exact {
+        precision::exact(layout)
+    } else {
+        let pairs: Vec<(usize, usize, bool)> = extra
+            .constraints
+            .iter()
+            .filter_map(|c| Some((dataset.find(&c.a)?, dataset.find(&c.b)?, c.realized)))
+            .collect();
+        precision::choose(dataset, layout, &pairs)
+    };
     let mut out = String::with_capacity(256 + 200 * layout.cells.len());
     out.push_str("{\n");
     out.push_str(&format!("  \"format\": {},\n", to_json(&FORMAT)));
-    let exact = extra.exact;
     let canvas = CanvasOut {
-        width: Coord(layout.canvas.width, exact),
-        height: Coord(layout.canvas.height, exact),
+        width: Num(layout.canvas.width),
+        height: Num(layout.canvas.height),
     };
     out.push_str(&format!("  \"canvas\": {},\n", to_json(&canvas)));
 
-    let nodes = dataset
-        .nodes()
-        .iter()
-        .zip(&layout.cells)
-        .map(|(node, cell)| NodeOut {
-            id: &node.id,
-            label: &node.label,
-            parent: node.parent.map(|p| dataset.node(p).id.as_str()),
-            depth: node.depth,
-            weight: Num(node.value),
-            is_virtual: node.is_virtual,
-            site: point(cell.site, exact),
-            power_weight: Num(cell.power_weight),
-            polygon: cell
-                .polygon
-                .points()
-                .iter()
-                .map(|p| point(*p, exact))
-                .collect(),
-        });
+    let nodes =
+        dataset
+            .nodes()
+            .iter()
+            .zip(&layout.cells)
+            .zip(&spelled)
+            .map(|((node, cell), spelled)| {
+                let only_child = node
+                    .parent
+                    .is_some_and(|p| dataset.node(p).children.len() == 1);
+                NodeOut {
+                    id: &node.id,
+                    label: &node.label,
+                    parent: node.parent.map(|p| dataset.node(p).id.as_str()),
+                    depth: node.depth,
+                    weight: Num(node.value),
+                    is_virtual: node.is_virtual,
+                    site: point(spelled.site),
+                    power_weight: (!only_child)
+                        .then(|| Num(precision::round(cell.power_weight, spelled.places))),
+                    polygon: polygon(spelled),
+                }
+            });
     push_array(&mut out, "nodes", nodes);
     out.push(',');
     out.push('\n');
@@ -61,9 +79,10 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
     let constraints = extra.constraints.iter().map(|c| ConstraintRow {
         a: &c.a,
         b: &c.b,
-        similarity: Num(c.similarity),
+        similarity: Num(precision::round(c.similarity, Some(SIMILARITY_DECIMALS))),
         strength: c.strength,
         realized: c.realized,
+        also_above: (c.also_above > 0).then_some(c.also_above),
     });
     push_array(&mut out, "constraints", constraints);
 
@@ -86,11 +105,13 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
 }
 
 /// Appends `  "name": [` + one element per line + `  ]` (or `[]` when empty).
+/// Elements are not indented: one per line keeps diffs readable, and on a
+/// deep tree four spaces a line were 2% of the file.
 fn push_array<T: Serialize>(out: &mut String, name: &str, items: impl Iterator<Item = T>) {
     out.push_str(&format!("  \"{name}\": ["));
     let mut any = false;
     for item in items {
-        out.push_str(if any { ",\n    " } else { "\n    " });
+        out.push_str(if any { ",\n" } else { "\n" });
         out.push_str(&to_json(&item));
         any = true;
     }
@@ -101,18 +122,22 @@ fn push_array<T: Serialize>(out: &mut String, name: &str, items: impl Iterator<I
 fn to_json<T: Serialize + ?Sized>(value: &T) -> String {
     // serde_json fails only on maps with non-string keys or on a Serialize impl
     // that reports an error; the types here have neither, and non-finite floats
-    // are mapped to 0 by `Num`/`Coord` before serde_json sees them.
+    // are mapped to 0 by `Num` before serde_json sees them.
     serde_json::to_string(value).expect("plain structs of strings and numbers serialise")
 }
 
-fn point(p: Point, exact: bool) -> [Coord; 2] {
-    [Coord(p.x, exact), Coord(p.y, exact)]
+fn point(p: Point) -> [Num; 2] {
+    [Num(p.x), Num(p.y)]
+}
+
+fn polygon(spelled: &Spelled) -> Vec<[Num; 2]> {
+    spelled.polygon.iter().map(|p| point(*p)).collect()
 }
 
 #[derive(Serialize)]
 struct CanvasOut {
-    width: Coord,
-    height: Coord,
+    width: Num,
+    height: Num,
 }
 
 /// One entry of `nodes`, fields in the spec's order.
@@ -125,16 +150,17 @@ struct NodeOut<'a> {
     weight: Num,
     #[serde(rename = "virtual")]
     is_virtual: bool,
-    site: [Coord; 2],
+    site: [Num; 2],
     /// Not in the spec's list (it allows new fields): the site's power weight,
-    /// written in full precision so that this file alone can seed a warm start
-    /// (issue 6) that reproduces the cells.
-    power_weight: Num,
-    polygon: Vec<[Coord; 2]>,
+    /// so that this file alone can seed a warm start (issue 6) that reproduces
+    /// the cells; left out for an only child, whose cell needs none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    power_weight: Option<Num>,
+    polygon: Vec<[Num; 2]>,
 }
 
-/// One entry of `constraints`; a borrowed copy of [`ConstraintOut`] with the
-/// similarity guarded against non-finite values.
+/// One entry of `constraints`; a borrowed copy of [`super::ConstraintOut`]
+/// with the similarity guarded against non-finite values.
 #[derive(Serialize)]
 struct ConstraintRow<'a> {
     a: &'a str,
@@ -142,43 +168,29 @@ struct ConstraintRow<'a> {
     similarity: Num,
     strength: u8,
     realized: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    also_above: Option<usize>,
 }
 
-/// A coordinate: rounded to [`COORD_DECIMALS`] places when written, unless
-/// the second field asks for full precision.
-#[derive(Clone, Copy)]
-struct Coord(f64, bool);
-
-/// Any other number: written as is, except that non-finite values become 0.
+/// A number, written in the shortest form that reads back as the same
+/// double: a whole number without `.0` (`1000`, not `1000.0`), and
+/// non-finite values as 0.
 #[derive(Clone, Copy)]
 struct Num(f64);
 
-impl Serialize for Coord {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        if self.1 {
-            s.serialize_f64(finite(self.0) + 0.0)
-        } else {
-            s.serialize_f64(round_coord(self.0))
-        }
-    }
-}
+/// Largest magnitude written as an integer: every whole double up to it is
+/// exact as an i64 and reads back as the same double.
+const WHOLE_LIMIT: f64 = 9_007_199_254_740_992.0; // 2^53
 
 impl Serialize for Num {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_f64(finite(self.0))
+        let v = finite(self.0) + 0.0;
+        if v.fract() == 0.0 && v.abs() <= WHOLE_LIMIT {
+            s.serialize_i64(v as i64)
+        } else {
+            s.serialize_f64(v)
+        }
     }
-}
-
-/// `v` rounded to [`COORD_DECIMALS`] places, never `-0.0`, never non-finite.
-///
-/// Dividing the rounded integer by the power of ten gives the double nearest to
-/// the decimal, so serde_json's shortest round-trip output prints exactly that
-/// decimal (no `0.30000000000000004` tails).
-fn round_coord(v: f64) -> f64 {
-    let scale = 10f64.powi(COORD_DECIMALS);
-    // `+ 0.0` turns -0.0 into 0.0 (IEEE: -0 + +0 = +0), so a coordinate that
-    // rounds to zero from below is not written as "-0.0".
-    finite((v * scale).round() / scale) + 0.0
 }
 
 /// Non-finite numbers are a bug upstream (a finished layout is finite); JSON
@@ -220,15 +232,7 @@ mod tests {
         for (n, node) in nodes.iter().zip(dataset.nodes()) {
             let keys: Vec<&str> = n.as_object().unwrap().keys().map(String::as_str).collect();
             for k in [
-                "id",
-                "label",
-                "parent",
-                "depth",
-                "weight",
-                "virtual",
-                "site",
-                "power_weight",
-                "polygon",
+                "id", "label", "parent", "depth", "weight", "virtual", "site", "polygon",
             ] {
                 assert!(keys.contains(&k), "missing {k}");
             }
@@ -242,17 +246,14 @@ mod tests {
             assert!(poly.len() >= 3);
             assert!(poly
                 .iter()
-                .all(|p| p.as_array().unwrap().iter().all(Value::is_f64)));
+                .all(|p| p.as_array().unwrap().iter().all(Value::is_number)));
             match node.parent {
                 None => assert!(n["parent"].is_null()),
                 Some(p) => assert_eq!(n["parent"], dataset.node(p).id.as_str()),
             }
         }
         // The hand-written layout: one node per line.
-        let node_lines = text
-            .lines()
-            .filter(|l| l.starts_with("    {\"id\":"))
-            .count();
+        let node_lines = text.lines().filter(|l| l.starts_with("{\"id\":")).count();
         assert_eq!(node_lines, dataset.len());
     }
 
@@ -286,6 +287,7 @@ mod tests {
                 similarity: 0.83,
                 strength: 3,
                 realized: true,
+                also_above: 0,
             }],
             metrics: vec![("zeta".into(), 1.5), ("alpha".into(), f64::from(2u8))],
             exact: false,
@@ -304,34 +306,54 @@ mod tests {
     }
 
     #[test]
-    fn exact_coordinates_round_trip_bit_for_bit() {
+    fn numbers_are_written_short_and_read_back_the_same() {
         let v = 1.0 / 3.0 + 123.456;
-        let text = to_json(&Coord(v, true));
-        assert_eq!(text.parse::<f64>().ok(), Some(v));
-        assert_eq!(to_json(&Coord(-0.0, true)), "0.0");
+        assert_eq!(to_json(&Num(v)).parse::<f64>().ok(), Some(v));
+        assert_eq!(to_json(&Num(-0.0)), "0");
+        assert_eq!(to_json(&Num(1000.0)), "1000");
+        assert_eq!(to_json(&Num(1411778724.0)), "1411778724");
+        assert_eq!(to_json(&Num(-2.5)), "-2.5");
+        assert_eq!(to_json(&Num(1e300)).parse::<f64>().ok(), Some(1e300));
     }
 
     #[test]
-    fn coordinates_are_rounded_to_six_places() {
-        assert_eq!(round_coord(1.0 / 3.0), 0.333333);
-        assert_eq!(to_json(&Coord(1.0 / 3.0, false)), "0.333333");
-        assert_eq!(to_json(&Coord(0.1 + 0.2, false)), "0.3");
-        assert_eq!(to_json(&Coord(-1e-9, false)), "0.0");
-        assert_eq!(to_json(&Coord(-0.0, false)), "0.0");
-        assert_eq!(to_json(&Coord(-2.5000004, false)), "-2.5");
-        assert_eq!(to_json(&Num(1411778724.0)), "1411778724.0");
-
-        let (dataset, layout) = sample();
+    fn coordinates_are_rounded_to_the_canvas_grid() {
+        // 1000 × 1000: a tenth of 1e-6 of the diagonal (1414) is 1.4e-4: four places.
+        let mut b = nptreemap_formats::DatasetBuilder::new();
+        b.add(nptreemap_formats::NodeSpec::new("root"));
+        for k in 0..7 {
+            b.add(
+                nptreemap_formats::NodeSpec::new(format!("n{k}"))
+                    .parent("root")
+                    .weight(1.0 + k as f64),
+            );
+        }
+        let dataset = b.build().unwrap();
+        let computed =
+            crate::layout::compute(&dataset, &crate::layout::Request::default()).unwrap();
+        let layout = computed.layout;
         let text = layout_json(&dataset, &layout, &JsonExtras::default());
         let v: Value = serde_json::from_str(&text).unwrap();
+        let mut most = 0;
         for n in v["nodes"].as_array().unwrap() {
             for p in n["polygon"].as_array().unwrap().iter().chain([&n["site"]]) {
                 for x in p.as_array().unwrap() {
                     let s = x.to_string();
                     let decimals = s.split_once('.').map_or(0, |(_, f)| f.len());
-                    assert!(decimals <= 6, "{s}");
+                    most = most.max(decimals);
+                    assert!(decimals <= 4, "{s}");
                 }
             }
+        }
+        assert_eq!(most, 4, "some coordinate uses the whole grid");
+        let exact = JsonExtras {
+            exact: true,
+            ..JsonExtras::default()
+        };
+        let text = layout_json(&dataset, &layout, &exact);
+        let v: Value = serde_json::from_str(&text).unwrap();
+        for (n, cell) in v["nodes"].as_array().unwrap().iter().zip(&layout.cells) {
+            assert_eq!(n["site"][0].as_f64(), Some(cell.site.x), "full precision");
         }
     }
 

@@ -6,8 +6,12 @@
 //!   in full precision with the fingerprint of the layout settings it was
 //!   made with, the next build's warm start. Deterministic bytes (no time,
 //!   no absolute path); meant to be committed with the outputs, so that a
-//!   fresh clone lays an edited dataset out warm from the same layout. About
-//!   as large as the layout JSON output (5 KB per leaf of a deep tree).
+//!   fresh clone lays an edited dataset out warm from the same layout. A bit
+//!   larger than the layout JSON output, whose coordinates are rounded: 3.5 KB
+//!   per leaf on a 6,000-leaf tree 10 levels deep (BENCHMARKS.md, "Output
+//!   sizes"), 0.7–1.1 KB on two or three levels. Its cells stay in full
+//!   precision: a rebuild that reuses every diagram copies them, and must
+//!   write the bytes a cold build wrote.
 //! - `<name>.manifest.json`, the manifest ([`manifest`]): fingerprints of the
 //!   inputs and layout settings the stored layout was made from and of every
 //!   output's bytes and render settings. A build or `build --check` whose

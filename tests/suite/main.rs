@@ -20,6 +20,7 @@ mod incremental;
 mod init;
 mod labels;
 mod legibility;
+mod light_outputs;
 mod neighborhood;
 mod packaging;
 mod paper_data;
