@@ -4,11 +4,13 @@
 Walks a folder (default /usr/include) and writes hierarchy JSON: one leaf per
 header file (`*.h`, `*.hpp`, `*.hh`), nested in its folders, weighted by its
 size in bytes, with the Jaccard similarity of the names it `#include`s (each
-leaf carries the one-hot vector of those names over all distinct names; the
-root declares `similarityMeasure: jaccard` and `weightAttribute: size`).
+leaf carries the set of those names as a list of strings; the root declares
+`similarityMeasure: jaccard` and `weightAttribute: size`). `--one-hot` writes
+the older form instead: each leaf's one-hot vector over all distinct names
+(the same dataset once read, issue 23, but a file of leaves x names numbers).
 Folders with a single child folder are kept, so the depth is the tree's own.
 
-    python3 benches/c_headers.py OUT.json [--root /usr/include] [--leaves N]
+    python3 benches/c_headers.py OUT.json [--root /usr/include] [--leaves N] [--one-hot]
 
 `--leaves N` keeps N headers spread evenly over the sorted list (the same
 folders, fewer files). Prints the leaf count, depth and distinct names on
@@ -44,6 +46,11 @@ def main():
     ap.add_argument("out")
     ap.add_argument("--root", default="/usr/include")
     ap.add_argument("--leaves", type=int, default=0, help="keep this many headers (0: all)")
+    ap.add_argument(
+        "--one-hot",
+        action="store_true",
+        help="write one-hot vectors over all names instead of lists of names",
+    )
     args = ap.parse_args()
 
     files = headers(args.root)
@@ -81,10 +88,13 @@ def main():
 
     depth = 0
     for rel in files:
-        vector = [0] * len(names)
-        for n in includes[rel]:
-            vector[index[n]] = 1
-        leaf = {"id": rel, "name": os.path.basename(rel), "size": sizes[rel], "embeddings": vector}
+        if args.one_hot:
+            features = [0] * len(names)
+            for n in includes[rel]:
+                features[index[n]] = 1
+        else:
+            features = includes[rel]
+        leaf = {"id": rel, "name": os.path.basename(rel), "size": sizes[rel], "embeddings": features}
         folder(os.path.dirname(rel))["children"].append(leaf)
         depth = max(depth, rel.count("/") + 1)
     with open(args.out, "w") as f:

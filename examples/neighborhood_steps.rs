@@ -165,20 +165,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // every node has a vector of one length, else MDS of 1 − similarity.
     let t = Instant::now();
     let nodes = prepared.nodes();
-    let dim = nodes[0].features.as_ref().map_or(0, Vec::len);
-    let uniform = dim > 0
-        && nodes
-            .iter()
-            .all(|n| n.features.as_ref().is_some_and(|f| f.len() == dim));
-    let (points, path) = if uniform {
-        let vectors: Vec<Vec<f64>> = nodes
-            .iter()
-            .map(|n| n.features.clone().unwrap_or_default())
-            .collect();
-        (projection::pca_2d(&vectors), "pca")
-    } else {
-        let sim = |a, b| 1.0 - similarity::similarity(kind, &prepared, a, b);
-        (projection::classical_mds_2d(sim, nodes.len()), "mds")
+    let features: Vec<_> = nodes.iter().map(|n| n.features.as_ref()).collect();
+    let (points, path) = match projection::pca_of_features(&features) {
+        Some(points) => (points, "pca"),
+        None => {
+            let sim = |a, b| 1.0 - similarity::similarity(kind, &prepared, a, b);
+            (projection::classical_mds_2d(sim, nodes.len()), "mds")
+        }
     };
     println!(
         "projection:  {:9.1} ms  peak {:6.0} MB  ({path}, {} points)",

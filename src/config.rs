@@ -651,6 +651,7 @@ struct LimitsSection {
     max_nodes: usize,
     max_depth: usize,
     max_dimensions: usize,
+    max_set_members: usize,
     max_file_mb: u64,
     max_adapter_mb: Option<u64>,
 }
@@ -662,6 +663,7 @@ impl Default for LimitsSection {
             max_nodes: l.max_nodes,
             max_depth: l.max_depth,
             max_dimensions: l.max_dimensions,
+            max_set_members: l.max_set_members,
             max_file_mb: l.max_file_mb,
             max_adapter_mb: None,
         }
@@ -675,6 +677,7 @@ impl LimitsSection {
             max_nodes: self.max_nodes,
             max_depth: self.max_depth,
             max_dimensions: self.max_dimensions,
+            max_set_members: self.max_set_members,
             max_file_mb: self.max_file_mb,
         }
     }

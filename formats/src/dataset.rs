@@ -6,6 +6,7 @@
 use std::collections::HashMap;
 
 use crate::color::Rgb;
+use crate::features::Features;
 use crate::limits::{Limit, LimitError, Limits};
 use crate::warning::{Warning, Warnings};
 
@@ -48,8 +49,9 @@ pub struct Node {
     pub value: f64,
     /// Colour, parsed by the reader from `#rgb` or `#rrggbb`.
     pub color: Option<Rgb>,
-    /// Similarity feature vector; every value is finite.
-    pub features: Option<Vec<f64>>,
+    /// What similarity is measured on: a dense vector or a sparse one (a set);
+    /// every value is finite. Shared: cloning a node clones a pointer.
+    pub features: Option<Features>,
     /// Related nodes (for example countries sharing a border): sorted, without
     /// duplicates and without the node itself.
     pub relations: Vec<usize>,
@@ -66,7 +68,8 @@ pub struct Node {
 pub enum SimilarityHint {
     /// Cosine similarity of the feature vectors, rescaled to [0, 1].
     Cosine,
-    /// Jaccard index of the feature vectors' non-zero supports.
+    /// Jaccard index of the feature vectors' non-zero supports (of two sets:
+    /// shared members over all members of the pair).
     Jaccard,
     /// 1 when two feature vectors are identical, else 0.
     Binary,
@@ -301,8 +304,8 @@ pub struct NodeSpec {
     pub weight: Option<f64>,
     /// Colour.
     pub color: Option<Rgb>,
-    /// Similarity feature vector.
-    pub features: Option<Vec<f64>>,
+    /// What similarity is measured on (a dense vector, or a set).
+    pub features: Option<Features>,
     /// Ids of related nodes; a relation to the node itself is dropped.
     pub relations: Vec<String>,
     /// Further (name, text) pairs the node carries unchanged ([`Node::fields`]).
@@ -342,9 +345,10 @@ impl NodeSpec {
         self
     }
 
-    /// Sets the feature vector.
-    pub fn features(mut self, features: Vec<f64>) -> Self {
-        self.features = Some(features);
+    /// Sets the features: a dense vector (`Vec<f64>`) or a
+    /// [`crate::SparseVector`] (a set).
+    pub fn features(mut self, features: impl Into<Features>) -> Self {
+        self.features = Some(features.into());
         self
     }
 
@@ -612,18 +616,24 @@ fn check_values(spec: &NodeSpec) -> Result<(), ModelError> {
         }
     }
     if let Some(features) = &spec.features {
-        if let Some((index, &value)) = features.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        // Non-finite values first, then magnitudes: the same input always
+        // reports the same error.
+        let entries = || -> Box<dyn Iterator<Item = (usize, f64)> + '_> {
+            match features {
+                Features::Dense(values) => Box::new(values.iter().copied().enumerate()),
+                Features::Sparse(sparse) => {
+                    Box::new(sparse.entries().map(|(k, v)| (k as usize, v)))
+                }
+            }
+        };
+        if let Some((index, value)) = entries().find(|(_, v)| !v.is_finite()) {
             return Err(ModelError::InvalidFeature {
                 id: spec.id.clone(),
                 index,
                 value,
             });
         }
-        if let Some((index, &value)) = features
-            .iter()
-            .enumerate()
-            .find(|(_, v)| v.abs() > FEATURE_BOUND)
-        {
+        if let Some((index, value)) = entries().find(|(_, v)| v.abs() > FEATURE_BOUND) {
             return Err(ModelError::FeatureTooLarge {
                 id: spec.id.clone(),
                 index,
@@ -750,7 +760,10 @@ mod tests {
         // Sorted, deduplicated, self dropped.
         assert_eq!(x.relations, vec![2, 3]);
         assert_eq!(dataset.node(2).color, Some(Rgb::new(0xaa, 0xbb, 0xcc)));
-        assert_eq!(dataset.node(3).features, Some(vec![1.0, 0.5]));
+        assert_eq!(
+            dataset.node(3).features.as_ref().map(Features::to_dense),
+            Some(vec![1.0, 0.5])
+        );
         assert!(dataset.nodes().iter().all(|n| !n.is_virtual));
         assert_eq!(dataset.similarity_hint(), None);
     }

@@ -227,7 +227,7 @@ fn add_vectors(
         if vector.iter().all(|&v| v == 0.0) {
             return Err(zero_vector(Some(row.line), &format!("node {id:?}")));
         }
-        tree.specs[index].features = Some(vector);
+        tree.specs[index].features = Some(vector.into());
     }
     Ok(())
 }
@@ -367,7 +367,7 @@ fn add_matrix(
         if row.iter().all(|&v| v == 0.0) {
             return Err(zero_vector(None, &what()));
         }
-        tree.specs[index].features = Some(row);
+        tree.specs[index].features = Some(row.into());
     }
     Ok(())
 }

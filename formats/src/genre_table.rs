@@ -1,5 +1,5 @@
 //! The genre-table format: one node table (see [`crate::node_table`]) whose rows also list
-//! genres, turned into 0/1 feature vectors compared by Jaccard similarity. Owns the
+//! genres, kept as sets of genres ([`SparseVector::set`]) compared by Jaccard similarity. Owns the
 //! two ways of writing genres (a multi-valued column or one-hot columns) and their
 //! encoding.
 //!
@@ -16,12 +16,15 @@
 //!   or empty (has not), ASCII case-insensitive; anything else is an error.
 //!
 //! Naming both a genres column and one-hot columns is an error. At least one row
-//! must have a genre. Every row's node gets a feature vector over the genres that
-//! some row has, sorted by name (byte order, so the result depends on neither column
-//! nor row order): 1 when the row has the genre, else 0. A one-hot column no row
-//! uses adds no dimension, so the same data written either way gives the same
-//! dataset. A row without genres gets an all-zero vector, whose Jaccard similarity
-//! to anything is 0.
+//! must have a genre. Every row's node gets the set of its genres, numbered over the
+//! genres that some row has, sorted by name (byte order, so the result depends on
+//! neither column nor row order): as a vector, 1 when the row has the genre, else 0,
+//! but stored as the genres' numbers only, so a table of 100,000 distinct genres
+//! costs what its rows list. A one-hot column no row uses adds no member, so the same
+//! data written either way gives the same dataset. A row without genres gets the
+//! empty set, whose Jaccard similarity to anything is 0. The distinct genres are
+//! bounded by [`Limits::max_set_members`] (not `max_dimensions`, which caps dense
+//! vectors).
 //!
 //! The dataset's similarity hint is [`SimilarityHint::Jaccard`] (shared genres over
 //! all genres of the pair). The paper's IMDB example instead uses `binary` (1 only
@@ -32,6 +35,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use crate::dataset::ModelError;
 use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
+use crate::features::SparseVector;
 use crate::format::{Format, FormatOptions, InputError, Inputs, Role};
 use crate::limits::Limits;
 use crate::node_table::{read_node_table, tree_from_table, TableTree};
@@ -177,8 +181,8 @@ fn read_one_hot(
     Ok(genres)
 }
 
-/// Encodes every row's genres as a 0/1 vector over all genres, sorted, and sets it on
-/// the row's node (`row_specs[k]` is the spec of row `k`).
+/// Sets every row's genres, numbered over all genres sorted by name, on the row's
+/// node (`row_specs[k]` is the spec of row `k`).
 fn set_features(
     tree: &mut TableTree,
     row_specs: &[usize],
@@ -194,24 +198,37 @@ fn set_features(
             message: "no row has a genre, so there is nothing to compare".to_owned(),
         });
     }
-    // Every row gets a vector over all genres: bound them before allocating
-    // rows × genres values (a column of unique genres would be quadratic).
+    let too_many = |e| FormatError::Model {
+        line: Some(table.header_line),
+        column: None,
+        source: ModelError::TooLarge(e),
+    };
     limits
-        .check_dimensions(all.len(), "the genres")
-        .map_err(|e| FormatError::Model {
+        .check_set_members(all.len(), "genres")
+        .map_err(too_many)?;
+    // Within the limit, which fits a u32 (a larger limit fails here instead).
+    let len = u32::try_from(all.len()).map_err(|_| {
+        too_many(limits.exceeded(
+            crate::limits::Limit::SetMembers,
+            format_args!("{} distinct genres", all.len()),
+        ))
+    })?;
+    let position: BTreeMap<&str, u32> = all
+        .iter()
+        .enumerate()
+        .map(|(i, &g)| (g, i as u32))
+        .collect();
+    for (&spec, set) in row_specs.iter().zip(genres) {
+        let members = set
+            .iter()
+            .filter_map(|genre| position.get(genre.as_str()).copied());
+        // Every member is a position in `all`, below `len`.
+        let features = SparseVector::set(len, members).ok_or_else(|| FormatError::Structure {
             line: Some(table.header_line),
             column: None,
-            source: ModelError::TooLarge(e),
+            message: "internal error: a genre outside the genres found".to_owned(),
         })?;
-    let position: BTreeMap<&str, usize> = all.iter().enumerate().map(|(i, &g)| (g, i)).collect();
-    for (&spec, set) in row_specs.iter().zip(genres) {
-        let mut vector = vec![0.0; all.len()];
-        for genre in set {
-            if let Some(&index) = position.get(genre.as_str()) {
-                vector[index] = 1.0;
-            }
-        }
-        tree.specs[spec].features = Some(vector);
+        tree.specs[spec].features = Some(features.into());
     }
     Ok(())
 }

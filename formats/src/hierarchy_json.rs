@@ -16,8 +16,17 @@
 //!   1 (the prototype's quirk, method-reference §2.3). Every leaf must have the field;
 //!   an internal node that has it keeps it as its own weight (d3's `hierarchy.sum`
 //!   adds it too). With no weight field anywhere, every leaf weighs 1 (d3's `count`).
-//! - **features**: the field named by the root's `simAttribute` (default `embeddings`),
-//!   an array of numbers, possibly wrapped once as `[[..]]`.
+//! - **features**: the field named by the root's `simAttribute` (default `embeddings`):
+//!   an array of numbers (a vector), possibly wrapped once as `[[..]]`, or an array of
+//!   strings (a set: `["stdio.h", "string.h"]`, repeats counted once). Sets are
+//!   numbered over the distinct strings of the whole file, sorted by bytes, and kept
+//!   as those numbers ([`SparseVector::set`]): the same as 0/1 vectors over the sorted
+//!   names, without a row per name. A file uses one kind: numbers on one node and
+//!   strings on another is an error; an empty array is an empty set in a file of
+//!   sets. Under `similarityMeasure: jaccard`, vectors are sets too (only their
+//!   non-zero entries are kept, [`SparseVector::from_dense`], which loses nothing)
+//!   and their length counts against `limits.max_set_members` instead of
+//!   `max_dimensions`; so do the distinct strings of a file of sets.
 //! - **relations**: `neighbors`, an array of ids. Ids that name no node in the file are
 //!   dropped: the prototype's country file lists every real border (117 of the 153
 //!   entries in `country_pop_50M_AUS.json` name countries that are not in the dataset,
@@ -28,7 +37,7 @@
 //! [`SimilarityHint::NeighborList`]; else `similarityMeasure` (`cosine`, `jaccard`,
 //! `binary`); without either flag, neighbour lists that name nodes of the file give
 //! [`SimilarityHint::NeighborList`] (what an adapter printing them means); else
-//! cosine when any node has features. Neighbour lists left unused by a flag, or
+//! Jaccard for sets of strings and cosine for vectors. Neighbour lists left unused by a flag, or
 //! chosen over feature vectors, are a warning. Other fields are ignored, but
 //! for those asked for in [`HierarchyJsonOptions::carry`]: a string, number or
 //! boolean there becomes the node's [`crate::Node::fields`] entry (other values
@@ -44,7 +53,7 @@
 //! can stay a small skip-scanner; if it ever gets lost it returns no position rather
 //! than a wrong one.
 
-use std::collections::HashSet;
+use std::collections::{BTreeMap, BTreeSet, HashSet};
 
 use serde_json::{Map, Value};
 
@@ -53,6 +62,7 @@ use crate::dataset::{
     is_valid_weight, Dataset, DatasetBuilder, ModelError, NodeSpec, SimilarityHint,
 };
 use crate::error::FormatError;
+use crate::features::{Features, SparseVector};
 use crate::format::{Carry, Format, FormatOptions, InputError, Inputs, Role};
 use crate::json_path::{extend, line_column, locate, skip_whitespace, syntax_error, Step};
 use crate::limits::{Limit, Limits};
@@ -106,11 +116,18 @@ pub fn parse_hierarchy_json(
         flags: &flags,
         specs: Vec::new(),
         origins: Vec::new(),
+        features: Vec::new(),
         limits: options.limits,
         carry: &options.carry,
     };
     walk.visit(&root, None, 0)?;
-    let Walk { specs, origins, .. } = walk;
+    let Walk {
+        mut specs,
+        origins,
+        features,
+        ..
+    } = walk;
+    let sets = reader.set_features(&mut specs, features, &flags, &origins, &options.limits)?;
     // A property asked for that no node has is a misspelt name, not data.
     for carry in &options.carry {
         if !specs
@@ -143,7 +160,7 @@ pub fn parse_hierarchy_json(
 
     let listing = relations.iter().filter(|r| !r.is_empty()).count();
     let has_features = specs.iter().any(|spec| spec.features.is_some());
-    let (hint, note) = similarity_hint(&flags, listing, has_features);
+    let (hint, note) = similarity_hint(&flags, listing, has_features, sets);
 
     let node_ids: Vec<String> = specs.iter().map(|spec| spec.id.clone()).collect();
     let mut builder = DatasetBuilder::new();
@@ -178,6 +195,7 @@ fn similarity_hint(
     flags: &Flags,
     listing: usize,
     has_features: bool,
+    sets: bool,
 ) -> (Option<SimilarityHint>, Option<String>) {
     let measure = flags.measure.map(|(hint, _)| hint);
     match (flags.neighbor_lists, measure) {
@@ -192,7 +210,12 @@ fn similarity_hint(
             (Some(SimilarityHint::NeighborList), note)
         }
         (flag, _) => {
-            let hint = measure.or(has_features.then_some(SimilarityHint::Cosine));
+            let natural = if sets {
+                SimilarityHint::Jaccard
+            } else {
+                SimilarityHint::Cosine
+            };
+            let hint = measure.or(has_features.then_some(natural));
             let why = match (flag, flags.measure) {
                 (Some(false), _) => "\"useNeighborLeafs\" is false".to_owned(),
                 (_, Some((_, name))) => format!("\"similarityMeasure\" is {name:?}"),
@@ -249,6 +272,9 @@ struct Walk<'r, 't> {
     flags: &'r Flags,
     specs: Vec<NodeSpec>,
     origins: Vec<Origin>,
+    /// Parallel to `specs`: the feature array as read, turned into
+    /// [`Features`] once the whole file is known ([`Reader::set_features`]).
+    features: Vec<Option<RawFeatures>>,
     limits: Limits,
     carry: &'r [Carry],
 }
@@ -256,7 +282,128 @@ struct Walk<'r, 't> {
 /// The weight-field names tried on leaves when neither the options nor the file say.
 const WEIGHT_FIELD_GUESSES: [&str; 3] = ["value", "weight", "size"];
 
+/// A node's feature array as read, before the file's kind is known.
+#[derive(Debug)]
+enum RawFeatures {
+    /// Numbers: a vector (an empty array is this too).
+    Numbers(Vec<f64>),
+    /// Strings: the names of a set's members.
+    Names(Vec<String>),
+}
+
 impl Reader<'_> {
+    /// Turns every node's feature array into [`Features`] on its spec: sets
+    /// when the file lists strings (numbered over all its distinct strings,
+    /// sorted) or declares Jaccard, dense vectors otherwise. Returns whether
+    /// the file lists strings. A file mixing numbers and strings is an error
+    /// at the first node whose kind differs from the first node's.
+    fn set_features(
+        &self,
+        specs: &mut [NodeSpec],
+        raw: Vec<Option<RawFeatures>>,
+        flags: &Flags,
+        origins: &[Origin],
+        limits: &Limits,
+    ) -> Result<bool, FormatError> {
+        let field = flags.feature_field.as_str();
+        let is_names = |r: &RawFeatures| matches!(r, RawFeatures::Names(_));
+        let non_empty = |r: &&RawFeatures| match r {
+            RawFeatures::Numbers(v) => !v.is_empty(),
+            RawFeatures::Names(v) => !v.is_empty(),
+        };
+        let mut kinds = raw.iter().enumerate().filter_map(|(i, r)| {
+            r.as_ref()
+                .filter(|r| non_empty(r))
+                .map(|r| (i, is_names(r)))
+        });
+        let first = kinds.next();
+        let names = first.is_some_and(|(_, names)| names);
+        if let (Some((first, _)), Some((other, _))) = (first, kinds.find(|&(_, n)| n != names)) {
+            let what = |n: bool| {
+                if n {
+                    "strings (a set)"
+                } else {
+                    "numbers (a vector)"
+                }
+            };
+            let path = extend(&node_path(other, origins), Step::Key(field));
+            return Err(self.field_error(
+                Some(&specs[other].id),
+                &path,
+                field,
+                format!(
+                    "{} here, but node {:?} has {}: a file's features are all vectors or all sets",
+                    what(!names),
+                    specs[first].id,
+                    what(names)
+                ),
+            ));
+        }
+        let jaccard = matches!(flags.measure, Some((SimilarityHint::Jaccard, _)));
+        if !names {
+            for (spec, raw) in specs.iter_mut().zip(raw) {
+                spec.features = raw.map(|raw| match raw {
+                    RawFeatures::Numbers(v) if jaccard => SparseVector::from_dense(&v).into(),
+                    RawFeatures::Numbers(v) => v.into(),
+                    // Only empty name lists reach here, in a file of vectors.
+                    RawFeatures::Names(_) => Vec::new().into(),
+                });
+            }
+            return Ok(false);
+        }
+        let all: BTreeSet<&str> = raw
+            .iter()
+            .flatten()
+            .filter_map(|r| match r {
+                RawFeatures::Names(names) => Some(names.iter().map(String::as_str)),
+                RawFeatures::Numbers(_) => None,
+            })
+            .flatten()
+            .collect();
+        let too_many = |what: String| FormatError::Model {
+            line: None,
+            column: None,
+            source: ModelError::TooLarge(limits.exceeded(Limit::SetMembers, what)),
+        };
+        let count = all.len();
+        let described = format!("field {field:?}: {count} distinct names in lists");
+        limits
+            .check_set_members(count, &format!("names in the lists of field {field:?}"))
+            .map_err(|e| FormatError::Model {
+                line: None,
+                column: None,
+                source: ModelError::TooLarge(e),
+            })?;
+        let len = u32::try_from(count).map_err(|_| too_many(described))?;
+        let number: BTreeMap<&str, u32> = all
+            .iter()
+            .enumerate()
+            .map(|(i, &name)| (name, i as u32))
+            .collect();
+        let sets: Vec<Option<Features>> = raw
+            .iter()
+            .map(|r| {
+                r.as_ref().map(|r| {
+                    let members: Vec<u32> = match r {
+                        RawFeatures::Names(names) => names
+                            .iter()
+                            .filter_map(|n| number.get(n.as_str()).copied())
+                            .collect(),
+                        RawFeatures::Numbers(_) => Vec::new(),
+                    };
+                    // Every number is below `len`: the fallback is never taken.
+                    SparseVector::set(len, members)
+                        .unwrap_or_else(|| SparseVector::from_dense(&[]))
+                        .into()
+                })
+            })
+            .collect();
+        for (spec, features) in specs.iter_mut().zip(sets) {
+            spec.features = features;
+        }
+        Ok(true)
+    }
+
     /// Resolves the root flags that steer the whole read.
     fn read_flags(
         &self,
@@ -419,7 +566,8 @@ impl Walk<'_, '_> {
         let label = node.label()?;
         let children = node.children()?;
         let weight = node.weight(&self.flags.weight, children.is_empty())?;
-        let features = node.features(&self.flags.feature_field, &self.limits)?;
+        let jaccard = matches!(self.flags.measure, Some((SimilarityHint::Jaccard, _)));
+        let features = node.features(&self.flags.feature_field, &self.limits, jaccard)?;
         let relations = node.relations()?;
         let color = node.color()?;
         let fields = self
@@ -433,10 +581,11 @@ impl Walk<'_, '_> {
             parent: parent_id,
             weight,
             color,
-            features,
+            features: None,
             relations,
             fields,
         });
+        self.features.push(features);
         for (child_index, child) in children.iter().enumerate() {
             self.visit(child, Some((index, child_index)), depth + 1)?;
         }
@@ -598,9 +747,15 @@ impl<'a> NodeObject<'a, '_> {
         }
     }
 
-    /// The feature vector in `field`: numbers, possibly wrapped once as `[[..]]`,
-    /// at most `limits.max_dimensions` of them.
-    fn features(&self, field: &str, limits: &Limits) -> Result<Option<Vec<f64>>, FormatError> {
+    /// The feature array in `field`: numbers (possibly wrapped once as `[[..]]`)
+    /// or strings, at most `limits.max_dimensions` numbers (`max_set_members`
+    /// when they are a Jaccard file's sets).
+    fn features(
+        &self,
+        field: &str,
+        limits: &Limits,
+        jaccard: bool,
+    ) -> Result<Option<RawFeatures>, FormatError> {
         let outer = match self.object.get(field) {
             None | Some(Value::Null) => return Ok(None),
             Some(Value::Array(outer)) => outer,
@@ -608,7 +763,10 @@ impl<'a> NodeObject<'a, '_> {
                 return Err(self.error(
                     field,
                     &self.at(field),
-                    format!("expected an array of numbers, found {}", kind(other)),
+                    format!(
+                        "expected an array of numbers or of strings, found {}",
+                        kind(other)
+                    ),
                 ))
             }
         };
@@ -621,12 +779,34 @@ impl<'a> NodeObject<'a, '_> {
             }
             _ => outer,
         };
-        if entries.len() > limits.max_dimensions {
+        if entries.first().is_some_and(Value::is_string) {
+            let mut names = Vec::with_capacity(entries.len());
+            for (k, entry) in entries.iter().enumerate() {
+                let Some(name) = entry.as_str() else {
+                    return Err(self.error(
+                        field,
+                        &extend(&steps, Step::Index(k)),
+                        format!(
+                            "entry {k}: expected a string like the entries before it, found {}",
+                            kind(entry)
+                        ),
+                    ));
+                };
+                names.push(name.to_owned());
+            }
+            return Ok(Some(RawFeatures::Names(names)));
+        }
+        let (limit, allowed) = if jaccard {
+            (Limit::SetMembers, limits.max_set_members)
+        } else {
+            (Limit::Dimensions, limits.max_dimensions)
+        };
+        if entries.len() > allowed {
             return Err(over_limit(
                 self.reader,
                 &self.path,
                 limits,
-                Limit::Dimensions,
+                limit,
                 format!(
                     "node {:?}: a feature vector of {} values",
                     self.id,
@@ -645,7 +825,7 @@ impl<'a> NodeObject<'a, '_> {
             };
             features.push(x);
         }
-        Ok(Some(features))
+        Ok(Some(RawFeatures::Numbers(features)))
     }
 
     /// The ids listed in `neighbors`.

@@ -34,6 +34,8 @@ pub mod dataset;
 pub mod embedding;
 /// [`FormatError`]: reader errors with line and column.
 pub mod error;
+/// [`Features`]: dense vectors and sparse ones (sets), shared between copies.
+pub mod features;
 /// The [`Format`] trait, its inputs, options and errors.
 pub mod format;
 /// Genre tables: a node table whose rows list genres, compared by Jaccard.
@@ -64,6 +66,7 @@ pub use color::{ColorError, Rgb};
 pub use dataset::{Dataset, DatasetBuilder, ModelError, Node, NodeSpec, SimilarityHint};
 pub use embedding::EmbeddingMatrix;
 pub use error::FormatError;
+pub use features::{Features, SparseVector};
 pub use format::{Carry, Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 pub use genre_table::GenreTable;
 pub use hierarchy_json::{parse_hierarchy_json, HierarchyJson, HierarchyJsonOptions};

@@ -1,5 +1,5 @@
-//! [`Limits`]: how large an input the readers accept (nodes, depth, feature
-//! dimensions, file size), and [`LimitError`], the refusal that names the
+//! [`Limits`]: how large an input the readers accept (nodes, depth, dense
+//! feature dimensions, distinct set members, file size), and [`LimitError`], the refusal that names the
 //! limit and the config key raising it. Readers check them as they go, before
 //! any allocation that grows with the quantity limited, so an oversized input
 //! costs memory in proportion to the limit, never to the input's claims.
@@ -24,9 +24,16 @@ pub struct Limits {
     pub max_nodes: usize,
     /// Deepest level a node may sit at (the root is depth 0). Default: 32.
     pub max_depth: usize,
-    /// Longest feature vector: values per embedding row, distinct genres of a
-    /// genre table, dates of a time series. Default: 1,024.
+    /// Longest dense feature vector: values per embedding row, dates of a time
+    /// series. Sets (genres, lists of names) are not dense: see
+    /// [`Limits::max_set_members`]. Default: 1,024.
     pub max_dimensions: usize,
+    /// Most distinct members the sets of one dataset may draw from: genres of
+    /// a genre table, names of a hierarchy JSON's lists of strings (or the
+    /// length of its 0/1 vectors under `similarityMeasure: jaccard`). Sets are
+    /// stored as member ids, so memory grows with the members nodes have, not
+    /// with this count. Default: 1,000,000.
+    pub max_set_members: usize,
     /// Largest input file, in MiB (checked before it is read). Default: 256.
     pub max_file_mb: u64,
 }
@@ -37,6 +44,7 @@ impl Default for Limits {
             max_nodes: 250_000,
             max_depth: 32,
             max_dimensions: 1_024,
+            max_set_members: 1_000_000,
             max_file_mb: 256,
         }
     }
@@ -51,6 +59,8 @@ pub enum Limit {
     Depth,
     /// [`Limits::max_dimensions`].
     Dimensions,
+    /// [`Limits::max_set_members`].
+    SetMembers,
     /// [`Limits::max_file_mb`].
     FileSize,
 }
@@ -62,6 +72,7 @@ impl Limit {
             Limit::Nodes => "max_nodes",
             Limit::Depth => "max_depth",
             Limit::Dimensions => "max_dimensions",
+            Limit::SetMembers => "max_set_members",
             Limit::FileSize => "max_file_mb",
         }
     }
@@ -89,6 +100,7 @@ impl Limits {
             Limit::Nodes => self.max_nodes as u64,
             Limit::Depth => self.max_depth as u64,
             Limit::Dimensions => self.max_dimensions as u64,
+            Limit::SetMembers => self.max_set_members as u64,
             Limit::FileSize => self.max_file_mb,
         }
     }
@@ -130,12 +142,22 @@ impl Limits {
         Ok(())
     }
 
+    /// An error when sets draw from `count` distinct members, more than
+    /// allowed; `what` names them ("genres", "names in lists").
+    pub fn check_set_members(&self, count: usize, what: &str) -> Result<(), LimitError> {
+        if count > self.max_set_members {
+            return Err(self.exceeded(Limit::SetMembers, format_args!("{count} distinct {what}")));
+        }
+        Ok(())
+    }
+
     /// The first limit that is 0 (every limit must be at least 1), with its key.
     pub fn zero_limit(&self) -> Option<&'static str> {
         [
             Limit::Nodes,
             Limit::Depth,
             Limit::Dimensions,
+            Limit::SetMembers,
             Limit::FileSize,
         ]
         .into_iter()
@@ -173,6 +195,14 @@ mod tests {
             Some("max_depth")
         );
         assert_eq!(limits.zero_limit(), None);
+        let error = limits
+            .check_set_members(1_000_001, "genres")
+            .expect_err("too many");
+        assert_eq!(
+            error.to_string(),
+            "1000001 distinct genres: over the limit of 1000000 (`limits.max_set_members` in the config raises it)"
+        );
+        assert!(limits.check_set_members(1_000_000, "genres").is_ok());
         assert_eq!(limits.max_file_bytes(), 256 << 20);
     }
 }

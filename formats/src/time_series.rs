@@ -185,14 +185,14 @@ fn add_series(
         };
         // Leading gaps take the first value; later gaps the value before them.
         let mut last = first;
-        let vector = values
+        let vector: Vec<f64> = values
             .into_iter()
             .map(|value| {
                 last = value.unwrap_or(last);
                 last
             })
             .collect();
-        tree.specs[index].features = Some(vector);
+        tree.specs[index].features = Some(vector.into());
     }
     let leaves = tree.leaf_flags();
     for (index, spec) in tree.specs.iter().enumerate() {

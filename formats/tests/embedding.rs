@@ -56,10 +56,13 @@ fn foods_with_vectors() {
     assert_eq!(dataset.leaves().count(), 20);
     assert_eq!(dataset.similarity_hint(), Some(SimilarityHint::Cosine));
     for leaf in dataset.leaves() {
-        assert_eq!(dataset.node(leaf).features.as_ref().map(Vec::len), Some(4));
+        assert_eq!(
+            dataset.node(leaf).features.as_ref().map(|f| f.len()),
+            Some(4)
+        );
     }
     let walnut = dataset.node(dataset.find("walnut").expect("walnut"));
-    assert_eq!(walnut.features, Some(vec![4.0, 14.0, 15.0, 65.0]));
+    assert_eq!(walnut.features, Some(vec![4.0, 14.0, 15.0, 65.0].into()));
     let nuts = dataset.node(dataset.find("group:nut").expect("nuts"));
     assert_eq!(nuts.children.len(), 5);
     assert_eq!(nuts.features, None, "groups get no vector");

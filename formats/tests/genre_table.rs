@@ -89,7 +89,11 @@ fn vector(genres: &[&str]) -> Vec<f64> {
 
 fn features(dataset: &Dataset, id: &str) -> Option<Vec<f64>> {
     let index = dataset.find(id).unwrap_or_else(|| panic!("no node {id}"));
-    dataset.node(index).features.clone()
+    dataset.node(index).features.as_ref().map(|f| {
+        // Genres stay a set: member ids, never a one-hot row.
+        assert!(f.as_sparse().is_some_and(|s| s.is_set()), "{id}: {f:?}");
+        f.to_dense()
+    })
 }
 
 #[test]
@@ -108,15 +112,15 @@ fn films_by_director() {
     assert_eq!(root.children.len(), 4);
     for leaf in dataset.leaves() {
         let node = dataset.node(leaf);
-        let vector = node.features.as_ref().expect("every film has a vector");
-        assert_eq!(vector.len(), GENRES.len(), "{}", node.id);
-        assert!(vector.iter().all(|&v| v == 0.0 || v == 1.0));
+        let set = node.features.as_ref().expect("every film has a set");
+        assert_eq!(set.len(), GENRES.len(), "{}", node.id);
+        assert!(set.as_sparse().is_some_and(|s| s.is_set()), "{}", node.id);
     }
     let knight = dataset.node(dataset.find("dark-knight").expect("dark knight"));
     assert_eq!(knight.label, "The Dark Knight");
     assert_eq!(knight.weight, Some(152.0));
     assert_eq!(
-        knight.features,
+        features(&dataset, "dark-knight"),
         Some(vector(&["Action", "Crime", "Drama", "Thriller"]))
     );
     assert_eq!(

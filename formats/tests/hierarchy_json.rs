@@ -265,7 +265,7 @@ fn every_paper_file_matches_independent_counts() {
             );
         }
 
-        let with_features: Vec<&Vec<f64>> = dataset
+        let with_features: Vec<&nptreemap_formats::Features> = dataset
             .nodes()
             .iter()
             .filter_map(|n| n.features.as_ref())
@@ -344,7 +344,10 @@ fn cifar_internal_features_are_unwrapped() {
     assert_eq!(root.id, "root");
     let features = root.features.as_ref().expect("root has its own vector");
     assert_eq!(features.len(), 300);
-    assert_eq!(features[0], 0.0010100001003593207);
+    assert_eq!(
+        features.as_dense().expect("dense")[0],
+        0.0010100001003593207
+    );
     let top: Vec<&str> = root
         .children
         .iter()
@@ -551,8 +554,16 @@ fn features_follow_sim_attribute_and_unwrap_once() {
     );
     let fixed = json.replace("[[5], [6]]", "[[5, 6]]");
     let dataset = parse(fixed.as_bytes()).expect("valid");
-    let features: Vec<Option<Vec<f64>>> =
-        dataset.nodes().iter().map(|n| n.features.clone()).collect();
+    let features: Vec<Option<Vec<f64>>> = dataset
+        .nodes()
+        .iter()
+        .map(|n| {
+            n.features
+                .as_ref()
+                .and_then(|f| f.as_dense())
+                .map(<[f64]>::to_vec)
+        })
+        .collect();
     assert_eq!(
         features,
         [

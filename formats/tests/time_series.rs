@@ -110,7 +110,13 @@ fn failure(series: &[u8]) -> (InputError, String) {
 
 fn features(dataset: &Dataset, id: &str) -> Vec<f64> {
     let index = dataset.find(id).unwrap_or_else(|| panic!("no node {id}"));
-    dataset.node(index).features.clone().expect("features")
+    dataset
+        .node(index)
+        .features
+        .as_ref()
+        .and_then(|f| f.as_dense())
+        .expect("a dense series")
+        .to_vec()
 }
 
 #[test]
@@ -133,7 +139,7 @@ fn stocks_by_sector() {
     for leaf in dataset.leaves() {
         let node = dataset.node(leaf);
         assert_eq!(
-            node.features.as_ref().map(Vec::len),
+            node.features.as_ref().map(|f| f.len()),
             Some(30),
             "{}",
             node.id

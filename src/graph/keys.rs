@@ -3,7 +3,7 @@
 //! is reused precisely while those are unchanged; adding an input to a
 //! stage means adding it here.
 
-use nptreemap_formats::Dataset;
+use nptreemap_formats::{Dataset, Features};
 
 use crate::config::{DatasetConfig, OutputConfig, OutputKind};
 use crate::fingerprint::{Fingerprint, Fingerprinter};
@@ -43,10 +43,18 @@ fn similarity_of_nodes(dataset: &Dataset) -> Fingerprint {
         f.str(&node.id)
             .u64(node.parent.map_or(u64::MAX, |p| p as u64));
         match &node.features {
-            Some(values) => {
+            Some(Features::Dense(values)) => {
                 f.u64(values.len() as u64);
-                for &v in values {
+                for &v in values.iter() {
                     f.f64(v);
+                }
+            }
+            Some(Features::Sparse(sparse)) => {
+                // Marked apart from a dense vector of the same length.
+                f.u64(u64::MAX - 1).u64(sparse.len() as u64);
+                f.u64(sparse.indices().len() as u64);
+                for (k, v) in sparse.entries() {
+                    f.u64(u64::from(k)).f64(v);
                 }
             }
             None => {

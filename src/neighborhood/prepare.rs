@@ -4,7 +4,7 @@
 
 use std::collections::HashSet;
 
-use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
+use nptreemap_formats::{Dataset, DatasetBuilder, Features, NodeSpec, SparseVector};
 
 /// Virtual nodes of a chain that get the prototype's compound id (§2.2); later ones
 /// are named after the leaf, so ids stay short on deep chains.
@@ -23,7 +23,9 @@ const COMPOUND_IDS: usize = 4;
 ///   5,000-deep chain would spell ids of 40 kB, O(D³) bytes over a caterpillar tree
 ///   (issue 11 item 5). No paper dataset has a chain that long. Label, colour and
 ///   feature vector are copied from the node it hangs under; it has no relations
-///   and [`nptreemap_formats::Node::is_virtual`] is set.
+///   and [`nptreemap_formats::Node::is_virtual`] is set. Features are shared
+///   ([`Features`] holds them behind an `Arc`): a chain of copies costs a
+///   pointer per node, not a row.
 /// - **Weights** (§2.3): the *last* virtual node of a chain carries the original
 ///   leaf's own weight and the original leaf's own weight becomes `None`. The
 ///   prototype keeps the weight on the leaf and gives virtual nodes weight 0; both
@@ -36,7 +38,13 @@ const COMPOUND_IDS: usize = 4;
 ///   the count, as mathjs's `mean`); nodes with their own (CIFAR's internal nodes)
 ///   keep it. Only children with a vector count; if those vectors differ in
 ///   length, the mean is undefined and the node stays without a vector (its
-///   similarities are then 0, method-reference §10 #3).
+///   similarities are then 0, method-reference §10 #3). Sparse vectors (sets)
+///   are averaged sparsely: the sum of each member's values in child order,
+///   divided by the count, zeros dropped; that is the dense mean bit for bit
+///   (the dense sum only adds exact zeros for the absent members), so the
+///   support of a mean of sets is the union of the sets (what Jaccard reads),
+///   and cosine and binary see the dense means. Dense and sparse children
+///   together have no mean.
 ///
 /// Original nodes keep their ids, relations and colours; the result is built
 /// through [`DatasetBuilder`], so it is in breadth-first order, the tie-break order
@@ -118,49 +126,77 @@ fn unique_id(candidate: String, taken: &mut HashSet<String>) -> String {
 }
 
 /// Feature vectors after the bottom-up mean (§2.4), indexed like `dataset`.
-fn aggregate_features(dataset: &Dataset) -> Vec<Option<Vec<f64>>> {
+fn aggregate_features(dataset: &Dataset) -> Vec<Option<Features>> {
     let nodes = dataset.nodes();
-    let mut features: Vec<Option<Vec<f64>>> = nodes.iter().map(|n| n.features.clone()).collect();
+    let mut features: Vec<Option<Features>> = nodes.iter().map(|n| n.features.clone()).collect();
     // Children have larger indices than their parent (breadth-first order), so a
     // reverse sweep is a valid post-order for this purpose.
     for index in (0..nodes.len()).rev() {
         if features[index].is_some() {
             continue;
         }
-        features[index] = mean_of(
-            nodes[index]
-                .children
-                .iter()
-                .filter_map(|&c| features[c].as_deref()),
-        );
+        let children: Vec<&Features> = nodes[index]
+            .children
+            .iter()
+            .filter_map(|&c| features[c].as_ref())
+            .collect();
+        features[index] = mean_of(&children);
     }
     features
 }
 
-/// Element-wise mean of the vectors; `None` for no vectors or differing lengths.
-fn mean_of<'a>(vectors: impl Iterator<Item = &'a [f64]>) -> Option<Vec<f64>> {
-    let mut sum: Option<Vec<f64>> = None;
-    let mut count = 0usize;
-    for v in vectors {
-        match &mut sum {
-            None => sum = Some(v.to_vec()),
-            Some(s) => {
-                if s.len() != v.len() {
-                    return None;
-                }
-                for (acc, x) in s.iter_mut().zip(v) {
-                    *acc += x;
-                }
-            }
-        }
-        count += 1;
+/// Element-wise mean of the vectors; `None` for no vectors, differing lengths,
+/// or dense and sparse vectors together.
+fn mean_of(vectors: &[&Features]) -> Option<Features> {
+    let first = vectors.first()?;
+    if vectors.iter().any(|v| v.len() != first.len()) {
+        return None;
     }
-    let mut sum = sum?;
-    let n = count as f64;
+    match first {
+        Features::Dense(_) => {
+            let dense: Option<Vec<&[f64]>> = vectors.iter().map(|v| v.as_dense()).collect();
+            dense_mean(&dense?).map(Features::from)
+        }
+        Features::Sparse(_) => {
+            let sparse: Option<Vec<&SparseVector>> =
+                vectors.iter().map(|v| v.as_sparse()).collect();
+            sparse_mean(&sparse?).map(Features::from)
+        }
+    }
+}
+
+/// Element-wise mean of dense vectors of one length (sum left to right, then
+/// divided by the count, as mathjs's `mean`).
+fn dense_mean(vectors: &[&[f64]]) -> Option<Vec<f64>> {
+    let (first, rest) = vectors.split_first()?;
+    let mut sum = first.to_vec();
+    for v in rest {
+        for (acc, x) in sum.iter_mut().zip(v.iter()) {
+            *acc += x;
+        }
+    }
+    let n = vectors.len() as f64;
     for value in &mut sum {
         *value /= n;
     }
     Some(sum)
+}
+
+/// [`dense_mean`] of sparse vectors of one length, without densifying: each
+/// member's values summed in child order (a stable sort by member keeps it).
+fn sparse_mean(vectors: &[&SparseVector]) -> Option<SparseVector> {
+    let len = u32::try_from(vectors.first()?.len()).ok()?;
+    let mut entries: Vec<(u32, f64)> = vectors.iter().flat_map(|v| v.entries()).collect();
+    entries.sort_by_key(|&(index, _)| index);
+    let n = vectors.len() as f64;
+    let mut summed: Vec<(u32, f64)> = Vec::with_capacity(entries.len());
+    for (index, value) in entries {
+        match summed.last_mut() {
+            Some((last, sum)) if *last == index => *sum += value,
+            _ => summed.push((index, value)),
+        }
+    }
+    SparseVector::from_entries(len, summed.into_iter().map(|(k, sum)| (k, sum / n)))
 }
 
 /// The paper's datasets for tests, embedded at compile time so that the tests of
@@ -274,7 +310,7 @@ mod tests {
         let v = p.node(p.find("adepth1depth2").expect("exists"));
         assert_eq!(v.label, "a");
         assert_eq!(v.color, Some(nptreemap_formats::Rgb::new(0xff, 0, 0)));
-        assert_eq!(v.features, Some(vec![1.0, 0.0]));
+        assert_eq!(v.features.as_ref().map(Features::to_dense), Some(vec![1.0, 0.0]));
         assert!(v.relations.is_empty());
     }
 
@@ -309,7 +345,12 @@ mod tests {
     #[test]
     fn vectors_are_mean_aggregated() {
         let p = prepare(&uneven());
-        let f = |id: &str| p.node(p.find(id).expect("exists")).features.clone();
+        let f = |id: &str| {
+            p.node(p.find(id).expect("exists"))
+                .features
+                .as_ref()
+                .map(Features::to_dense)
+        };
         assert_eq!(f("c"), Some(vec![0.0, 1.0]));
         assert_eq!(f("b"), Some(vec![0.5, 1.0]));
         assert_eq!(f("r"), Some(vec![0.75, 0.5]));
@@ -342,7 +383,12 @@ mod tests {
                 .features(vec![4.0]),
         ]);
         let p = prepare(&d);
-        let f = |id: &str| p.node(p.find(id).expect("exists")).features.clone();
+        let f = |id: &str| {
+            p.node(p.find(id).expect("exists"))
+                .features
+                .as_ref()
+                .map(Features::to_dense)
+        };
         assert_eq!(f("x"), Some(vec![9.0]));
         assert_eq!(f("y"), None);
         // Only children with a vector count.
@@ -455,5 +501,57 @@ mod tests {
             }
         }
         assert!(internal_with_own > 0);
+    }
+
+    /// Issue 23 item 2: a virtual copy shares its original's features (the
+    /// same allocation, not a cloned row), and the mean of sets is the dense
+    /// mean bit for bit, its support the union of the sets.
+    #[test]
+    fn copies_share_their_features_and_sets_average_as_vectors() {
+        let set = |members: &[u32]| {
+            nptreemap_formats::SparseVector::set(4, members.iter().copied()).expect("set")
+        };
+        let d = build(vec![
+            NodeSpec::new("r"),
+            NodeSpec::new("a").parent("r").weight(1.0).features(set(&[0, 3])),
+            NodeSpec::new("b").parent("r"),
+            NodeSpec::new("c").parent("b"),
+            NodeSpec::new("c1").parent("c").weight(1.0).features(set(&[1])),
+            NodeSpec::new("c2").parent("c").weight(1.0).features(set(&[1, 2])),
+            NodeSpec::new("c3").parent("c").weight(1.0).features(set(&[2, 3])),
+        ]);
+        let p = prepare(&d);
+        let node = |id: &str| p.node(p.find(id).expect(id));
+        let Some(Features::Sparse(original)) = &node("a").features else {
+            panic!("a keeps its set");
+        };
+        for copy in ["adepth1", "adepth1depth2"] {
+            let Some(Features::Sparse(shared)) = &node(copy).features else {
+                panic!("{copy} has the set");
+            };
+            assert!(
+                std::ptr::eq(shared.indices().as_ptr(), original.indices().as_ptr()),
+                "{copy} shares a's members"
+            );
+        }
+        let mean = node("c").features.clone().expect("a mean");
+        let third = 1.0 / 3.0;
+        assert_eq!(mean.to_dense(), [0.0, 2.0 * third, 2.0 / 3.0, third]);
+        assert_eq!(
+            mean.as_sparse().map(|s| s.indices().to_vec()),
+            Some(vec![1, 2, 3])
+        );
+        // The dense path on the same data gives the same bits.
+        let dense = build(vec![
+            NodeSpec::new("r"),
+            NodeSpec::new("c").parent("r"),
+            NodeSpec::new("c1").parent("c").weight(1.0).features(vec![0.0, 1.0, 0.0, 0.0]),
+            NodeSpec::new("c2").parent("c").weight(1.0).features(vec![0.0, 1.0, 1.0, 0.0]),
+            NodeSpec::new("c3").parent("c").weight(1.0).features(vec![0.0, 0.0, 1.0, 1.0]),
+        ]);
+        let dense = prepare(&dense);
+        let want = dense.node(dense.find("c").expect("c")).features.clone().expect("mean");
+        let bits = |v: Vec<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(mean.to_dense()), bits(want.to_dense()));
     }
 }

@@ -9,12 +9,21 @@
 //! centred data for PCA above. Measured against the hand-written solver this replaced
 //! (Householder, Sturm bisection, inverse iteration, Lanczos) in BENCHMARKS.md
 //! ("Projections"): as accurate or better everywhere, and faster on every size.
+//!
+//! Sets and other sparse features ([`SparseVector`]) are projected by the same PCA:
+//! densified when small (at most [`DENSIFY_MAX`] values, so small data gives the
+//! dense path's projection bit for bit), else by faer's partial SVD of the implicitly
+//! centred sparse matrix ([`CentredSparse`]), never a dense n×d copy (issue 23).
 
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::{self_adjoint_evd, self_adjoint_evd_scratch, ComputeEigenvectors};
 use faer::matrix_free::eigen::{partial_svd, partial_svd_scratch, PartialEigenParams};
-use faer::{Col, Mat, MatRef, Par};
+use faer::dyn_stack::StackReq;
+use faer::matrix_free::{BiLinOp, LinOp};
+use faer::reborrow::ReborrowMut;
+use faer::{Col, Mat, MatMut, MatRef, Par};
+use nptreemap_formats::{Features, SparseVector};
 
 use crate::geom::Point;
 
@@ -51,6 +60,35 @@ const PARTIAL_REL_TOL: f64 = 1e-13;
 /// these make runs repeatable.
 const SEED_LANCZOS: u64 = 0x9e37_79b9_7f4a_7c15;
 const SEED_LANDMARK: u64 = 0x6e70_7472_6565_6d61;
+
+/// Sparse features of at most this many coordinates in all (nodes × dimension) are
+/// densified for [`pca_2d`]: 32 MB, far below the dense copy that used to take
+/// gigabytes, and large enough for every paper and real dataset in `tests/data`.
+pub const DENSIFY_MAX: usize = 1 << 22;
+
+/// PCA to 2-D of every node's features (method-reference §4.1) when all of them
+/// have features of one length and one kind (all dense or all sparse) and that
+/// length is not 0; `None` otherwise (the caller then uses MDS of a similarity).
+/// Dense vectors go to [`pca_2d`]; sparse ones too when small ([`DENSIFY_MAX`]),
+/// else to the sparse PCA (same axes up to round-off, no dense copy).
+pub fn pca_of_features(features: &[Option<&Features>]) -> Option<Vec<Point>> {
+    let first = (*features.first()?)?;
+    let d = first.len();
+    let uniform = d > 0
+        && features.iter().all(|f| {
+            f.is_some_and(|f| f.len() == d && f.as_dense().is_some() == first.as_dense().is_some())
+        });
+    if !uniform {
+        return None;
+    }
+    let all = features.iter().flatten();
+    if first.as_dense().is_some() || features.len().saturating_mul(d) <= DENSIFY_MAX {
+        let vectors: Vec<Vec<f64>> = all.map(|f| f.to_dense()).collect();
+        return Some(pca_2d(&vectors));
+    }
+    let sparse: Vec<&SparseVector> = all.filter_map(|f| f.as_sparse()).collect();
+    Some(sparse_pca_2d(&sparse, d))
+}
 
 /// Projects feature vectors to 2-D by plain Euclidean PCA (method-reference §4.1: one PCA
 /// over all nodes of the tree).
@@ -167,6 +205,214 @@ pub fn pca_2d(vectors: &[Vec<f64>]) -> Vec<Point> {
         }
     }
     to_points(coords)
+}
+
+/// [`pca_2d`] of sparse vectors of dimension `d` without a dense copy: the two
+/// leading right singular vectors of the centred data by faer's partial SVD of
+/// [`CentredSparse`], O(non-zeros + n + d) per Lanczos step and O((n + d)·64)
+/// extra memory. Same scaling, start vector, tolerance and orientation as the
+/// dense partial-SVD path, so the axes agree with it up to round-off.
+fn sparse_pca_2d(vectors: &[&SparseVector], d: usize) -> Vec<Point> {
+    let n = vectors.len();
+    if n < 2 || d == 0 {
+        return vec![Point::ZERO; n];
+    }
+    let amax = vectors
+        .iter()
+        .flat_map(|v| v.entries())
+        .fold(0.0_f64, |m, (_, x)| if x.is_finite() { m.max(x.abs()) } else { m });
+    if amax == 0.0 {
+        return vec![Point::ZERO; n];
+    }
+    let scale = pow2_floor(amax);
+    let op = CentredSparse::new(vectors, d, scale);
+    let par = Par::Seq;
+    let params = PartialEigenParams::default();
+    let want = 2.min(n.min(d));
+    let mut left = Mat::<f64>::zeros(n, want);
+    let mut right = Mat::<f64>::zeros(d, want);
+    let mut sigma = vec![0.0; want];
+    let start = Col::<f64>::from_fn(d, {
+        let v = start_vector(d, SEED_LANCZOS);
+        move |i| v[i]
+    });
+    let mut mem = MemBuffer::new(partial_svd_scratch::<f64>(&op, want, par, params));
+    let info = partial_svd(
+        left.as_mut(),
+        right.as_mut(),
+        &mut sigma,
+        &op,
+        start.as_ref(),
+        PARTIAL_REL_TOL * op.frobenius(),
+        par,
+        MemStack::new(&mut mem),
+        params,
+    );
+    let pairs: Vec<(f64, Vec<f64>)> = (0..info.n_converged_eigen.min(want))
+        .map(|t| {
+            let mut v = right.col_as_slice(t).to_vec();
+            normalize(&mut v);
+            (sigma[t] * sigma[t], v)
+        })
+        .collect();
+    let mut coords = [vec![0.0; n], vec![0.0; n]];
+    for (axis, (_, mut v)) in leading_axes(pairs).into_iter().enumerate() {
+        orient(&mut v);
+        let shift = dot(&op.mean, &v);
+        for (c, row) in coords[axis].iter_mut().zip(vectors) {
+            let mut sum = 0.0;
+            for (k, x) in row.entries() {
+                sum += op.value(x) * v[k as usize];
+            }
+            *c = finite_or_clamped((sum - shift) * scale);
+        }
+    }
+    to_points(coords)
+}
+
+/// The n×d matrix of sparse rows divided by `scale`, minus its column means,
+/// applied without forming it: `A·v = X·v − 1·(μ·v)` and `Aᵀ·u = Xᵀ·u − μ·(1·u)`.
+#[derive(Debug)]
+struct CentredSparse<'a> {
+    rows: &'a [&'a SparseVector],
+    d: usize,
+    scale: f64,
+    mean: Vec<f64>,
+}
+
+impl<'a> CentredSparse<'a> {
+    fn new(rows: &'a [&'a SparseVector], d: usize, scale: f64) -> Self {
+        let mut mean = vec![0.0; d];
+        for row in rows {
+            for (k, x) in row.entries() {
+                mean[k as usize] += if x.is_finite() { x / scale } else { 0.0 };
+            }
+        }
+        for m in &mut mean {
+            *m /= rows.len() as f64;
+        }
+        CentredSparse {
+            rows,
+            d,
+            scale,
+            mean,
+        }
+    }
+
+    /// A stored value as the matrix holds it (scaled; non-finite as 0).
+    fn value(&self, x: f64) -> f64 {
+        if x.is_finite() {
+            x / self.scale
+        } else {
+            0.0
+        }
+    }
+
+    /// ‖A‖_F, from the non-zeros and the means: Σ(x − μ)² over every entry.
+    fn frobenius(&self) -> f64 {
+        let mut squares = 0.0;
+        let mut count = vec![0usize; self.d];
+        for row in self.rows {
+            for (k, x) in row.entries() {
+                let c = self.value(x) - self.mean[k as usize];
+                squares += c * c;
+                count[k as usize] += 1;
+            }
+        }
+        let n = self.rows.len();
+        for (m, c) in self.mean.iter().zip(count) {
+            squares += (n - c) as f64 * m * m;
+        }
+        squares.sqrt()
+    }
+
+    /// `out = A·rhs` (`transpose` false) or `out = Aᵀ·rhs`, column by column.
+    fn product(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, transpose: bool) {
+        for c in 0..rhs.ncols() {
+            if transpose {
+                let mut total = 0.0;
+                for k in 0..self.d {
+                    *out.rb_mut().get_mut(k, c) = 0.0;
+                }
+                for (i, row) in self.rows.iter().enumerate() {
+                    let u = *rhs.get(i, c);
+                    total += u;
+                    for (k, x) in row.entries() {
+                        *out.rb_mut().get_mut(k as usize, c) += self.value(x) * u;
+                    }
+                }
+                for (k, m) in self.mean.iter().enumerate() {
+                    *out.rb_mut().get_mut(k, c) -= m * total;
+                }
+            } else {
+                let mut shift = 0.0;
+                for (k, m) in self.mean.iter().enumerate() {
+                    shift += m * rhs.get(k, c);
+                }
+                for (i, row) in self.rows.iter().enumerate() {
+                    let mut sum = 0.0;
+                    for (k, x) in row.entries() {
+                        sum += self.value(x) * rhs.get(k as usize, c);
+                    }
+                    *out.rb_mut().get_mut(i, c) = sum - shift;
+                }
+            }
+        }
+    }
+}
+
+impl LinOp<f64> for CentredSparse<'_> {
+    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
+        StackReq::EMPTY
+    }
+
+    fn nrows(&self) -> usize {
+        self.rows.len()
+    }
+
+    fn ncols(&self) -> usize {
+        self.d
+    }
+
+    fn apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
+        self.product(out, rhs, false);
+    }
+
+    fn conj_apply(
+        &self,
+        out: MatMut<'_, f64>,
+        rhs: MatRef<'_, f64>,
+        _par: Par,
+        _stack: &mut MemStack,
+    ) {
+        self.product(out, rhs, false);
+    }
+}
+
+impl BiLinOp<f64> for CentredSparse<'_> {
+    fn transpose_apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
+        StackReq::EMPTY
+    }
+
+    fn transpose_apply(
+        &self,
+        out: MatMut<'_, f64>,
+        rhs: MatRef<'_, f64>,
+        _par: Par,
+        _stack: &mut MemStack,
+    ) {
+        self.product(out, rhs, true);
+    }
+
+    fn adjoint_apply(
+        &self,
+        out: MatMut<'_, f64>,
+        rhs: MatRef<'_, f64>,
+        _par: Par,
+        _stack: &mut MemStack,
+    ) {
+        self.product(out, rhs, true);
+    }
 }
 
 /// Classical (Torgerson) MDS to 2-D: double-centres the squared dissimilarities and
@@ -1049,5 +1295,52 @@ mod tests {
             Point::new(4.0, 4.0),
         );
         assert_eq!(out, vec![Point::new(2.0, 2.0)]);
+    }
+
+    /// Issue 23 item 1: sets above [`DENSIFY_MAX`] values are projected by the
+    /// sparse PCA without a dense copy, to the dense PCA's points up to
+    /// round-off; small ones are densified, so they give its points bit for bit.
+    #[test]
+    fn sparse_pca_matches_the_dense_pca() {
+        use nptreemap_formats::{Features, SparseVector};
+        let (n, d) = (120usize, 40_000u32);
+        assert!(n * d as usize > DENSIFY_MAX);
+        let mut rng = crate::rng::Rng::new(7);
+        // Three clusters of members plus noise, so the two axes are well separated.
+        let sets: Vec<Features> = (0..n)
+            .map(|i| {
+                let base = (i % 3) as u32 * 100;
+                let mut members: Vec<u32> =
+                    (0..30).filter(|_| rng.next_u64() % 3 > 0).map(|k| base + k).collect();
+                members.extend((0..5).map(|_| (rng.next_u64() % u64::from(d)) as u32));
+                if i % 2 == 0 {
+                    members.push(1000 + (i % 3) as u32);
+                }
+                SparseVector::set(d, members).expect("set").into()
+            })
+            .collect();
+        let refs: Vec<Option<&Features>> = sets.iter().map(Some).collect();
+        let sparse = pca_of_features(&refs).expect("uniform");
+        let dense = pca_2d(&sets.iter().map(Features::to_dense).collect::<Vec<_>>());
+        let spread = dense.iter().fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+        for (s, t) in sparse.iter().zip(&dense) {
+            assert!(
+                (s.x - t.x).abs() < 1e-9 * spread && (s.y - t.y).abs() < 1e-9 * spread,
+                "{s:?} {t:?}"
+            );
+        }
+        // Small: densified, bit for bit.
+        let small: Vec<Features> = sets[..10]
+            .iter()
+            .map(|f| SparseVector::set(1200, f.as_sparse().expect("set").indices().iter().copied().filter(|&k| k < 1200)).expect("set").into())
+            .collect();
+        let refs: Vec<Option<&Features>> = small.iter().map(Some).collect();
+        assert_eq!(
+            pca_of_features(&refs),
+            Some(pca_2d(&small.iter().map(Features::to_dense).collect::<Vec<_>>()))
+        );
+        // Mixed kinds or lengths: no PCA (the caller uses MDS).
+        let mixed = [Some(&sets[0]), Some(&small[0])];
+        assert_eq!(pca_of_features(&mixed), None);
     }
 }

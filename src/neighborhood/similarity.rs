@@ -1,8 +1,19 @@
 //! Similarity between two nodes of a dataset (method-reference §1.4) and the integer
 //! score the constraint pipeline works on (§1.5). Owns the floating-point form of
 //! every measure, because the golden constraint counts depend on it bit for bit.
+//!
+//! Sparse features (sets and their means, [`nptreemap_formats::SparseVector`])
+//! are read as they are stored: their cosine, Jaccard and binary similarities
+//! are those of the dense vectors they stand for, bit for bit (the dense sums
+//! only add exact zeros between the non-zero terms); Pearson, whose centring
+//! makes every coordinate non-zero, is the same correlation summed in another
+//! order (equal up to the last bits). A dense and a sparse vector are never
+//! compared (no reader mixes them): like vectors of different lengths, they
+//! give 0.
 
-use nptreemap_formats::{Dataset, SimilarityHint};
+use std::borrow::Cow as Borrowed;
+
+use nptreemap_formats::{Dataset, Features, SimilarityHint, SparseVector};
 
 /// How the similarity of two nodes is measured. Every measure gives a value in
 /// [0, 1]; undefined cases (zero vectors, two empty supports, a missing vector,
@@ -93,14 +104,37 @@ pub(crate) fn clamp_unit(s: f64) -> f64 {
 /// all-pairs loop of the constraint pipeline allocates nothing per pair.
 #[derive(Clone, Debug)]
 pub(crate) struct NodeFeatures<'a> {
-    /// The feature vector (centred for Pearson); `None` when missing.
+    /// The number of coordinates, when the node has features.
+    len: Option<usize>,
+    /// The dense vector (centred for Pearson, rescaled for cosine); `None` when
+    /// missing or sparse.
     values: Option<Cow<'a>>,
-    /// Euclidean norm of `values` (cosine, Pearson), summed left to right from 0.
+    /// The sparse vector (values rescaled for cosine); `None` when missing or dense.
+    sparse: Option<Sparse<'a>>,
+    /// Euclidean norm of the vector (centred for Pearson), summed left to right
+    /// from 0 (cosine, Pearson).
     norm: f64,
-    /// Sorted positions of the non-zero values (Jaccard).
-    support: Vec<u32>,
+    /// Mean of all coordinates of a sparse vector (Pearson).
+    mean: f64,
+    /// Sorted positions of the non-zero values (Jaccard; a sparse vector's own).
+    support: Borrowed<'a, [u32]>,
     /// Sorted relation targets (neighbour list).
     relations: &'a [usize],
+}
+
+/// A sparse vector as one similarity reads it.
+#[derive(Clone, Debug)]
+struct Sparse<'a> {
+    indices: &'a [u32],
+    /// `None`: every value is 1 (a set).
+    values: Option<Cow<'a>>,
+}
+
+impl Sparse<'_> {
+    /// The value of the `k`-th stored entry.
+    fn value(&self, k: usize) -> f64 {
+        self.values.as_ref().map_or(1.0, |v| v.as_slice()[k])
+    }
 }
 
 /// A borrowed vector, or an owned one when it had to be transformed (centred).
@@ -158,35 +192,47 @@ impl<'a> NodeFeatures<'a> {
     /// Precomputes what `kind` needs from node `index`.
     pub(crate) fn new(kind: SimilarityKind, dataset: &'a Dataset, index: usize) -> Self {
         let node = dataset.node(index);
-        let features = node.features.as_deref();
         let mut result = NodeFeatures {
+            len: None,
             values: None,
+            sparse: None,
             norm: 0.0,
-            support: Vec::new(),
+            mean: 0.0,
+            support: Borrowed::Borrowed(&[]),
             relations: &node.relations,
         };
-        let Some(values) = features else {
-            return result;
-        };
+        match &node.features {
+            None => {}
+            Some(Features::Dense(values)) => result.dense(kind, values),
+            Some(Features::Sparse(sparse)) => result.sparse(kind, sparse),
+        }
+        result
+    }
+
+    /// Fills in what `kind` needs from a dense vector.
+    fn dense(&mut self, kind: SimilarityKind, values: &'a [f64]) {
+        self.len = Some(values.len());
         match kind {
             SimilarityKind::Cosine => {
                 let values = match rescaled(values) {
                     Some(scaled) => Cow::Owned(scaled),
                     None => Cow::Borrowed(values),
                 };
-                result.norm = squared_norm(values.as_slice()).sqrt();
-                result.values = Some(values);
+                self.norm = squared_norm(values.as_slice()).sqrt();
+                self.values = Some(values);
             }
             SimilarityKind::Jaccard => {
-                result.support = values
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, &v)| v != 0.0)
-                    .map(|(i, _)| i as u32)
-                    .collect();
-                result.values = Some(Cow::Borrowed(values));
+                self.support = Borrowed::Owned(
+                    values
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, &v)| v != 0.0)
+                        .map(|(i, _)| i as u32)
+                        .collect(),
+                );
+                self.values = Some(Cow::Borrowed(values));
             }
-            SimilarityKind::Binary => result.values = Some(Cow::Borrowed(values)),
+            SimilarityKind::Binary => self.values = Some(Cow::Borrowed(values)),
             SimilarityKind::NeighborList => {}
             SimilarityKind::Pearson => {
                 let mut sum = 0.0;
@@ -200,16 +246,60 @@ impl<'a> NodeFeatures<'a> {
                 };
                 let centered: Vec<f64> = values.iter().map(|&v| v - mean).collect();
                 let centered = rescaled(&centered).unwrap_or(centered);
-                result.norm = squared_norm(&centered).sqrt();
-                result.values = Some(Cow::Owned(centered));
+                self.norm = squared_norm(&centered).sqrt();
+                self.values = Some(Cow::Owned(centered));
             }
         }
-        result
     }
 
-    /// The vector, when present.
+    /// Fills in what `kind` needs from a sparse vector, without densifying it.
+    fn sparse(&mut self, kind: SimilarityKind, sparse: &'a SparseVector) {
+        let len = sparse.len();
+        self.len = Some(len);
+        let stored = sparse.values().map(Cow::Borrowed);
+        let mut view = Sparse {
+            indices: sparse.indices(),
+            values: stored,
+        };
+        match kind {
+            SimilarityKind::Cosine => {
+                // The dense sum of squares adds exact zeros between these terms.
+                if let Some(scaled) = sparse.values().and_then(rescaled) {
+                    view.values = Some(Cow::Owned(scaled));
+                }
+                self.norm = match &view.values {
+                    Some(values) => squared_norm(values.as_slice()).sqrt(),
+                    None => (view.indices.len() as f64).sqrt(),
+                };
+            }
+            SimilarityKind::Jaccard => self.support = Borrowed::Borrowed(sparse.indices()),
+            SimilarityKind::Binary | SimilarityKind::NeighborList => {}
+            SimilarityKind::Pearson => {
+                let mut sum = 0.0;
+                for k in 0..view.indices.len() {
+                    sum += view.value(k);
+                }
+                self.mean = if len == 0 { 0.0 } else { sum / len as f64 };
+                let mut squares = 0.0;
+                for k in 0..view.indices.len() {
+                    let c = view.value(k) - self.mean;
+                    squares += c * c;
+                }
+                let zeros = (len - view.indices.len()) as f64;
+                self.norm = (squares + zeros * self.mean * self.mean).sqrt();
+            }
+        }
+        self.sparse = Some(view);
+    }
+
+    /// The dense vector, when present.
     pub(crate) fn values(&self) -> Option<&[f64]> {
         self.values.as_ref().map(Cow::as_slice)
+    }
+
+    /// The number of coordinates, when the node has features.
+    pub(crate) fn len(&self) -> Option<usize> {
+        self.len
     }
 
     /// Sorted positions of the non-zero values (computed for Jaccard only).
@@ -220,6 +310,29 @@ impl<'a> NodeFeatures<'a> {
     /// Sorted relation targets (dataset indices).
     pub(crate) fn relations(&self) -> &[usize] {
         self.relations
+    }
+
+    /// What decides binary equality, as words: equal keys, equal vectors
+    /// (−0 folded into 0; lengths and kinds, dense or sparse, included).
+    /// `None` when the node has no vector or a NaN, which equals nothing.
+    pub(crate) fn binary_key(&self) -> Option<Vec<u64>> {
+        let bits = |x: f64| if x == 0.0 { 0 } else { x.to_bits() };
+        if let Some(v) = self.values() {
+            if v.iter().any(|x| x.is_nan()) {
+                return None;
+            }
+            let mut key = Vec::with_capacity(v.len() + 2);
+            key.extend([0, v.len() as u64]);
+            key.extend(v.iter().map(|&x| bits(x)));
+            return Some(key);
+        }
+        let sparse = self.sparse.as_ref()?;
+        let mut key = Vec::with_capacity(2 * sparse.indices.len() + 2);
+        key.extend([1, self.len.unwrap_or(0) as u64]);
+        for (k, &index) in sparse.indices.iter().enumerate() {
+            key.extend([u64::from(index), bits(sparse.value(k))]);
+        }
+        Some(key)
     }
 }
 
@@ -255,13 +368,18 @@ pub(crate) fn norm_of(features: &NodeFeatures<'_>) -> f64 {
 /// A vector measure before clamping, NaN already mapped to 0 (the neighbour flag,
 /// which needs node indices, is [`neighbor_flag`]).
 fn vector_similarity(kind: SimilarityKind, a: &NodeFeatures<'_>, b: &NodeFeatures<'_>) -> f64 {
-    let (Some(va), Some(vb)) = (a.values(), b.values()) else {
-        return 0.0;
-    };
-    if va.len() != vb.len() {
-        // Different lengths have no defined similarity; treat as unrelated.
+    if kind == SimilarityKind::NeighborList || a.len.is_none() || a.len != b.len {
+        // Missing vectors and different lengths have no defined similarity;
+        // treat as unrelated.
         return 0.0;
     }
+    if let (Some(sa), Some(sb)) = (&a.sparse, &b.sparse) {
+        return sparse_similarity(kind, a, sa, b, sb);
+    }
+    let (Some(va), Some(vb)) = (a.values(), b.values()) else {
+        // A dense and a sparse vector are unrelated (module docs).
+        return 0.0;
+    };
     match kind {
         SimilarityKind::Cosine | SimilarityKind::Pearson => {
             cosine_from_parts(dot(va, vb), a.norm, b.norm)
@@ -277,6 +395,80 @@ fn vector_similarity(kind: SimilarityKind, a: &NodeFeatures<'_>, b: &NodeFeature
             }
         }
         SimilarityKind::NeighborList => 0.0,
+    }
+}
+
+/// [`vector_similarity`] of two sparse vectors of one length (module docs).
+fn sparse_similarity(
+    kind: SimilarityKind,
+    a: &NodeFeatures<'_>,
+    sa: &Sparse<'_>,
+    b: &NodeFeatures<'_>,
+    sb: &Sparse<'_>,
+) -> f64 {
+    match kind {
+        SimilarityKind::Cosine => {
+            // Products in ascending index order: the dense sum with its zero
+            // terms left out, which changes no bit.
+            let mut sum = 0.0;
+            merge(sa.indices, sb.indices, |i, j| {
+                if let (Some(i), Some(j)) = (i, j) {
+                    sum += sa.value(i) * sb.value(j);
+                }
+            });
+            cosine_from_parts(sum, a.norm, b.norm)
+        }
+        SimilarityKind::Pearson => {
+            let (ma, mb) = (a.mean, b.mean);
+            let (mut sum, mut union) = (0.0, 0usize);
+            merge(sa.indices, sb.indices, |i, j| {
+                union += 1;
+                let x = i.map_or(0.0, |i| sa.value(i)) - ma;
+                let y = j.map_or(0.0, |j| sb.value(j)) - mb;
+                sum += x * y;
+            });
+            let len = a.len.unwrap_or(0);
+            sum += (len - union) as f64 * (ma * mb);
+            cosine_from_parts(sum, a.norm, b.norm)
+        }
+        SimilarityKind::Jaccard => jaccard(sa.indices, sb.indices),
+        SimilarityKind::Binary => {
+            let same = sa.indices == sb.indices
+                && (0..sa.indices.len()).all(|k| sa.value(k) == sb.value(k));
+            if same {
+                1.0
+            } else {
+                0.0
+            }
+        }
+        SimilarityKind::NeighborList => 0.0,
+    }
+}
+
+/// Walks two ascending index lists together, calling `visit` once per index of
+/// either, with its position in each list (`None` where it is absent).
+fn merge(a: &[u32], b: &[u32], mut visit: impl FnMut(Option<usize>, Option<usize>)) {
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() || j < b.len() {
+        match (a.get(i), b.get(j)) {
+            (Some(x), Some(y)) if x == y => {
+                visit(Some(i), Some(j));
+                i += 1;
+                j += 1;
+            }
+            (Some(x), Some(y)) if x < y => {
+                visit(Some(i), None);
+                i += 1;
+            }
+            (Some(_), None) => {
+                visit(Some(i), None);
+                i += 1;
+            }
+            _ => {
+                visit(None, Some(j));
+                j += 1;
+            }
+        }
     }
 }
 
@@ -580,7 +772,7 @@ mod tests {
                 let spec = NodeSpec::new(format!("n{i}"))
                     .parent(format!("g{}", i % 4))
                     .weight(1.0 + i as f64)
-                    .features(v.iter().map(|x| x * scale).collect());
+                    .features(v.iter().map(|x| x * scale).collect::<Vec<f64>>());
                 b.add(spec);
             }
             b.build().expect("valid")
@@ -611,6 +803,82 @@ mod tests {
                         assert!((s.similarity - r.similarity).abs() < 1e-12);
                     }
                 }
+            }
+        }
+    }
+
+    /// Issue 23 item 1: a set (member ids) gives the constraints of its dense
+    /// 0/1 vector, similarities bit for bit, for Jaccard, cosine and binary, on
+    /// three levels (so the sparse means of §2.4 are compared too); Pearson's
+    /// sparse sum is the same correlation up to round-off.
+    #[test]
+    fn sets_give_the_constraints_of_their_dense_vectors() {
+        use crate::neighborhood::{build_constraints, prepare, Constraint};
+        use nptreemap_formats::SparseVector;
+        let width = 9u32;
+        let mut rng = crate::rng::Rng::new(23);
+        let members: Vec<Vec<u32>> = (0..60)
+            .map(|i| {
+                if i % 17 == 0 {
+                    Vec::new()
+                } else {
+                    (0..width).filter(|_| rng.next_u64() % 4 == 0).collect()
+                }
+            })
+            .collect();
+        let tree = |sparse: bool| {
+            let mut b = DatasetBuilder::new();
+            b.add(NodeSpec::new("r"));
+            for g in 0..3 {
+                b.add(NodeSpec::new(format!("g{g}")).parent("r"));
+                for h in 0..3 {
+                    b.add(NodeSpec::new(format!("g{g}h{h}")).parent(format!("g{g}")));
+                }
+            }
+            for (i, set) in members.iter().enumerate() {
+                // Some leaves one level up, so that virtual copies carry them down.
+                let parent = if i % 5 == 0 {
+                    format!("g{}", i % 3)
+                } else {
+                    format!("g{}h{}", i % 3, i % 7 % 3)
+                };
+                let spec = NodeSpec::new(format!("n{i}")).parent(parent).weight(1.0);
+                let spec = if sparse {
+                    spec.features(SparseVector::set(width, set.iter().copied()).expect("set"))
+                } else {
+                    let mut dense = vec![0.0; width as usize];
+                    for &k in set {
+                        dense[k as usize] = 1.0;
+                    }
+                    spec.features(dense)
+                };
+                b.add(spec);
+            }
+            prepare(&b.build().expect("valid"))
+        };
+        let (dense, sparse) = (tree(false), tree(true));
+        assert!(sparse.nodes().iter().all(|n| n.features.as_ref().is_some_and(|f| f.as_sparse().is_some())));
+        let key = |c: &Constraint| (c.a, c.b, c.score, c.strength, c.similarity.to_bits());
+        for kind in [SimilarityKind::Jaccard, SimilarityKind::Cosine, SimilarityKind::Binary] {
+            let want: Vec<_> = build_constraints(&dense, kind).iter().map(key).collect();
+            let got: Vec<_> = build_constraints(&sparse, kind).iter().map(key).collect();
+            assert!(want.len() > 10, "{kind:?}: {}", want.len());
+            assert_eq!(got, want, "{kind:?}");
+            for (a, b) in [(1, 2), (4, 30), (40, 41), (0, 3)] {
+                assert_eq!(
+                    similarity(kind, &sparse, a, b).to_bits(),
+                    similarity(kind, &dense, a, b).to_bits(),
+                    "{kind:?} {a} {b}"
+                );
+            }
+        }
+        for a in 0..dense.len() {
+            for b in [1, 5, 17, 33, 60] {
+                let (s, d) = (
+                    similarity(SimilarityKind::Pearson, &sparse, a, b),
+                    similarity(SimilarityKind::Pearson, &dense, a, b),
+                );
+                assert!((s - d).abs() < 1e-12, "pearson {a} {b}: {s} {d}");
             }
         }
     }

@@ -11,7 +11,7 @@
 
 use std::collections::HashMap;
 
-use super::similarity::{jaccard, NodeFeatures, SimilarityKind};
+use super::similarity::{pair_similarity, NodeFeatures, SimilarityKind};
 
 /// What the binning of one node needs from its row.
 #[derive(Clone, Debug, Default)]
@@ -68,7 +68,7 @@ impl SparseLevel {
                     .map_or(0, |&m| m as usize + 1);
                 let mut postings: Vec<Vec<u32>> = vec![Vec::new(); width];
                 for (j, f) in features.iter().enumerate() {
-                    if f.values().is_some() {
+                    if f.len().is_some() {
                         for &k in f.support() {
                             postings[k as usize].push(j as u32);
                         }
@@ -126,7 +126,7 @@ impl SparseLevel {
             }
             SparseLevel::Supports { postings } => {
                 let a = &features[i];
-                let Some(len) = a.values().map(<[f64]>::len) else {
+                let Some(len) = a.len() else {
                     row.zeros = others;
                     row.zero_head = (0..level.len()).filter(|&j| j != i).take(HEAD).collect();
                     return row;
@@ -147,8 +147,10 @@ impl SparseLevel {
                 for &j in &touched {
                     let b = &features[j];
                     // Different lengths have no similarity (as `vector_similarity`).
-                    if j != i && b.values().map(<[f64]>::len) == Some(len) {
-                        let s = jaccard(a.support(), b.support());
+                    if j != i && b.len() == Some(len) {
+                        // The measure itself: a dense and a sparse vector of one
+                        // length are still unrelated.
+                        let s = pair_similarity(SimilarityKind::Jaccard, a, b, level[j]);
                         if s != 0.0 {
                             row.shown.push((j, s));
                         }
@@ -178,25 +180,15 @@ impl SparseLevel {
 }
 
 /// Groups of identical vectors (`==` per element, so −0 equals 0 and NaN equals
-/// nothing; lengths must match; a missing vector equals nothing), as
-/// `vector_similarity` decides binary similarity.
+/// nothing; lengths must match; a missing vector equals nothing; sets by their
+/// members), as `vector_similarity` decides binary similarity.
 fn equal_groups(features: &[NodeFeatures<'_>]) -> SparseLevel {
     let mut ids: HashMap<Vec<u64>, usize> = HashMap::new();
     let mut group = Vec::with_capacity(features.len());
     let mut sizes: Vec<usize> = Vec::new();
     let mut first_members: Vec<Vec<usize>> = Vec::new();
     for (j, f) in features.iter().enumerate() {
-        let key = f
-            .values()
-            .filter(|v| !v.iter().any(|x| x.is_nan()))
-            .map(|v| {
-                // Length first, then the bits with −0 folded into 0.
-                let mut key = Vec::with_capacity(v.len() + 1);
-                key.push(v.len() as u64);
-                key.extend(v.iter().map(|&x| if x == 0.0 { 0 } else { x.to_bits() }));
-                key
-            });
-        let g = match key {
+        let g = match f.binary_key() {
             Some(key) => *ids.entry(key).or_insert(sizes.len()),
             None => sizes.len(),
         };

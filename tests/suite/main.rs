@@ -30,6 +30,7 @@ mod render_fields;
 mod render_refs;
 mod safety;
 mod serve;
+mod sets;
 mod similarity_paths;
 mod single_dataset;
 mod tabs;

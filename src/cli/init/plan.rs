@@ -280,7 +280,15 @@ fn similarity(
             )));
         };
         let values = genre_values(nodes.known, genres);
-        dims(values, "distinct values of the genres column", nodes_path)?;
+        // Genres are sets, capped by max_set_members (issue 23), not dense dimensions.
+        if values > limits.max_set_members {
+            return Err(over(
+                nodes_path,
+                limits,
+                Limit::SetMembers,
+                format!("{values} distinct values of the genres column"),
+            ));
+        }
         return Ok(Similarity {
             format: "genre-table",
             files: Vec::new(),

@@ -62,29 +62,15 @@ pub use params::NeighborParams;
 const LOOKAHEAD_CANDIDATES: usize = 3;
 
 /// 2-D positions for every node of `dataset`, in any scale: PCA of the
-/// feature vectors when every node has one of the same length (after
+/// feature vectors when every node has one of the same length and kind (after
 /// `neighborhood::prepare` internal nodes have the mean of their
 /// children), else classical MDS of `1 − similarity`.
 pub fn projection_of(dataset: &Dataset, similarity: impl Fn(usize, usize) -> f64) -> Vec<Point> {
     let nodes = dataset.nodes();
-    let dim = nodes
-        .first()
-        .and_then(|n| n.features.as_ref().map(Vec::len));
-    let uniform = dim.is_some_and(|d| {
-        d > 0
-            && nodes
-                .iter()
-                .all(|n| n.features.as_ref().is_some_and(|f| f.len() == d))
-    });
-    if uniform {
-        let vectors: Vec<Vec<f64>> = nodes
-            .iter()
-            .map(|n| n.features.clone().unwrap_or_default())
-            .collect();
-        projection::pca_2d(&vectors)
-    } else {
+    let features: Vec<_> = nodes.iter().map(|n| n.features.as_ref()).collect();
+    projection::pca_of_features(&features).unwrap_or_else(|| {
         projection::classical_mds_2d(|a, b| 1.0 - similarity(a, b), nodes.len())
-    }
+    })
 }
 
 /// Lays out a prepared dataset (uniform depth) with a similarity-driven method.

@@ -479,6 +479,7 @@ pub fn small_limits() -> impl Strategy<Value = Limits> {
             max_nodes: n,
             max_depth: d,
             max_dimensions: k,
+            max_set_members: k,
             max_file_mb: 1,
         }),
     ]
@@ -739,10 +740,16 @@ pub fn check_dataset(dataset: &Dataset, limits: &Limits) -> Result<(), String> {
             return Err(format!("node {:?}: value {}", node.id, node.value));
         }
         if let Some(f) = &node.features {
-            if f.len() > limits.max_dimensions {
+            // Dense vectors are capped by max_dimensions, sets by max_set_members.
+            let cap = if f.as_dense().is_some() {
+                limits.max_dimensions
+            } else {
+                limits.max_set_members
+            };
+            if f.len() > cap {
                 return Err(format!("node {:?}: {} dimensions", node.id, f.len()));
             }
-            if f.iter().any(|v| !v.is_finite()) {
+            if f.to_dense().iter().any(|v| !v.is_finite()) {
                 return Err(format!("node {:?}: non-finite feature", node.id));
             }
         }
@@ -1155,7 +1162,7 @@ impl SmallDataset {
                 let mut spec = NodeSpec::new(format!("l{leaf}"))
                     .parent(gid.clone())
                     .weight(*w);
-                spec.features = features.clone();
+                spec.features = features.clone().map(Into::into);
                 spec.relations = std::mem::take(&mut relations[leaf]);
                 b.add(spec);
                 leaf += 1;
