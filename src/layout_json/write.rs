@@ -25,7 +25,7 @@ const SIMILARITY_DECIMALS: i32 = 4;
 /// `dataset`'s nodes. Ends with a newline. Identical input gives identical bytes.
 ///
 /// Coordinates (and power weights) are rounded to a grid chosen from the
-/// canvas, finer for the cells that need it ([`precision`]), or written in
+/// canvas, finer for the cells that need it (the `precision` module), or written in
 /// full precision when `extra.exact`. An only child's `power_weight` is left
 /// out: its cell is its parent's whatever the weight (always 0).
 pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> String {
