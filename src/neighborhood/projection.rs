@@ -226,35 +226,7 @@ fn sparse_pca_2d(vectors: &[&SparseVector], d: usize) -> Vec<Point> {
     }
     let scale = pow2_floor(amax);
     let op = CentredSparse::new(vectors, d, scale);
-    let par = Par::Seq;
-    let params = PartialEigenParams::default();
-    let want = 2.min(n.min(d));
-    let mut left = Mat::<f64>::zeros(n, want);
-    let mut right = Mat::<f64>::zeros(d, want);
-    let mut sigma = vec![0.0; want];
-    let start = Col::<f64>::from_fn(d, {
-        let v = start_vector(d, SEED_LANCZOS);
-        move |i| v[i]
-    });
-    let mut mem = MemBuffer::new(partial_svd_scratch::<f64>(&op, want, par, params));
-    let info = partial_svd(
-        left.as_mut(),
-        right.as_mut(),
-        &mut sigma,
-        &op,
-        start.as_ref(),
-        PARTIAL_REL_TOL * op.frobenius(),
-        par,
-        MemStack::new(&mut mem),
-        params,
-    );
-    let pairs: Vec<(f64, Vec<f64>)> = (0..info.n_converged_eigen.min(want))
-        .map(|t| {
-            let mut v = right.col_as_slice(t).to_vec();
-            normalize(&mut v);
-            (sigma[t] * sigma[t], v)
-        })
-        .collect();
+    let pairs = top2_singular_of(&op, op.frobenius());
     let mut coords = [vec![0.0; n], vec![0.0; n]];
     for (axis, (_, mut v)) in leading_axes(pairs).into_iter().enumerate() {
         orient(&mut v);
@@ -776,8 +748,13 @@ fn orthogonalize(x: &mut [f64], against: &[&[f64]]) {
 /// (σ², v) pairs, descending: the covariance's top eigenpairs without forming it, by
 /// faer's restarted Lanczos bidiagonalisation from a fixed start vector.
 fn top2_singular(x: &[f64], n: usize, d: usize) -> Vec<(f64, Vec<f64>)> {
-    let op = MatRef::from_row_major_slice(x, n, d);
-    let frob = dot(x, x).sqrt();
+    top2_singular_of(&MatRef::from_row_major_slice(x, n, d), dot(x, x).sqrt())
+}
+
+/// [`top2_singular`] of any operator (`frob`: its Frobenius norm, for the
+/// stopping tolerance): the dense data or the implicitly centred sparse rows.
+fn top2_singular_of(op: &dyn BiLinOp<f64>, frob: f64) -> Vec<(f64, Vec<f64>)> {
+    let (n, d) = (op.nrows(), op.ncols());
     let par = Par::Seq;
     let params = PartialEigenParams::default();
     let want = 2.min(n.min(d));
@@ -788,12 +765,12 @@ fn top2_singular(x: &[f64], n: usize, d: usize) -> Vec<(f64, Vec<f64>)> {
         let v = start_vector(d, SEED_LANCZOS);
         move |i| v[i]
     });
-    let mut mem = MemBuffer::new(partial_svd_scratch::<f64>(&op, want, par, params));
+    let mut mem = MemBuffer::new(partial_svd_scratch::<f64>(op, want, par, params));
     let info = partial_svd(
         left.as_mut(),
         right.as_mut(),
         &mut sigma,
-        &op,
+        op,
         start.as_ref(),
         PARTIAL_REL_TOL * frob,
         par,

@@ -126,7 +126,7 @@ fn output_that_is_a_fifo_or_a_dangling_link_is_refused_without_blocking() {
 }
 
 /// Runs `nptreemap ARGS` in `dir` with at most `mib` MiB of address space.
-fn run_capped(dir: &Path, mib: u64, args: &str) -> Output {
+pub(crate) fn run_capped(dir: &Path, mib: u64, args: &str) -> Output {
     let bin = env!("CARGO_BIN_EXE_nptreemap");
     support::output_within(
         std::process::Command::new("bash")

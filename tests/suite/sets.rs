@@ -5,22 +5,8 @@
 //! lists of names gives the constraints of the same data written as one-hot
 //! vectors.
 
-use std::path::Path;
-use std::process::Output;
-
+use crate::init::run_capped;
 use crate::support;
-
-/// Runs `nptreemap ARGS` in `dir` with at most `mib` MiB of address space.
-fn run_capped(dir: &Path, mib: u64, args: &str) -> Output {
-    let bin = env!("CARGO_BIN_EXE_nptreemap");
-    support::output_within(
-        std::process::Command::new("bash")
-            .arg("-c")
-            .arg(format!("ulimit -v {}; exec {bin} {args}", mib * 1024))
-            .current_dir(dir),
-        600,
-    )
-}
 
 #[cfg(unix)]
 #[test]
