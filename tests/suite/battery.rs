@@ -282,25 +282,27 @@ fn real_debian_packages_at_five_seeds() {
     }
     let config = dir.join("nptreemap.yaml");
     for seed in SEEDS {
-        let out = dir.join(format!("debian_{seed}.json"));
-        let run = support::bin()
-            .args(["layout", "--config", config.to_str().expect("utf8")])
-            .args([
-                "--seed",
-                &seed.to_string(),
-                "--out",
-                out.to_str().expect("utf8"),
-            ])
-            .output()
-            .expect("run nptreemap");
-        assert!(
-            run.status.success(),
-            "seed {seed}: {}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let report = support::check_layout(&out);
-        support::assert_area_error(&report, 0.01);
+        layout_real(&config, seed, &dir.join(format!("debian_{seed}.json")));
     }
+}
+
+/// Lays out the dataset of `config` at `seed` to `out` with the binary and
+/// returns the checker's report, after checking the areas (within 1%).
+fn layout_real(config: &Path, seed: u64, out: &Path) -> Value {
+    let run = support::bin()
+        .args(["layout", "--config", config.to_str().expect("utf8")])
+        .args(["--seed", &seed.to_string()])
+        .args(["--out", out.to_str().expect("utf8")])
+        .output()
+        .expect("run nptreemap");
+    assert!(
+        run.status.success(),
+        "seed {seed}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report = support::check_layout(out);
+    support::assert_area_error(&report, 0.01);
+    report
 }
 
 /// Issue 23: "realised constraints at least today's" on every real dataset.
@@ -319,21 +321,8 @@ fn real_usr_bin_realises_at_least_the_issue_baseline() {
     let config = dir.join("nptreemap.yaml");
     let mut realized: Vec<u64> = [1, 2, 3]
         .iter()
-        .map(|seed| {
-            let out = dir.join(format!("usr_bin_{seed}.json"));
-            let run = support::bin()
-                .args(["layout", "--config", config.to_str().expect("utf8")])
-                .args(["--seed", &seed.to_string()])
-                .args(["--out", out.to_str().expect("utf8")])
-                .output()
-                .expect("run nptreemap");
-            assert!(
-                run.status.success(),
-                "seed {seed}: {}",
-                String::from_utf8_lossy(&run.stderr)
-            );
-            let report = support::check_layout(&out);
-            support::assert_area_error(&report, 0.01);
+        .map(|&seed| {
+            let report = layout_real(&config, seed, &dir.join(format!("usr_bin_{seed}.json")));
             report["realized_lowest"].as_u64().expect("realized_lowest")
         })
         .collect();
