@@ -134,7 +134,7 @@ pub(super) fn optimize_level(
     // by attraction ticks (see ATTRACT_MAX_CHILDREN).
     let largest = diagrams.iter().map(Diagram::len).max().unwrap_or(0);
     let ticks = if largest > ATTRACT_MAX_CHILDREN {
-        catch_up(&mut diagrams, np.ticks);
+        lloyd_until(&mut diagrams, CANDIDATE_ERROR, np.ticks);
         0
     } else {
         np.ticks
@@ -147,7 +147,7 @@ pub(super) fn optimize_level(
         let snap = lv.snapshot(&diagrams);
         keep_if_best(&mut best, &snap.score, snap.area_error, &diagrams);
         let value = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.0.value());
-        if value >= reference + (PLATEAU_SHARE * reference.abs()).max(0.5) {
+        if value >= reference + progress_step(reference) {
             reference = value;
             idle = 0;
         } else {
@@ -198,13 +198,16 @@ pub(super) fn optimize_level(
     Ok((score, diagrams))
 }
 
-/// Lloyd ticks (the plain optimiser's) for every diagram whose areas are far
-/// from their targets: after the equal-area start, and after swaps.
-fn grow(diagrams: &mut [Diagram]) {
+/// Lloyd ticks (the plain optimiser's), at most `ticks`, for every diagram
+/// whose area error is above `error`: after the equal-area start and after
+/// swaps (to [`GROWN_ERROR`]), and for a level that makes no attraction
+/// ticks, what the tick loop would do for it (to [`CANDIDATE_ERROR`]: after
+/// growing, a 10,000-cell diagram can still be at area error 0.7).
+fn lloyd_until(diagrams: &mut [Diagram], error: f64, ticks: usize) {
     diagrams.par_iter_mut().for_each(|d| {
         if let Diagram::Sim { sim, .. } = d {
-            for _ in 0..GROW_TICKS {
-                if sim.state().convergence_ratio <= GROWN_ERROR {
+            for _ in 0..ticks {
+                if sim.state().convergence_ratio <= error {
                     break;
                 }
                 sim.lloyd_tick();
@@ -213,21 +216,15 @@ fn grow(diagrams: &mut [Diagram]) {
     });
 }
 
-/// Lloyd ticks, at most `ticks`, for every diagram whose areas are further
-/// from their targets than a candidate state's may be: what the tick loop
-/// does for such diagrams, for a level that makes no attraction ticks. After
-/// [`grow`] a 10,000-cell diagram can still be at area error 0.7.
-fn catch_up(diagrams: &mut [Diagram], ticks: usize) {
-    diagrams.par_iter_mut().for_each(|d| {
-        if let Diagram::Sim { sim, .. } = d {
-            for _ in 0..ticks {
-                if sim.state().convergence_ratio <= CANDIDATE_ERROR {
-                    break;
-                }
-                sim.lloyd_tick();
-            }
-        }
-    });
+/// [`lloyd_until`] the areas have grown from the equal-area start.
+fn grow(diagrams: &mut [Diagram]) {
+    lloyd_until(diagrams, GROWN_ERROR, GROW_TICKS);
+}
+
+/// The least rise over `reference` that counts as progress: half a
+/// constraint, or [`PLATEAU_SHARE`] of the score on large levels.
+fn progress_step(reference: f64) -> f64 {
+    (PLATEAU_SHARE * reference.abs()).max(0.5)
 }
 
 /// Keeps `diagrams` as the best state when its score is at least the best's
@@ -297,7 +294,7 @@ fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
         }
         let gain = snap.score.value() - score.value();
         score = snap.score;
-        if gain < (PLATEAU_SHARE * score.value().abs()).max(0.5) {
+        if gain < progress_step(score.value()) {
             break;
         }
     }
