@@ -128,8 +128,7 @@ pub(super) fn optimize_level(
     grow(&mut diagrams);
     let patience = patience(cells, np);
     let mut best: Option<(Score, Saved)> = None;
-    let mut reference = f64::NEG_INFINITY;
-    let mut idle = 0;
+    let mut progress = Progress::default();
     // One diagram this large is arranged by the swap rounds of `polish`, not
     // by attraction ticks (see ATTRACT_MAX_CHILDREN).
     let largest = diagrams.iter().map(Diagram::len).max().unwrap_or(0);
@@ -146,14 +145,8 @@ pub(super) fn optimize_level(
         }
         let snap = lv.snapshot(&diagrams);
         keep_if_best(&mut best, &snap.score, snap.area_error, &diagrams);
-        let value = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.0.value());
-        if value >= reference + progress_step(reference) {
-            reference = value;
-            idle = 0;
-        } else {
-            idle += 1;
-        }
-        if idle >= patience {
+        let value = best.as_ref().map(|b| b.0.value());
+        if progress.observe(value) >= patience {
             break;
         }
         diagrams.par_iter_mut().for_each(|d| {
@@ -219,6 +212,32 @@ fn lloyd_until(diagrams: &mut [Diagram], error: f64, ticks: usize) {
 /// [`lloyd_until`] the areas have grown from the equal-area start.
 fn grow(diagrams: &mut [Diagram]) {
     lloyd_until(diagrams, GROWN_ERROR, GROW_TICKS);
+}
+
+/// The patience count of the tick loop: the best score that last counted as
+/// progress, and the ticks since.
+#[derive(Default)]
+struct Progress {
+    reference: Option<f64>,
+    idle: usize,
+}
+
+impl Progress {
+    /// Takes the best score after a tick (`None` while no state is a
+    /// candidate yet) and returns the ticks since the last progress.
+    fn observe(&mut self, best: Option<f64>) -> usize {
+        // The first candidate is progress over nothing (a reference of -inf
+        // would make the step, and so the comparison, NaN).
+        let rises = |value: f64| self.reference.is_none_or(|r| value >= r + progress_step(r));
+        match best {
+            Some(value) if rises(value) => {
+                self.reference = Some(value);
+                self.idle = 0;
+            }
+            _ => self.idle += 1,
+        }
+        self.idle
+    }
 }
 
 /// The least rise over `reference` that counts as progress: half a
@@ -297,5 +316,28 @@ fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
         if gain < progress_step(score.value()) {
             break;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_first_candidate_and_each_real_rise_count_as_progress() {
+        let mut p = Progress::default();
+        // Before any candidate state, ticks are idle.
+        assert_eq!(p.observe(None), 1);
+        assert_eq!(p.observe(None), 2);
+        // The first candidate is progress over nothing.
+        assert_eq!(p.observe(Some(100.0)), 0);
+        // Less than half a constraint more is not progress ...
+        assert_eq!(p.observe(Some(100.4)), 1);
+        // ... half a constraint over the last progress is.
+        assert_eq!(p.observe(Some(100.5)), 0);
+        // On large scores the step is PLATEAU_SHARE of the score.
+        assert_eq!(p.observe(Some(10_000.0)), 0);
+        assert_eq!(p.observe(Some(10_000.0 + 0.9 * PLATEAU_SHARE * 10_000.0)), 1);
+        assert_eq!(p.observe(Some(10_000.0 + 1.1 * PLATEAU_SHARE * 10_000.0)), 0);
     }
 }
