@@ -5,14 +5,17 @@ where it runs (issue 12, item 7).
 
 Inputs are seeded similarity hierarchies from benches/gen_similar.py (64-d
 random-walk embeddings, lognormal weights; "flat" = one level, "h" = 3
-levels), written to target/scale/. For every case, method and seed it runs
+levels), written to target/scale/; "cheaders" is this machine's /usr/include
+through benches/c_headers.py (issue 23's C-headers-like tree). For every case, method and seed it runs
 `nptreemap bench INPUT --method M --seed S --repeat 1` in a fresh process:
 time is the layout alone (parsing excluded), peak RSS is the process's
 (os.wait4), and realised constraints (all levels), leaf aspect ratio and
 per-diagram area error are the tool's own measures, which the suite checks
 against the independent checker. d3 runs through ../shared/peers (the
 harness benches/peers.py uses) on the same files, seed 1, one process,
-where the peer can run (flat sets above 3,000 leaves fail in d3).
+where the peer can run (flat sets above 3,000 leaves fail in d3). With
+--outputs, each case is also built once with `nptreemap build` (layout JSON
+and HTML page) and the sizes of both and of the state folder are reported.
 
 Usage (from the repository root):
     python3 benches/scale.py                        # the default set, seeds 1-3
@@ -30,6 +33,7 @@ import argparse
 import datetime as dt
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -55,6 +59,10 @@ CASES = {
     "h10000": (10000, 3),
     "h20000": (20000, 3),
     "h100000": (100000, 3),
+    # Issue 23's C-headers-like tree: this machine's /usr/include by
+    # benches/c_headers.py (Jaccard sets of included names, 8+ levels); its
+    # size is the machine's.
+    "cheaders": (None, None),
 }
 DEFAULT = ["flat500", "flat1000", "flat2000", "h1000", "h10000", "h20000"]
 METHODS = ["plain", "neighbor"]
@@ -64,9 +72,13 @@ def log(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
-def generate(name: str, leaves: int, depth: int) -> Path:
+def generate(name: str, leaves, depth) -> Path:
     path = OUT / f"{name}.json"
-    if not path.exists():
+    if not path.exists() and leaves is None:
+        log(f"generating {path.relative_to(REPO)} from /usr/include ...")
+        subprocess.run([sys.executable, str(REPO / "benches" / "c_headers.py"), str(path)],
+                       check=True)
+    elif not path.exists():
         log(f"generating {path.relative_to(REPO)} ...")
         subprocess.run([sys.executable, str(REPO / "benches" / "gen_similar.py"),
                         "--n", str(leaves), "--depth", str(depth), "--dim", "64",
@@ -99,8 +111,13 @@ def timed(cmd: list, timeout: float) -> tuple[int | None, str, str, float, int]:
     return proc.returncode, text_out, text_err, secs, usage.ru_maxrss
 
 
-def run_ours(args, inp: Path, method: str, seed: int) -> dict:
-    cmd = [args.bin, "bench", inp, "--weight", "weight", "--method", method,
+def weight_args(name: str) -> list:
+    """gen_similar's files name their weight `weight`; c_headers.py's declare theirs."""
+    return [] if CASES[name][0] is None else ["--weight", "weight"]
+
+
+def run_ours(args, name: str, inp: Path, method: str, seed: int) -> dict:
+    cmd = [args.bin, "bench", inp, *weight_args(name), "--method", method,
            "--seed", seed, "--repeat", 1]
     rc, out, err, secs, rss = timed(cmd, args.timeout)
     if rc is None:
@@ -112,7 +129,31 @@ def run_ours(args, inp: Path, method: str, seed: int) -> dict:
             "realized": line.get("realized"), "constraints": line.get("constraints"),
             "aspect": line.get("aspect_ratio_mean"),
             "area_error": line.get("area_error_diagram_mean"),
-            "unconverged": line.get("unconverged")}
+            "unconverged": line.get("unconverged"), "leaves": line.get("leaves")}
+
+
+def run_outputs(args, name: str, inp: Path) -> dict:
+    """`nptreemap build` of the case (the neighbor method, the default seed) writing the layout
+    JSON and the HTML page; their sizes and the state folder's (layout, manifest and
+    cached constraints under `.nptreemap/`), in bytes."""
+    folder = OUT / f"{name}-build"
+    shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir(parents=True)
+    fields = "" if CASES[name][0] is None else "    fields: {weight: weight}\n"
+    (folder / "nptreemap.yaml").write_text(
+        f"datasets:\n  - name: {name}\n    format: hierarchy-json\n"
+        f"    files: {{hierarchy: {json.dumps(str(inp))}}}\n{fields}"
+        f"    outputs:\n      - path: out/{name}.json\n      - path: out/{name}.html\n")
+    rc, _, err, secs, rss = timed([args.bin, "build", "--config", folder / "nptreemap.yaml"],
+                                  args.timeout)
+    if rc != 0:
+        return {"status": "failed" if rc is not None else "timeout",
+                "note": peers.tail(err) or f"exit {rc}"}
+    state = folder / "out" / ".nptreemap"
+    return {"status": "ok", "build_ms": secs * 1000.0, "rss_mb": rss / 1024.0,
+            "json": (folder / "out" / f"{name}.json").stat().st_size,
+            "html": (folder / "out" / f"{name}.html").stat().st_size,
+            "state": sum(f.stat().st_size for f in state.rglob("*") if f.is_file())}
 
 
 def run_d3(args, inp: Path, leaves: int, depth: int) -> dict:
@@ -153,8 +194,8 @@ def report(results: dict, args, env: dict) -> str:
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, res in results.items():
-        leaves = CASES[name][0]
         p, n, d = res["plain"], res["neighbor"], res.get("d3", [])
+        leaves = CASES[name][0] or median(n, "leaves") or 0
         tp, tn = median(p, "time_ms"), median(n, "time_ms")
         failed = [f"{m}: {r['status']} ({r.get('note', '')})" for m in METHODS
                   for r in res[m] if r.get("status") != "ok"]
@@ -172,6 +213,20 @@ def report(results: dict, args, env: dict) -> str:
             f"{fmt(median(n, 'aspect'), '.2f')} | "
             f"{fmt(median(p, 'area_error'), '.4f')} / {fmt(median(n, 'area_error'), '.4f')} |"
             + (f" {'; '.join(failed)}" if failed else ""))
+    sized = {name: res["outputs"] for name, res in results.items() if "outputs" in res}
+    if sized:
+        lines += ["", "Output sizes (`nptreemap build`, neighbor, one run; bytes per leaf "
+                  "in brackets; state = `out/.nptreemap/`):", "",
+                  "| case | build time | build RSS | layout JSON | HTML page | state |",
+                  "|---|---|---|---|---|---|"]
+        for name, o in sized.items():
+            if o.get("status") != "ok":
+                lines.append(f"| {name} | {o.get('status')}: {o.get('note', '')} | | | | |")
+                continue
+            leaves = CASES[name][0] or median(results[name]["neighbor"], "leaves") or 1
+            size = lambda b: f"{b / 1e6:,.1f} MB ({b / leaves:,.0f} B)"  # noqa: E731
+            lines.append(f"| {name} | {o['build_ms']:,.0f} ms | {o['rss_mb']:.0f} MB | "
+                         f"{size(o['json'])} | {size(o['html'])} | {size(o['state'])} |")
     return "\n".join(lines) + "\n"
 
 
@@ -187,6 +242,9 @@ def main(argv=None) -> int:
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds per nptreemap run")
     ap.add_argument("--peer-timeout", type=float, default=300.0, help="seconds per d3 run")
     ap.add_argument("--shared", type=Path, default=peers.DEFAULT_SHARED)
+    ap.add_argument("--outputs", action="store_true",
+                    help="also build each case's layout JSON and page and report their "
+                         "sizes and the state folder's")
     args = ap.parse_args(argv)
     names = [c.strip() for c in args.cases.split(",") if c.strip()]
     bad = [c for c in names if c not in CASES]
@@ -215,10 +273,14 @@ def main(argv=None) -> int:
         for seed in seeds:
             for method in METHODS:
                 log(f"{name} {method} seed {seed} ...")
-                r = run_ours(args, inp, method, seed)
+                r = run_ours(args, name, inp, method, seed)
                 failed |= r["status"] != "ok"
                 res[method].append(r)
-        if peer:
+        if args.outputs:
+            log(f"{name} outputs ...")
+            res["outputs"] = run_outputs(args, name, inp)
+            failed |= res["outputs"]["status"] != "ok"
+        if peer and leaves is not None:
             log(f"{name} d3 ...")
             res["d3"] = [run_d3(args, inp, leaves, depth)]
         results[name] = res
