@@ -71,6 +71,7 @@ pub fn constraint_lists(prepared: &Dataset, kind: SimilarityKind) -> ConstraintL
 /// copies' too: the reference the derived rows of `copies` are tested
 /// against (issue 23 item 2). Not for production use.
 #[doc(hidden)]
+#[cfg(any(test, feature = "internals"))]
 pub fn constraint_lists_recomputed(prepared: &Dataset, kind: SimilarityKind) -> ConstraintLists {
     constraint_lists_with(prepared, kind, true, false)
 }

@@ -23,9 +23,15 @@
 //! their position there (their rank) and are renamed to a level's positions
 //! when merged, which keeps every tie where the full row puts it.
 //!
-//! Where it is not used: neighbour lists (a copy lists no relation, so its
-//! row is empty and costs nothing already), datasets without copies, and
-//! datasets where the estimate of the pairs visited says it would not pay.
+//! Where it is used: Jaccard and binary similarity (rows from an index of the
+//! columns, like `sparse_rows`). Not for neighbour lists (a copy lists no
+//! relation: its row is empty and costs nothing already), nor for datasets
+//! without copies or where an estimate of the pairs visited says it does not
+//! pay. Not for cosine and Pearson either, though it derives their bins
+//! exactly too (tested): its pairs are exact f64 one at a time, and the full
+//! rows' f32-filtered scan and nearest-neighbour search were faster than the
+//! work it saves (BENCHMARKS.md, "Copies' constraints derived from the
+//! leaves").
 //! Real rows of a level with copies are scanned, never searched through the
 //! nearest-neighbour index of `knn_rows` (which indexes a level for all of
 //! its rows); both give the same lists.
@@ -40,10 +46,6 @@ use super::rows::{level_bins, level_rows_bins};
 use super::score_tops::{ScoreTops, TopsBuilder};
 use super::similarity::{pair_similarity, NodeFeatures, SimilarityKind};
 
-/// How much more a dense pair costs here (exact f64, one pair at a time)
-/// than in the f32-filtered scan of the rows it replaces.
-const DENSE_PAIR_COST: u64 = 3;
-
 /// Every node's bins (indexed like `prepared`) with the copies' rows derived
 /// from their leaves', or `None` where derivation is not used (module docs);
 /// `levels` are the nodes of each depth in breadth-first order, `sparse` as
@@ -53,6 +55,21 @@ pub(super) fn derived_bins(
     kind: SimilarityKind,
     levels: &[Vec<usize>],
     sparse: bool,
+) -> Option<Vec<Bins>> {
+    if !matches!(kind, SimilarityKind::Jaccard | SimilarityKind::Binary) {
+        return None;
+    }
+    derive(prepared, kind, levels, sparse, true)
+}
+
+/// [`derived_bins`] for any measure but neighbour lists, whether it pays
+/// (`check_cost`) or not.
+fn derive(
+    prepared: &Dataset,
+    kind: SimilarityKind,
+    levels: &[Vec<usize>],
+    sparse: bool,
+    check_cost: bool,
 ) -> Option<Vec<Bins>> {
     if kind == SimilarityKind::NeighborList {
         return None;
@@ -74,7 +91,7 @@ pub(super) fn derived_bins(
         .iter()
         .map(|level| level.iter().map(|&n| role(prepared, n)).collect())
         .collect();
-    if !pays(kind, &roles) {
+    if !has_copies(&roles) || (check_cost && !pays(&roles)) {
         return None;
     }
 
@@ -184,27 +201,27 @@ fn role(prepared: &Dataset, index: usize) -> Role {
     }
 }
 
+/// True when some level holds a copy.
+fn has_copies(roles: &[Vec<Role>]) -> bool {
+    roles.iter().flatten().any(|&r| r == Role::Copy)
+}
+
 /// True when the pairs the derivation visits are fewer than the full rows'
-/// (dense pairs weighed by [`DENSE_PAIR_COST`]) on the levels it touches,
-/// and there is a copy at all.
-fn pays(kind: SimilarityKind, roles: &[Vec<Role>]) -> bool {
-    let weight = match kind {
-        SimilarityKind::Cosine | SimilarityKind::Pearson => DENSE_PAIR_COST,
-        _ => 1,
-    };
-    let (mut full, mut derived, mut any_copy) = (0u64, 0u64, false);
+/// on the levels it touches (a proxy: the sparse rows visit only pairs that
+/// share a member, in the same proportion on both sides).
+fn pays(roles: &[Vec<Role>]) -> bool {
+    let (mut full, mut derived) = (0u64, 0u64);
     for level in roles {
         let count = |r: Role| level.iter().filter(|&&x| x == r).count() as u64;
         let (copies, heads, all) = (count(Role::Copy), count(Role::Head), level.len() as u64);
         if copies + heads == 0 {
             continue;
         }
-        any_copy |= copies > 0;
         let reals = all - copies;
         full += all * all;
-        derived += reals * all + weight * (copies * reals + heads * (copies + heads));
+        derived += reals * all + copies * reals + heads * (copies + heads);
     }
-    any_copy && derived < full
+    derived < full
 }
 
 /// A set of a level's positions (ascending) indexed for one measure, for rows
@@ -376,7 +393,7 @@ mod tests {
         let mut derived_any = false;
         for sparse in [true, false] {
             let old = recomputed(p, kind, sparse);
-            if let Some(new) = derived_bins(p, kind, &levels, sparse) {
+            if let Some(new) = derive(p, kind, &levels, sparse, false) {
                 derived_any = true;
                 assert_eq!(bits(&new), bits(&old), "{what}, {kind:?}, sparse {sparse}");
                 // Below the nearest-neighbour size the old rows are full bins.

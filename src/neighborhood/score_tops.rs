@@ -44,6 +44,7 @@ pub(super) struct ScoreTops {
 
 impl ScoreTops {
     /// The summary of no column.
+    #[cfg(test)]
     pub(super) fn empty() -> Self {
         ScoreTops {
             counts: vec![0; SCORES],
@@ -69,11 +70,20 @@ impl ScoreTops {
         if other.tops.is_empty() {
             return;
         }
-        let mut all: Vec<Entry> = self.tops.iter().chain(&other.tops).copied().collect();
-        all.sort_by(|a, b| b.score.cmp(&a.score).then_with(|| list_order(a, b)));
-        let mut kept: Vec<Entry> = Vec::with_capacity(all.len());
+        // Both lists are sorted: one linear merge, then each score cut to
+        // its first entries.
+        let order = |a: &Entry, b: &Entry| b.score.cmp(&a.score).then_with(|| list_order(a, b));
+        let (mut x, mut y) = (self.tops.iter().peekable(), other.tops.iter().peekable());
+        let mut kept: Vec<Entry> = Vec::with_capacity(self.tops.len() + other.tops.len());
         let (mut run, mut current) = (0, None);
-        for e in all {
+        loop {
+            let e = match (x.peek(), y.peek()) {
+                (Some(a), Some(b)) if order(a, b) != Ordering::Greater => x.next(),
+                (Some(_), Some(_)) | (None, Some(_)) => y.next(),
+                (Some(_), None) => x.next(),
+                (None, None) => break,
+            };
+            let Some(&e) = e else { break };
             if current == Some(e.score) {
                 run += 1;
             } else {
