@@ -350,6 +350,9 @@ mod tests {
     use crate::rng::Rng;
     use nptreemap_formats::{DatasetBuilder, NodeSpec, SparseVector};
 
+    /// A bin as (count, head as (similarity bits, node, score)).
+    type BinBits = (usize, Vec<(u64, usize, u8)>);
+
     /// The old path: every row of every level computed.
     fn recomputed(p: &Dataset, kind: SimilarityKind, sparse: bool) -> Vec<Bins> {
         let mut levels: Vec<Vec<usize>> = vec![Vec::new(); p.max_depth() + 1];
@@ -372,7 +375,7 @@ mod tests {
         for (index, node) in p.nodes().iter().enumerate() {
             levels[node.depth].push(index);
         }
-        let bits = |bins: &[Bins]| -> Vec<Vec<(usize, Vec<(u64, usize, u8)>)>> {
+        let bits = |bins: &[Bins]| -> Vec<Vec<BinBits>> {
             bins.iter()
                 .map(|b| {
                     stage_view(b)
