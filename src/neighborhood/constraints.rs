@@ -12,6 +12,7 @@ use std::collections::BTreeMap;
 use nptreemap_formats::Dataset;
 
 use super::bins::Bins;
+use super::copies::derived_bins;
 use super::rows::level_bins;
 use super::similarity::{clamp_unit, pair_similarity, NodeFeatures, SimilarityKind};
 use super::stages;
@@ -63,15 +64,26 @@ pub struct ConstraintLists {
 /// all pairs (`O(n²·d)` per level), through the f32 filter of `filtered_rows` where
 /// the level allows it (same bins, bit for bit).
 pub fn constraint_lists(prepared: &Dataset, kind: SimilarityKind) -> ConstraintLists {
-    constraint_lists_with(prepared, kind, true)
+    constraint_lists_with(prepared, kind, true, true)
+}
+
+/// [`constraint_lists`] with every row of every level computed, the virtual
+/// copies' too: the reference the derived rows of `copies` are tested
+/// against (issue 23 item 2). Not for production use.
+#[doc(hidden)]
+#[cfg(any(test, feature = "internals"))]
+pub fn constraint_lists_recomputed(prepared: &Dataset, kind: SimilarityKind) -> ConstraintLists {
+    constraint_lists_with(prepared, kind, true, false)
 }
 
 /// [`constraint_lists`], with the sparse rows allowed or not (the all-pairs scan is
-/// the reference the sparse rows are tested against).
+/// the reference the sparse rows are tested against), and the copies' rows
+/// derived from their leaves' (`copies`) or recomputed per level.
 fn constraint_lists_with(
     prepared: &Dataset,
     kind: SimilarityKind,
     sparse: bool,
+    derive: bool,
 ) -> ConstraintLists {
     let nodes = prepared.nodes();
 
@@ -81,13 +93,7 @@ fn constraint_lists_with(
         levels[node.depth].push(index);
     }
 
-    // §3.1–3.2: bins per non-root node, level by level, rows in parallel.
-    let mut bins: Vec<Bins> = vec![Bins::default(); nodes.len()];
-    for level in levels.iter().skip(1) {
-        for (&node, node_bins) in level.iter().zip(level_bins(prepared, kind, level, sparse)) {
-            bins[node] = node_bins;
-        }
-    }
+    let bins = level_by_level_bins(prepared, kind, &levels, sparse, derive);
 
     let mut lists = stages::top_bin(&bins);
     stages::propagate(nodes, &mut lists);
@@ -98,6 +104,30 @@ fn constraint_lists_with(
         directed,
         symmetric: lists,
     }
+}
+
+/// §3.1–3.2: bins per non-root node, level by level, rows in parallel; the
+/// virtual copies' derived from their leaves' where `derive` and it pays.
+fn level_by_level_bins(
+    prepared: &Dataset,
+    kind: SimilarityKind,
+    levels: &[Vec<usize>],
+    sparse: bool,
+    derive: bool,
+) -> Vec<Bins> {
+    if let Some(bins) = derive
+        .then(|| derived_bins(prepared, kind, levels, sparse))
+        .flatten()
+    {
+        return bins;
+    }
+    let mut bins: Vec<Bins> = vec![Bins::default(); prepared.len()];
+    for level in levels.iter().skip(1) {
+        for (&node, node_bins) in level.iter().zip(level_bins(prepared, kind, level, sparse)) {
+            bins[node] = node_bins;
+        }
+    }
+    bins
 }
 
 /// The unordered pairs with score > 1 (§3.6) of every level of a prepared dataset,
@@ -348,8 +378,8 @@ mod tests {
                 SimilarityKind::Binary,
                 SimilarityKind::Jaccard,
             ] {
-                let sparse = constraint_lists_with(&p, kind, true);
-                let dense = constraint_lists_with(&p, kind, false);
+                let sparse = constraint_lists_with(&p, kind, true, true);
+                let dense = constraint_lists_with(&p, kind, false, true);
                 assert_eq!(sparse, dense, "seed {seed}, {kind:?}");
             }
         }
@@ -361,8 +391,8 @@ mod tests {
         ] {
             let (p, kind) = paper(name);
             assert_eq!(
-                constraint_lists_with(&p, kind, true),
-                constraint_lists_with(&p, kind, false),
+                constraint_lists_with(&p, kind, true, true),
+                constraint_lists_with(&p, kind, false, true),
                 "{name}"
             );
         }

@@ -8,6 +8,8 @@
 mod bins;
 /// An exact nearest-neighbour index of unit vectors: spherical caps.
 mod cap_index;
+/// The virtual copies' bins, derived from their leaves' similarities.
+mod copies;
 /// The constraint pipeline's results and its order (stages A to E).
 pub mod constraints;
 /// The dot-product kernels of the dense similarity rows (one AVX dispatch).
@@ -26,6 +28,8 @@ pub mod projection;
 pub mod similarity;
 /// A level's similarity rows, binned: sparse, filtered or exact dense.
 mod rows;
+/// A row over some columns reduced to what binning reads; rows from parts.
+mod score_tops;
 /// Exact similarity rows without all-pairs work for the sparse measures.
 mod sparse_rows;
 /// Stages A to D: from bins to directed and symmetric lists.

@@ -25,6 +25,20 @@ pub(super) fn level_bins(
     level: &[usize],
     sparse: bool,
 ) -> Vec<Bins> {
+    level_rows_bins(prepared, kind, level, None, sparse)
+}
+
+/// [`level_bins`] for the rows at positions `only` (ascending) of `level`, one
+/// per position in that order, each over the whole level; `None` is every row.
+/// A subset never goes through the nearest-neighbour search, which indexes and
+/// samples the level for all of its rows: its rows are scanned.
+pub(super) fn level_rows_bins(
+    prepared: &Dataset,
+    kind: SimilarityKind,
+    level: &[usize],
+    only: Option<&[usize]>,
+    sparse: bool,
+) -> Vec<Bins> {
     // Norms, supports and centred vectors once per node, not per pair.
     let level_features: Vec<NodeFeatures<'_>> = level
         .iter()
@@ -38,29 +52,37 @@ pub(super) fn level_bins(
     // Large levels: the nearest-neighbour search, where a sample shows it pays.
     if let Some(bins) = filter
         .as_ref()
+        .filter(|_| only.is_none())
         .and_then(|f| knn_level_bins(kind, f, &level_features, level))
     {
         return bins;
     }
+    let all: Vec<usize>;
+    let rows: &[usize] = match only {
+        Some(rows) => rows,
+        None => {
+            all = (0..level.len()).collect();
+            &all
+        }
+    };
     let transposed = match (&sparse_level, &filter) {
         (None, None) => Transposed::new(kind, &level_features),
         _ => None,
     };
     if let Some(index) = &sparse_level {
-        return (0..level.len())
-            .into_par_iter()
-            .map_init(Vec::new, |counts, i| {
+        return rows
+            .par_iter()
+            .map_init(Vec::new, |counts, &i| {
                 let row = index.row(&level_features, level, i, counts);
                 bin_sparse(kind, &row, level)
             })
             .collect();
     }
-    let tiles: Vec<Vec<Bins>> = (0..level.len().div_ceil(TILE_ROWS))
-        .into_par_iter()
+    let tiles: Vec<Vec<Bins>> = rows
+        .par_chunks(TILE_ROWS)
         .map_init(
             || (vec![Vec::new(); TILE_ROWS], Vec::new(), Vec::new()),
-            |(rows, scores, filter_state), tile| {
-                let span = tile * TILE_ROWS..((tile + 1) * TILE_ROWS).min(level.len());
+            |(rows, scores, filter_state), span| {
                 if let Some(filter) = &filter {
                     return filtered_tile(
                         kind,
@@ -76,11 +98,12 @@ pub(super) fn level_bins(
                     &level_features,
                     transposed.as_ref(),
                     level,
-                    span.clone(),
+                    span,
                     rows,
                 );
-                span.zip(rows.iter())
-                    .map(|(i, row)| bin_row(kind, level, i, row, scores))
+                span.iter()
+                    .zip(rows.iter())
+                    .map(|(&i, row)| bin_row(kind, level, i, row, scores))
                     .collect()
             },
         )
@@ -159,16 +182,16 @@ fn similarity_rows(
     features: &[NodeFeatures<'_>],
     transposed: Option<&Transposed>,
     level: &[usize],
-    rows: std::ops::Range<usize>,
+    rows: &[usize],
     out: &mut [Vec<f64>],
 ) {
     let vectors: Option<Vec<&[f64]>> = transposed.and_then(|_| {
-        rows.clone()
-            .map(|i| features[i].values())
+        rows.iter()
+            .map(|&i| features[i].values())
             .collect::<Option<_>>()
     });
     let (Some(t), Some(vectors)) = (transposed, vectors) else {
-        for (i, row) in rows.zip(out.iter_mut()) {
+        for (&i, row) in rows.iter().zip(out.iter_mut()) {
             similarity_row(kind, features, None, level, i, row);
         }
         return;
@@ -182,7 +205,7 @@ fn similarity_rows(
         t.dot_block_tile(&vectors, block, &mut acc);
         let first = block * LANES;
         let last = (first + LANES).min(level.len());
-        for ((i, row), dots) in rows.clone().zip(out.iter_mut()).zip(&acc) {
+        for ((&i, row), dots) in rows.iter().zip(out.iter_mut()).zip(&acc) {
             let norm_a = t.norms[i];
             for (j, &d) in (first..last).zip(dots) {
                 row[j] = cosine_from_parts(d, norm_a, t.norms[j]);
@@ -207,7 +230,7 @@ fn similarity_row(
             features,
             Some(t),
             level,
-            i..i + 1,
+            &[i],
             std::slice::from_mut(out),
         );
         return;
@@ -242,14 +265,15 @@ fn filtered_tile(
     filter: &Filter,
     features: &[NodeFeatures<'_>],
     level: &[usize],
-    span: std::ops::Range<usize>,
+    span: &[usize],
     (row, scores, state): (&mut Vec<f64>, &mut Vec<u8>, &mut Vec<RowState>),
 ) -> Vec<Bins> {
-    let filtered: Vec<usize> = span.clone().filter(|&i| !filter.is_exact(i)).collect();
+    let filtered: Vec<usize> = span.iter().copied().filter(|&i| !filter.is_exact(i)).collect();
     let mut fast = filter
         .bin_rows(kind, features, level, &filtered, state)
         .into_iter();
-    span.map(|i| {
+    span.iter()
+        .map(|&i| {
         if filter.is_exact(i) {
             similarity_row(kind, features, None, level, i, row);
             bin_row(kind, level, i, row, scores)
@@ -313,16 +337,16 @@ mod tests {
             let mut rows = vec![Vec::new(); 9];
             for len in 1..=9 {
                 for first in 0..=level.len() - len {
-                    let span = first..first + len;
+                    let span: Vec<usize> = (first..first + len).collect();
                     similarity_rows(
                         kind,
                         &features,
                         transposed.as_ref(),
                         &level,
-                        span.clone(),
+                        &span,
                         &mut rows,
                     );
-                    for (i, row) in span.zip(&rows) {
+                    for (&i, row) in span.iter().zip(&rows) {
                         for j in (0..level.len()).filter(|&j| j != i) {
                             let slow = pair_similarity(kind, &features[i], &features[j], level[j]);
                             assert_eq!(row[j].to_bits(), slow.to_bits(), "tile {len} at {first}");
