@@ -14,10 +14,10 @@
 use rayon::prelude::*;
 
 use super::attract::attraction_moves;
-use super::level::{settle, settle_to, Diagram, LevelCtx};
+use super::level::{settle, settle_to, Diagram, LevelCtx, Snapshot};
 use super::links::Score;
 use super::params::Distances;
-use super::swap::{swap_round, swap_round_within};
+use super::swap::{apply_swaps, plan_swaps, swap_round, unpaid_swaps};
 use super::NeighborParams;
 use crate::layout::frames::Recorder;
 use crate::layout::map::Checkpoint;
@@ -282,8 +282,12 @@ fn relax(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) -> Score
     score
 }
 
-/// Swap rounds on the chosen state with its areas settled, each kept only
-/// while it raises the score.
+/// Swap rounds on the chosen state with its areas settled. Each swap is
+/// judged by its own neighbourhood once the round is settled
+/// ([`unpaid_swaps`]): those that did not pay are exchanged back and the
+/// round settled again, so one bad exchange no longer throws away the good
+/// ones of its round. The level's score (from the snapshot the next round
+/// reads anyway) is a safety net: a round that lowers it after all is undone.
 fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
     // Weight-only settling after a round of exchanges of cells of similar
     // size converges in a few steps; its full budget (and exchanges of very
@@ -294,29 +298,60 @@ fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
         ..lv.np.clone()
     };
     let mut max_ratio = POLISH_MAX_RATIO;
+    let mut snap = lv.snapshot(diagrams);
     for _ in 0..POLISH_ROUNDS {
-        let saved = save(diagrams);
-        if swap_round_within(diagrams, lv, max_ratio) == 0 {
+        let pairs = plan_swaps(diagrams, &snap, lv, max_ratio);
+        if pairs.is_empty() {
             break;
         }
-        diagrams.par_iter_mut().for_each(|d| settle(d, &np));
-        let snap = lv.snapshot(diagrams);
-        if snap.area_error > CANDIDATE_ERROR && max_ratio > POLISH_MIN_RATIO {
+        let saved = save(diagrams);
+        apply_swaps(diagrams, &snap, &pairs);
+        settle_touched(diagrams, &snap, &pairs, &np);
+        let unpaid = unpaid_swaps(diagrams, &snap, &pairs, lv);
+        if unpaid.len() == pairs.len() {
+            restore(diagrams, &saved);
+            break;
+        }
+        if !unpaid.is_empty() {
+            apply_swaps(diagrams, &snap, &unpaid);
+            settle_touched(diagrams, &snap, &unpaid, &np);
+        }
+        let next = lv.snapshot(diagrams);
+        if next.area_error > CANDIDATE_ERROR && max_ratio > POLISH_MIN_RATIO {
             // Some exchange could not be settled: retry with closer sizes.
             restore(diagrams, &saved);
             max_ratio = (max_ratio / 2.0).max(POLISH_MIN_RATIO);
             continue;
         }
-        if snap.score.value() <= score.value() || snap.area_error > CANDIDATE_ERROR {
+        if next.score.value() <= score.value() || next.area_error > CANDIDATE_ERROR {
             restore(diagrams, &saved);
             break;
         }
-        let gain = snap.score.value() - score.value();
-        score = snap.score;
+        let gain = next.score.value() - score.value();
+        score = next.score;
+        snap = next;
         if gain < progress_step(score.value()) {
             break;
         }
     }
+}
+
+/// Settles the areas of the diagrams holding a swap of `pairs`.
+fn settle_touched(
+    diagrams: &mut [Diagram],
+    snap: &Snapshot,
+    pairs: &[(usize, usize)],
+    np: &NeighborParams,
+) {
+    let mut touched = vec![false; diagrams.len()];
+    for &(a, _) in pairs {
+        touched[snap.diagram[a]] = true;
+    }
+    diagrams
+        .par_iter_mut()
+        .zip(touched.par_iter())
+        .filter(|(_, t)| **t)
+        .for_each(|(d, _)| settle(d, np));
 }
 
 #[cfg(test)]
