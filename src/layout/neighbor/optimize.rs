@@ -17,7 +17,8 @@ use super::attract::attraction_moves;
 use super::level::{settle, settle_to, Diagram, LevelCtx, Snapshot};
 use super::links::Score;
 use super::params::Distances;
-use super::swap::{apply_swaps, plan_swaps, swap_round, unpaid_swaps};
+use super::flip::{apply_flips, plan_flips, Flip};
+use super::swap::{apply_swaps, pays, plan_swaps, swap_round, unpaid_swaps};
 use super::NeighborParams;
 use crate::layout::frames::Recorder;
 use crate::layout::map::Checkpoint;
@@ -54,6 +55,8 @@ const POLISH_ROUNDS: usize = 16;
 /// (halved, down to the second, after a round whose areas did not settle).
 const POLISH_MAX_RATIO: f64 = 4.0;
 const POLISH_MIN_RATIO: f64 = 1.5;
+/// Most flip rounds (paper §9) after the swap rounds, each kept only if it helps.
+const FLIP_ROUNDS: usize = 4;
 /// Most weight-only steps settling the areas after a polish round.
 const POLISH_SETTLE: usize = 10;
 /// A level with a diagram of more children than this skips the attraction
@@ -282,12 +285,13 @@ fn relax(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) -> Score
     score
 }
 
-/// Swap rounds on the chosen state with its areas settled. Each swap is
-/// judged by its own neighbourhood once the round is settled
-/// ([`unpaid_swaps`]): those that did not pay are exchanged back and the
-/// round settled again, so one bad exchange no longer throws away the good
-/// ones of its round. The level's score (from the snapshot the next round
-/// reads anyway) is a safety net: a round that lowers it after all is undone.
+/// Swap rounds on the chosen state with its areas settled, then flip rounds
+/// ([`plan_flips`], paper §9). Each move is judged by its own neighbourhood
+/// once the round is settled ([`pays`]): those that did not pay are undone
+/// and the round settled again, so one bad move no longer throws away the
+/// good ones of its round. The level's score (from the snapshot the next
+/// round reads anyway) is a safety net: a round that lowers it after all is
+/// undone.
 fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
     // Weight-only settling after a round of exchanges of cells of similar
     // size converges in a few steps; its full budget (and exchanges of very
@@ -299,38 +303,79 @@ fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
     };
     let mut max_ratio = POLISH_MAX_RATIO;
     let mut snap = lv.snapshot(diagrams);
-    for _ in 0..POLISH_ROUNDS {
-        let pairs = plan_swaps(diagrams, &snap, lv, max_ratio);
-        if pairs.is_empty() {
-            break;
-        }
+    let mut flips_left = FLIP_ROUNDS;
+    let mut swapping = true;
+    for round in 0..POLISH_ROUNDS + FLIP_ROUNDS {
+        swapping &= round < POLISH_ROUNDS;
         let saved = save(diagrams);
-        apply_swaps(diagrams, &snap, &pairs);
-        settle_touched(diagrams, &snap, &pairs, &np);
-        let unpaid = unpaid_swaps(diagrams, &snap, &pairs, lv);
-        if unpaid.len() == pairs.len() {
-            restore(diagrams, &saved);
-            break;
-        }
-        if !unpaid.is_empty() {
+        if swapping {
+            let pairs = plan_swaps(diagrams, &snap, lv, max_ratio);
+            if pairs.is_empty() {
+                swapping = false;
+                continue;
+            }
+            apply_swaps(diagrams, &snap, &pairs);
+            settle_touched(diagrams, &snap, &pairs, &np);
+            let unpaid = unpaid_swaps(diagrams, &snap, &pairs, lv);
+            tracing::debug!(round, swaps = pairs.len(), unpaid = unpaid.len(), "polish swaps");
+            if unpaid.len() == pairs.len() {
+                restore(diagrams, &saved);
+                swapping = false;
+                continue;
+            }
             apply_swaps(diagrams, &snap, &unpaid);
             settle_touched(diagrams, &snap, &unpaid, &np);
+        } else {
+            if flips_left == 0 {
+                break;
+            }
+            flips_left -= 1;
+            let flips = plan_flips(diagrams, &snap, lv);
+            let pairs: Vec<(usize, usize)> = flips.iter().map(|f| (f.a, f.b)).collect();
+            if pairs.is_empty() {
+                break;
+            }
+            apply_flips(diagrams, &snap, &flips, false);
+            settle_touched(diagrams, &snap, &pairs, &np);
+            let place: Vec<usize> = (0..lv.links.nodes.len()).collect();
+            let unpaid: Vec<Flip> = flips
+                .into_iter()
+                .filter(|f| !pays(diagrams, &snap, &[f.a, f.b], &place, lv))
+                .collect();
+            tracing::debug!(round, flips = pairs.len(), unpaid = unpaid.len(), "polish flips");
+            if unpaid.len() == pairs.len() {
+                restore(diagrams, &saved);
+                break;
+            }
+            let back: Vec<(usize, usize)> = unpaid.iter().map(|f| (f.a, f.b)).collect();
+            apply_flips(diagrams, &snap, &unpaid, true);
+            settle_touched(diagrams, &snap, &back, &np);
         }
         let next = lv.snapshot(diagrams);
-        if next.area_error > CANDIDATE_ERROR && max_ratio > POLISH_MIN_RATIO {
+        if swapping && next.area_error > CANDIDATE_ERROR && max_ratio > POLISH_MIN_RATIO {
             // Some exchange could not be settled: retry with closer sizes.
             restore(diagrams, &saved);
             max_ratio = (max_ratio / 2.0).max(POLISH_MIN_RATIO);
             continue;
         }
         if next.score.value() <= score.value() || next.area_error > CANDIDATE_ERROR {
+            tracing::debug!(round, swapping, realized = next.score.realized, was = score.realized, area_error = next.area_error, "polish round undone");
             restore(diagrams, &saved);
+            if swapping {
+                swapping = false;
+                continue;
+            }
             break;
         }
         let gain = next.score.value() - score.value();
+        tracing::debug!(round, swapping, gain, realized = next.score.realized, "polish round kept");
         score = next.score;
         snap = next;
         if gain < progress_step(score.value()) {
+            if swapping {
+                swapping = false;
+                continue;
+            }
             break;
         }
     }

@@ -134,79 +134,83 @@ pub(super) fn apply_swaps(diagrams: &mut [Diagram], snap: &Snapshot, pairs: &[(u
 }
 
 /// The swaps of `pairs` (made on the geometry of `before`, then settled)
-/// that did not pay locally: those whose neighbourhood realises no more than
-/// before. A swap's neighbourhood is its two cells and their neighbours before
-/// and after; what it realises is every constraint with an end there, counted
-/// once, read from `before` and from the settled diagram's own power cells
-/// (its exact adjacency). Partners in other diagrams are read from `before`
-/// with the exchange applied (each node takes the other's place on the
-/// parent's boundary), so no whole-level adjacency is built to judge.
+/// that did not pay locally ([`pays`]). Each swapped node takes the other's
+/// place on the parent's boundary.
 pub(super) fn unpaid_swaps(
     diagrams: &[Diagram],
     before: &Snapshot,
     pairs: &[(usize, usize)],
     lv: &LevelCtx<'_>,
 ) -> Vec<(usize, usize)> {
-    let links = lv.links;
-    let threshold = MIN_SHARED * lv.scale;
     // Where each swapped node's cell was before the round.
-    let mut place: Vec<usize> = (0..links.nodes.len()).collect();
+    let mut place: Vec<usize> = (0..lv.links.nodes.len()).collect();
     for &(a, b) in pairs {
         place.swap(a, b);
     }
-    // Same-diagram neighbours of a level-local node after the round.
-    let after = |x: usize| -> Vec<usize> {
-        let d = before.diagram[x];
-        match &diagrams[d] {
-            Diagram::Sim { children, sim } => sim.state().diagram.cells[before.slot[x]]
-                .neighbors
-                .iter()
-                .filter(|nb| nb.edge[0].distance(nb.edge[1]) >= threshold)
-                .map(|nb| links.local[children[nb.site]])
-                .collect(),
-            Diagram::Single { .. } => Vec::new(),
-        }
-    };
     pairs
         .iter()
         .copied()
-        .filter(|&(a, b)| {
-            let mut region: Vec<usize> = vec![a, b];
-            let mut next: Vec<(usize, Vec<usize>)> = Vec::new();
-            for x in [a, b] {
-                region.extend_from_slice(before.adjacency.neighbors(x));
-            }
-            for x in [a, b] {
-                let nx = after(x);
-                region.extend_from_slice(&nx);
-            }
-            region.sort_unstable();
-            region.dedup();
-            for &x in &region {
-                next.push((x, after(x)));
-            }
-            let in_region = |x: usize| region.binary_search(&x).is_ok();
-            let adjacent_after = |x: usize, t: usize| -> bool {
-                if before.diagram[t] == before.diagram[x] {
-                    match next.binary_search_by_key(&x, |e| e.0) {
-                        Ok(i) => next[i].1.contains(&t),
-                        Err(_) => false,
-                    }
-                } else {
-                    before.adjacency.are_adjacent(place[x], place[t])
-                }
-            };
-            let count = |adjacent: &dyn Fn(usize, usize) -> bool| -> usize {
-                region
-                    .iter()
-                    .map(|&x| links.worth(x, |t| (!in_region(t) || t > x) && adjacent(x, t)))
-                    .sum()
-            };
-            let was = count(&|x, t| before.adjacency.are_adjacent(x, t));
-            let now = count(&adjacent_after);
-            now <= was
-        })
+        .filter(|&(a, b)| !pays(diagrams, before, &[a, b], &place, lv))
         .collect()
+}
+
+/// Did moving the cells of `moved` (level-local nodes, on the geometry of
+/// `before`, then settled) pay locally: does their neighbourhood realise
+/// more than before? The neighbourhood is the moved cells and their
+/// neighbours before and after; what it realises is every constraint with an
+/// end there, counted once, read from `before` and from the settled
+/// diagram's own power cells (its exact adjacency). Partners in other
+/// diagrams are read from `before`, each node at `place[node]`'s cell there
+/// (the cell it took over), so no whole-level adjacency is built to judge.
+pub(super) fn pays(
+    diagrams: &[Diagram],
+    before: &Snapshot,
+    moved: &[usize],
+    place: &[usize],
+    lv: &LevelCtx<'_>,
+) -> bool {
+    let links = lv.links;
+    let threshold = MIN_SHARED * lv.scale;
+    // Same-diagram neighbours of a level-local node after the round.
+    let after = |x: usize| -> Vec<usize> {
+        match &diagrams[before.diagram[x]] {
+            Diagram::Sim { children, sim } => {
+                let mut n: Vec<usize> = sim.state().diagram.cells[before.slot[x]]
+                    .neighbors
+                    .iter()
+                    .filter(|nb| nb.edge[0].distance(nb.edge[1]) >= threshold)
+                    .map(|nb| links.local[children[nb.site]])
+                    .collect();
+                n.sort_unstable();
+                n
+            }
+            Diagram::Single { .. } => Vec::new(),
+        }
+    };
+    let mut region: Vec<usize> = moved.to_vec();
+    for &x in moved {
+        region.extend_from_slice(before.adjacency.neighbors(x));
+        region.extend(after(x));
+    }
+    region.sort_unstable();
+    region.dedup();
+    let next: Vec<Vec<usize>> = region.iter().map(|&x| after(x)).collect();
+    let in_region = |x: usize| region.binary_search(&x).is_ok();
+    let adjacent_after = |i: usize, x: usize, t: usize| -> bool {
+        if before.diagram[t] == before.diagram[x] {
+            next[i].binary_search(&t).is_ok()
+        } else {
+            before.adjacency.are_adjacent(place[x], place[t])
+        }
+    };
+    let mut was = 0;
+    let mut now = 0;
+    for (i, &x) in region.iter().enumerate() {
+        let counted = |t: usize| !in_region(t) || t > x;
+        was += links.worth(x, |t| counted(t) && before.adjacency.are_adjacent(x, t));
+        now += links.worth(x, |t| counted(t) && adjacent_after(i, x, t));
+    }
+    now > was
 }
 
 /// The ratio of the larger to the smaller target area of slots `a` and `b`.
@@ -314,4 +318,88 @@ fn local_value(
         realized += links.worth(a, |b| adjacency.are_adjacent(a, b) && (!in_d(b) || b > a));
     }
     realized as f64 - lv.np.shape_weight * elongation
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::ConvexPolygon;
+    use crate::layout::map::{MapSettings, MapSimulation};
+    use super::super::links::LevelLinks;
+    use super::super::NeighborParams;
+    use crate::rng::Rng;
+
+    /// Three equal cells in a row (nodes 0, 1, 2 left to right) and the
+    /// constraints `pairs` between them.
+    fn row(pairs: &[(usize, usize)]) -> (Vec<Diagram>, LevelLinks) {
+        let clip = ConvexPolygon::rectangle(0.0, 0.0, 6.0, 2.0).expect("rectangle");
+        let positions = vec![Point::new(1.0, 1.0), Point::new(3.0, 1.0), Point::new(5.0, 1.0)];
+        let settings = MapSettings {
+            convergence_ratio: 0.01,
+            max_iterations: 10,
+            min_iterations: 0,
+        };
+        let sim = MapSimulation::new(clip, vec![4.0; 3], positions, None, settings, Rng::new(1));
+        let mut links = vec![Vec::new(); 3];
+        for &(a, b) in pairs {
+            links[a].push((b, 100));
+            links[b].push((a, 100));
+        }
+        let level = LevelLinks {
+            local: vec![0, 1, 2],
+            nodes: vec![0, 1, 2],
+            links,
+            lifted: vec![Vec::new(); 3],
+        };
+        let d = Diagram::Sim {
+            children: vec![0, 1, 2],
+            sim: Box::new(sim),
+        };
+        (vec![d], level)
+    }
+
+    fn ctx<'a>(links: &'a LevelLinks, np: &'a NeighborParams) -> LevelCtx<'a> {
+        LevelCtx {
+            links,
+            scale: 40f64.sqrt(),
+            np,
+        }
+    }
+
+    #[test]
+    fn the_best_swap_is_planned_and_its_neighbour_left_alone() {
+        // 0 and 2 want to touch: moving either into the middle realises it.
+        let (diagrams, links) = row(&[(0, 2)]);
+        let np = NeighborParams::default();
+        let lv = ctx(&links, &np);
+        let snap = lv.snapshot(&diagrams);
+        // Both (0, 1) and (1, 2) gain one constraint; ties go to the lower
+        // pair, and the other shares cell 1 with it.
+        assert_eq!(plan_swaps(&diagrams, &snap, &lv, f64::INFINITY), vec![(0, 1)]);
+        // Nothing to gain when the pair already touches.
+        let (diagrams, links) = row(&[(0, 1)]);
+        let lv = ctx(&links, &np);
+        let snap = lv.snapshot(&diagrams);
+        assert!(plan_swaps(&diagrams, &snap, &lv, f64::INFINITY).is_empty());
+    }
+
+    #[test]
+    fn a_swap_pays_only_when_its_neighbourhood_realises_more() {
+        let np = NeighborParams::default();
+        for (pairs, swap, expected) in [
+            // Brings 0 and 2 together: pays.
+            (vec![(0, 2)], (1, 2), true),
+            // Separates 0 and 1 and joins nothing: does not pay.
+            (vec![(0, 1)], (1, 2), false),
+            // Separates 0-1 but joins 0-2: even, does not pay.
+            (vec![(0, 1), (0, 2)], (1, 2), false),
+        ] {
+            let (mut diagrams, links) = row(&pairs);
+            let lv = ctx(&links, &np);
+            let before = lv.snapshot(&diagrams);
+            apply_swaps(&mut diagrams, &before, &[swap]);
+            let unpaid = unpaid_swaps(&diagrams, &before, &[swap], &lv);
+            assert_eq!(unpaid.is_empty(), expected, "{pairs:?} swapping {swap:?}");
+        }
+    }
 }
