@@ -318,13 +318,21 @@ fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
             settle_touched(diagrams, &snap, &pairs, &np);
             let unpaid = unpaid_swaps(diagrams, &snap, &pairs, lv);
             tracing::debug!(round, swaps = pairs.len(), unpaid = unpaid.len(), "polish swaps");
-            if unpaid.len() == pairs.len() {
-                restore(diagrams, &saved);
-                swapping = false;
-                continue;
+            if !unpaid.is_empty() {
+                // The whole round against the round without its unpaid swaps:
+                // on large diagrams the settling moves adjacencies far from
+                // the swaps, so the local verdict is checked, not trusted.
+                let whole = lv.snapshot(diagrams);
+                let kept = save(diagrams);
+                apply_swaps(diagrams, &snap, &unpaid);
+                settle_touched(diagrams, &snap, &unpaid, &np);
+                let pruned = lv.snapshot(diagrams);
+                if pruned.score.value() <= whole.score.value()
+                    && whole.area_error <= CANDIDATE_ERROR
+                {
+                    restore(diagrams, &kept);
+                }
             }
-            apply_swaps(diagrams, &snap, &unpaid);
-            settle_touched(diagrams, &snap, &unpaid, &np);
         } else {
             if flips_left == 0 {
                 break;
