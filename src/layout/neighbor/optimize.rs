@@ -18,7 +18,7 @@ use super::level::{settle, settle_to, Diagram, LevelCtx, Snapshot};
 use super::links::Score;
 use super::params::Distances;
 use super::flip::{apply_flips, plan_flips, Flip};
-use super::swap::{apply_swaps, pays, plan_swaps, swap_round, unpaid_swaps};
+use super::swap::{apply_swaps, pays, plan_swaps, swap_round};
 use super::NeighborParams;
 use crate::layout::frames::Recorder;
 use crate::layout::map::Checkpoint;
@@ -286,12 +286,14 @@ fn relax(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) -> Score
 }
 
 /// Swap rounds on the chosen state with its areas settled, then flip rounds
-/// ([`plan_flips`], paper §9). Each move is judged by its own neighbourhood
-/// once the round is settled ([`pays`]): those that did not pay are undone
-/// and the round settled again, so one bad move no longer throws away the
-/// good ones of its round. The level's score (from the snapshot the next
-/// round reads anyway) is a safety net: a round that lowers it after all is
-/// undone.
+/// ([`plan_flips`], paper §9). A swap round is kept while it raises the
+/// level's score, read from the snapshot the next round plans on (one
+/// snapshot per round). Each flip is judged by its own neighbourhood once
+/// its round is settled ([`pays`]): those that did not pay are moved back
+/// and the round settled again; a round that lowers the level's score after
+/// all is undone. (Judging the swaps the same way realised no more: the
+/// settling of a round moves adjacencies far from its swaps; see
+/// BENCHMARKS.md, "Local moves and spade".)
 fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
     // Weight-only settling after a round of exchanges of cells of similar
     // size converges in a few steps; its full budget (and exchanges of very
@@ -315,24 +317,8 @@ fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
                 continue;
             }
             apply_swaps(diagrams, &snap, &pairs);
-            settle_touched(diagrams, &snap, &pairs, &np);
-            let unpaid = unpaid_swaps(diagrams, &snap, &pairs, lv);
-            tracing::debug!(round, swaps = pairs.len(), unpaid = unpaid.len(), "polish swaps");
-            if !unpaid.is_empty() {
-                // The whole round against the round without its unpaid swaps:
-                // on large diagrams the settling moves adjacencies far from
-                // the swaps, so the local verdict is checked, not trusted.
-                let whole = lv.snapshot(diagrams);
-                let kept = save(diagrams);
-                apply_swaps(diagrams, &snap, &unpaid);
-                settle_touched(diagrams, &snap, &unpaid, &np);
-                let pruned = lv.snapshot(diagrams);
-                if pruned.score.value() <= whole.score.value()
-                    && whole.area_error <= CANDIDATE_ERROR
-                {
-                    restore(diagrams, &kept);
-                }
-            }
+            diagrams.par_iter_mut().for_each(|d| settle(d, &np));
+            tracing::debug!(round, swaps = pairs.len(), "polish swaps");
         } else {
             if flips_left == 0 {
                 break;
@@ -389,7 +375,7 @@ fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
     }
 }
 
-/// Settles the areas of the diagrams holding a swap of `pairs`.
+/// Settles the areas of the diagrams holding a pair of `pairs`.
 fn settle_touched(
     diagrams: &mut [Diagram],
     snap: &Snapshot,

@@ -3,7 +3,8 @@
 //! exchanges their cells, so the gain is exact for the geometry at hand), and
 //! on small levels an exhaustive polish that measures each swap after settling
 //! the areas, judged locally: only the one diagram is settled and only the pairs
-//! touching its cells are counted, never the whole level.
+//! touching its cells are counted, never the whole level. [`pays`] judges any
+//! move of a few cells the same way, from its neighbourhood.
 
 use rayon::prelude::*;
 
@@ -131,27 +132,6 @@ pub(super) fn apply_swaps(diagrams: &mut [Diagram], snap: &Snapshot, pairs: &[(u
                 sim.swap_sites(pairs);
             }
         });
-}
-
-/// The swaps of `pairs` (made on the geometry of `before`, then settled)
-/// that did not pay locally ([`pays`]). Each swapped node takes the other's
-/// place on the parent's boundary.
-pub(super) fn unpaid_swaps(
-    diagrams: &[Diagram],
-    before: &Snapshot,
-    pairs: &[(usize, usize)],
-    lv: &LevelCtx<'_>,
-) -> Vec<(usize, usize)> {
-    // Where each swapped node's cell was before the round.
-    let mut place: Vec<usize> = (0..lv.links.nodes.len()).collect();
-    for &(a, b) in pairs {
-        place.swap(a, b);
-    }
-    pairs
-        .iter()
-        .copied()
-        .filter(|&(a, b)| !pays(diagrams, before, &[a, b], &place, lv))
-        .collect()
 }
 
 /// Did moving the cells of `moved` (level-local nodes, on the geometry of
@@ -398,8 +378,11 @@ mod tests {
             let lv = ctx(&links, &np);
             let before = lv.snapshot(&diagrams);
             apply_swaps(&mut diagrams, &before, &[swap]);
-            let unpaid = unpaid_swaps(&diagrams, &before, &[swap], &lv);
-            assert_eq!(unpaid.is_empty(), expected, "{pairs:?} swapping {swap:?}");
+            // Each swapped node now sits in the other's old cell.
+            let mut place = vec![0, 1, 2];
+            place.swap(swap.0, swap.1);
+            let paid = pays(&diagrams, &before, &[swap.0, swap.1], &place, &lv);
+            assert_eq!(paid, expected, "{pairs:?} swapping {swap:?}");
         }
     }
 }
