@@ -5,7 +5,7 @@
 //! The graph is a candidate graph only: a power diagram's own adjacency equals
 //! the Delaunay graph of its sites when the weights are equal, and the weights
 //! of a treemap never are, so what it proposes is always confirmed on the real
-//! cells (see `swap::unpaid_moves`).
+//! cells (see `swap::pays`).
 
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 
