@@ -28,6 +28,8 @@
 //!   cells; issue 12).
 
 mod attract;
+mod delaunay;
+mod flip;
 mod level;
 mod links;
 mod optimize;

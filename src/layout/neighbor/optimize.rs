@@ -14,10 +14,11 @@
 use rayon::prelude::*;
 
 use super::attract::attraction_moves;
-use super::level::{settle, settle_to, Diagram, LevelCtx};
+use super::level::{settle, settle_to, Diagram, LevelCtx, Snapshot};
 use super::links::Score;
 use super::params::Distances;
-use super::swap::{swap_round, swap_round_within};
+use super::flip::{apply_flips, plan_flips, Flip};
+use super::swap::{apply_swaps, pays, plan_swaps, swap_round};
 use super::NeighborParams;
 use crate::layout::frames::Recorder;
 use crate::layout::map::Checkpoint;
@@ -54,6 +55,8 @@ const POLISH_ROUNDS: usize = 16;
 /// (halved, down to the second, after a round whose areas did not settle).
 const POLISH_MAX_RATIO: f64 = 4.0;
 const POLISH_MIN_RATIO: f64 = 1.5;
+/// Most flip rounds (paper §9) after the swap rounds, each kept only if it helps.
+const FLIP_ROUNDS: usize = 4;
 /// Most weight-only steps settling the areas after a polish round.
 const POLISH_SETTLE: usize = 10;
 /// A level with a diagram of more children than this skips the attraction
@@ -282,8 +285,15 @@ fn relax(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) -> Score
     score
 }
 
-/// Swap rounds on the chosen state with its areas settled, each kept only
-/// while it raises the score.
+/// Swap rounds on the chosen state with its areas settled, then flip rounds
+/// ([`plan_flips`], paper §9). A swap round is kept while it raises the
+/// level's score, read from the snapshot the next round plans on (one
+/// snapshot per round). Each flip is judged by its own neighbourhood once
+/// its round is settled ([`pays`]): those that did not pay are moved back
+/// and the round settled again; a round that lowers the level's score after
+/// all is undone. (Judging the swaps the same way realised no more: the
+/// settling of a round moves adjacencies far from its swaps; see
+/// BENCHMARKS.md, "Local moves and spade".)
 fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
     // Weight-only settling after a round of exchanges of cells of similar
     // size converges in a few steps; its full budget (and exchanges of very
@@ -294,29 +304,93 @@ fn polish(diagrams: &mut [Diagram], mut score: Score, lv: &LevelCtx<'_>) {
         ..lv.np.clone()
     };
     let mut max_ratio = POLISH_MAX_RATIO;
-    for _ in 0..POLISH_ROUNDS {
+    let mut snap = lv.snapshot(diagrams);
+    let mut flips_left = FLIP_ROUNDS;
+    let mut swapping = true;
+    for round in 0..POLISH_ROUNDS + FLIP_ROUNDS {
+        swapping &= round < POLISH_ROUNDS;
         let saved = save(diagrams);
-        if swap_round_within(diagrams, lv, max_ratio) == 0 {
-            break;
+        if swapping {
+            let pairs = plan_swaps(diagrams, &snap, lv, max_ratio);
+            if pairs.is_empty() {
+                swapping = false;
+                continue;
+            }
+            apply_swaps(diagrams, &snap, &pairs);
+            diagrams.par_iter_mut().for_each(|d| settle(d, &np));
+            tracing::debug!(round, swaps = pairs.len(), "polish swaps");
+        } else {
+            if flips_left == 0 {
+                break;
+            }
+            flips_left -= 1;
+            let flips = plan_flips(diagrams, &snap, lv);
+            let pairs: Vec<(usize, usize)> = flips.iter().map(|f| (f.a, f.b)).collect();
+            if pairs.is_empty() {
+                break;
+            }
+            apply_flips(diagrams, &snap, &flips, false);
+            settle_touched(diagrams, &snap, &pairs, &np);
+            let place: Vec<usize> = (0..lv.links.nodes.len()).collect();
+            let unpaid: Vec<Flip> = flips
+                .into_iter()
+                .filter(|f| !pays(diagrams, &snap, &[f.a, f.b], &place, lv))
+                .collect();
+            tracing::debug!(round, flips = pairs.len(), unpaid = unpaid.len(), "polish flips");
+            if unpaid.len() == pairs.len() {
+                restore(diagrams, &saved);
+                break;
+            }
+            let back: Vec<(usize, usize)> = unpaid.iter().map(|f| (f.a, f.b)).collect();
+            apply_flips(diagrams, &snap, &unpaid, true);
+            settle_touched(diagrams, &snap, &back, &np);
         }
-        diagrams.par_iter_mut().for_each(|d| settle(d, &np));
-        let snap = lv.snapshot(diagrams);
-        if snap.area_error > CANDIDATE_ERROR && max_ratio > POLISH_MIN_RATIO {
+        let next = lv.snapshot(diagrams);
+        if swapping && next.area_error > CANDIDATE_ERROR && max_ratio > POLISH_MIN_RATIO {
             // Some exchange could not be settled: retry with closer sizes.
             restore(diagrams, &saved);
             max_ratio = (max_ratio / 2.0).max(POLISH_MIN_RATIO);
             continue;
         }
-        if snap.score.value() <= score.value() || snap.area_error > CANDIDATE_ERROR {
+        if next.score.value() <= score.value() || next.area_error > CANDIDATE_ERROR {
+            tracing::debug!(round, swapping, realized = next.score.realized, was = score.realized, area_error = next.area_error, "polish round undone");
             restore(diagrams, &saved);
+            if swapping {
+                swapping = false;
+                continue;
+            }
             break;
         }
-        let gain = snap.score.value() - score.value();
-        score = snap.score;
+        let gain = next.score.value() - score.value();
+        tracing::debug!(round, swapping, gain, realized = next.score.realized, "polish round kept");
+        score = next.score;
+        snap = next;
         if gain < progress_step(score.value()) {
+            if swapping {
+                swapping = false;
+                continue;
+            }
             break;
         }
     }
+}
+
+/// Settles the areas of the diagrams holding a pair of `pairs`.
+fn settle_touched(
+    diagrams: &mut [Diagram],
+    snap: &Snapshot,
+    pairs: &[(usize, usize)],
+    np: &NeighborParams,
+) {
+    let mut touched = vec![false; diagrams.len()];
+    for &(a, _) in pairs {
+        touched[snap.diagram[a]] = true;
+    }
+    diagrams
+        .par_iter_mut()
+        .zip(touched.par_iter())
+        .filter(|(_, t)| **t)
+        .for_each(|(d, _)| settle(d, np));
 }
 
 #[cfg(test)]
