@@ -28,6 +28,7 @@
 //!   cells; issue 12).
 
 mod attract;
+mod cross;
 mod level;
 mod links;
 mod optimize;
@@ -222,11 +223,7 @@ fn descend(
     if links.is_empty() && ctx.method == Method::Neighbor && !ctx.np.prototype {
         return plain_level(ctx, depth, &parents, polygons, cells);
     }
-    let lv = LevelCtx {
-        links: &links,
-        scale: ctx.scale,
-        np: ctx.np,
-    };
+    let lv = LevelCtx::new(&links, ctx.scale, ctx.np);
     let starts = if ctx.method == Method::Neighbor && !ctx.np.prototype {
         starts_for(level.len(), ctx.np)
     } else {
