@@ -16,10 +16,10 @@
 use std::sync::{Arc, Mutex, PoisonError};
 
 use super::level::{aspect, Diagram};
-use super::links::LevelLinks;
+use super::links::{LevelLinks, LIFTED_WEIGHT};
 use crate::geom::adjacency::{adjacent_pairs, box_pad, overlapping_boxes};
 use crate::geom::shared_edge::PERPENDICULAR_TOL;
-use crate::geom::{ConvexPolygon, Point};
+use crate::geom::{ConvexPolygon, LevelAdjacency, Point};
 
 /// The [`CrossPlan`] of the level's diagrams, made on the first snapshot and
 /// kept while the diagrams' parents and only children stay the same (they do
@@ -73,6 +73,12 @@ pub(super) struct CrossPlan {
     /// Only children (level-local, sorted) whose padded cell box meets some
     /// moving diagram's reach box: the only ones a moving cell can touch.
     near_singles: Vec<usize>,
+    /// Per level-local index `a`, the partners `b > a` it has constraints
+    /// with and what their adjacency is worth ([`LevelLinks::worth`]),
+    /// sorted by `b`.
+    worth: Vec<Vec<(usize, usize)>>,
+    /// What [`fixed_pairs`](Self::fixed_pairs) are worth together.
+    fixed_worth: usize,
 }
 
 impl CrossPlan {
@@ -105,6 +111,8 @@ impl CrossPlan {
             shapes,
             fixed_pairs: Vec::new(),
             near_singles: Vec::new(),
+            worth: pair_worth(links),
+            fixed_worth: 0,
         };
         if diagrams.len() < 2 {
             return plan;
@@ -118,6 +126,7 @@ impl CrossPlan {
             }
         }
         plan.fixed_pairs = adjacent_pairs(|k| single_cell[k], &singles, scale, |_, _| true);
+        plan.fixed_worth = plan.fixed_pairs.iter().map(|&(a, b)| plan.pair_worth(a, b)).sum();
         // Reach boxes of moving diagrams first, then padded boxes of only
         // children; a pair of one of each that overlaps names a near one.
         let mut boxes: Vec<(Point, Point)> = plan
@@ -180,6 +189,29 @@ impl CrossPlan {
         lo.x >= reach.0.x && lo.y >= reach.0.y && hi.x <= reach.1.x && hi.y <= reach.1.y
     }
 
+    /// What the adjacency of `a` and `b` (level-local, `a < b`) is worth.
+    fn pair_worth(&self, a: usize, b: usize) -> usize {
+        let partners = &self.worth[a];
+        partners
+            .binary_search_by_key(&b, |p| p.0)
+            .map_or(0, |i| partners[i].1)
+    }
+
+    /// [`LevelLinks::realized`] for `adjacency`, whose pairs of only
+    /// children are the plan's [`fixed_pairs`](Self::fixed_pairs) (`diagram[k]`
+    /// is node `k`'s diagram): their worth is summed once per level, and only
+    /// the pairs with a moving cell are looked up.
+    pub(super) fn realized(&self, adjacency: &LevelAdjacency, diagram: &[usize]) -> usize {
+        let fixed = |k: usize| self.is_single(diagram[k]);
+        let moving: usize = adjacency
+            .pairs()
+            .iter()
+            .filter(|&&(a, b)| !(fixed(a) && fixed(b)))
+            .map(|&(a, b)| self.pair_worth(a, b))
+            .sum();
+        self.fixed_worth + moving
+    }
+
     /// True when diagram `d` is an only child.
     fn is_single(&self, d: usize) -> bool {
         matches!(self.shapes[d], Shape::Single { .. })
@@ -207,4 +239,27 @@ impl CrossPlan {
         pairs.extend_from_slice(&self.fixed_pairs);
         pairs
     }
+}
+
+/// Per level-local index `a`, its partners `b > a` and what their adjacency
+/// is worth: 1 per own constraint and [`LIFTED_WEIGHT`] per lifted one, as
+/// [`LevelLinks::worth`] counts them.
+fn pair_worth(links: &LevelLinks) -> Vec<Vec<(usize, usize)>> {
+    (0..links.nodes.len())
+        .map(|a| {
+            let own = links.links[a].iter().map(|&(b, _)| (b, 1));
+            let lifted = links.lifted[a].iter().map(|&(b, n)| (b, LIFTED_WEIGHT * n));
+            let mut partners: Vec<(usize, usize)> = own.chain(lifted).filter(|p| p.0 > a).collect();
+            partners.sort_unstable();
+            // One entry per partner, its worth summed.
+            let mut merged: Vec<(usize, usize)> = Vec::with_capacity(partners.len());
+            for (b, w) in partners {
+                match merged.last_mut() {
+                    Some(last) if last.0 == b => last.1 += w,
+                    _ => merged.push((b, w)),
+                }
+            }
+            merged
+        })
+        .collect()
 }

@@ -202,8 +202,19 @@ fn snapshot(
         pairs.extend(cross);
     }
     let adjacency = LevelAdjacency::from_pairs(present, pairs);
+    // From the plan only when its fixed pairs are the adjacency's pairs of
+    // only children, which the full comparison gives too, but is not asked.
+    let realized = if within_reach {
+        plan.realized(&adjacency, &diagram)
+    } else {
+        links.realized(&adjacency)
+    };
+    #[cfg(test)]
+    {
+        assert_eq!(realized, links.realized(&adjacency), "realised constraints");
+    }
     let score = Score {
-        realized: links.realized(&adjacency),
+        realized,
         elongation,
         shape_weight: np.shape_weight,
     };
