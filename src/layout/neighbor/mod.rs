@@ -6,6 +6,8 @@
 //! - [`params`]: the settings and the distance rules;
 //! - `links`: a level's constraints and what an arrangement scores;
 //! - `level`: a level's diagrams and the snapshot every step reads;
+//! - `cross`: what of the snapshot's adjacency across diagrams is fixed for
+//!   the level (only children's pairs), computed once;
 //! - `start`: CVT, matching and the baselines' starts;
 //! - `swap`: greedy swap rounds and the small levels' exhaustive polish;
 //! - `attract`: the attraction moves;
