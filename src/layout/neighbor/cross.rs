@@ -3,19 +3,20 @@
 //! level), and the cross-diagram pairs of a snapshot from it.
 //!
 //! Every parent's cell is fixed for the whole level, so an only child's cell
-//! (a [`Diagram::Single`]: mostly a virtual copy of a leaf, paper §4) is too.
-//! On deep levels of a tree with copies most cells are such, and the pairs
-//! between two of them were compared anew every tick; they are compared once
-//! here. A snapshot then compares only pairs with a cell of a moving diagram
-//! ([`Diagram::Sim`]), and only against cells that can reach that diagram's
-//! parent cell. The pairs are exactly those of comparing every boundary cell
-//! with every other ([`level_adjacency`], as the snapshot did before): the
-//! same [`shared_length`](crate::geom::shared_edge::shared_length) calls on
-//! the pairs that can count, none on pairs that cannot.
+//! (a [`Diagram::Single`](super::level::Diagram::Single): mostly a virtual
+//! copy of a leaf, paper §4) is too. On deep levels of a tree with copies
+//! most cells are such, and the pairs between two of them were compared anew
+//! every tick; they are compared once here. A snapshot then compares only
+//! pairs with a cell of a moving diagram
+//! ([`Diagram::Sim`](super::level::Diagram::Sim)), and only against cells that
+//! can reach that diagram's parent cell. The pairs are exactly those of
+//! comparing every boundary cell with every other
+//! ([`level_adjacency`](crate::geom::level_adjacency), as the snapshot did
+//! before): the same [`shared_length`](crate::geom::shared_edge::shared_length)
+//! calls on the pairs that can count, none on pairs that cannot.
 
 use std::sync::{Arc, Mutex, PoisonError};
 
-use super::level::{aspect, Diagram};
 use super::links::{LevelLinks, LIFTED_WEIGHT};
 use crate::geom::adjacency::{adjacent_pairs, box_pad, overlapping_boxes};
 use crate::geom::shared_edge::PERPENDICULAR_TOL;
@@ -30,18 +31,38 @@ pub(super) struct CrossCache {
 }
 
 impl CrossCache {
-    /// The plan for `diagrams`: the kept one when it fits them, else a new one.
-    pub(super) fn plan(&self, diagrams: &[Diagram], links: &LevelLinks, scale: f64) -> Arc<CrossPlan> {
+    /// The plan for `diagrams`: the kept one when it fits them, else a new
+    /// one, with `aspect` the shape measure of an only child's cell.
+    pub(super) fn plan(
+        &self,
+        diagrams: &[Part<'_>],
+        links: &LevelLinks,
+        scale: f64,
+        aspect: fn(&ConvexPolygon) -> f64,
+    ) -> Arc<CrossPlan> {
         // A panic elsewhere while the lock was held leaves a plan that was
         // either complete or absent, so a poisoned lock is still usable.
         let mut kept = self.plan.lock().unwrap_or_else(PoisonError::into_inner);
         if let Some(plan) = kept.as_ref().filter(|p| p.fits(diagrams, scale)) {
             return Arc::clone(plan);
         }
-        let plan = Arc::new(CrossPlan::new(diagrams, links, scale));
+        let plan = Arc::new(CrossPlan::new(diagrams, links, scale, aspect));
         *kept = Some(Arc::clone(&plan));
         plan
     }
+}
+
+/// What the plan reads of one of the level's diagrams: an only child (its
+/// node and cell, the parent's), or the parent's cell of a diagram whose
+/// cells move.
+pub(super) enum Part<'a> {
+    Single {
+        child: usize,
+        polygon: &'a ConvexPolygon,
+    },
+    Sim {
+        clip: &'a ConvexPolygon,
+    },
 }
 
 /// What one diagram was when the plan was made.
@@ -82,7 +103,12 @@ pub(super) struct CrossPlan {
 }
 
 impl CrossPlan {
-    fn new(diagrams: &[Diagram], links: &LevelLinks, scale: f64) -> Self {
+    fn new(
+        diagrams: &[Part<'_>],
+        links: &LevelLinks,
+        scale: f64,
+        aspect: fn(&ConvexPolygon) -> f64,
+    ) -> Self {
         let pad = box_pad(scale);
         // Cells are clipped to their parent's cell, so their boxes lie in its
         // box up to round-off; the margin keeps round-off from sending a
@@ -91,16 +117,16 @@ impl CrossPlan {
         let shapes: Vec<Shape> = diagrams
             .iter()
             .map(|d| match d {
-                Diagram::Single { child, polygon } => Shape::Single {
+                Part::Single { child, polygon } => Shape::Single {
                     local: links.local[*child],
-                    polygon: polygon.clone(),
+                    polygon: (*polygon).clone(),
                     centroid: polygon.centroid(),
                     aspect: aspect(polygon),
                 },
-                Diagram::Sim { sim, .. } => {
-                    let (lo, hi) = sim.clip().bbox();
+                Part::Sim { clip } => {
+                    let (lo, hi) = clip.bbox();
                     Shape::Sim {
-                        clip: sim.clip().clone(),
+                        clip: (*clip).clone(),
                         reach: (lo - widen, hi + widen),
                     }
                 }
@@ -154,12 +180,12 @@ impl CrossPlan {
 
     /// True when `diagrams` are the ones the plan was made for: the same
     /// parents' cells and the same only children with the same cells.
-    fn fits(&self, diagrams: &[Diagram], scale: f64) -> bool {
+    fn fits(&self, diagrams: &[Part<'_>], scale: f64) -> bool {
         self.scale == scale
             && self.shapes.len() == diagrams.len()
             && self.shapes.iter().zip(diagrams).all(|(s, d)| match (s, d) {
-                (Shape::Single { polygon: p, .. }, Diagram::Single { polygon, .. }) => p == polygon,
-                (Shape::Sim { clip, .. }, Diagram::Sim { sim, .. }) => clip == sim.clip(),
+                (Shape::Single { polygon: p, .. }, Part::Single { polygon, .. }) => p == *polygon,
+                (Shape::Sim { clip: c, .. }, Part::Sim { clip }) => c == *clip,
                 _ => false,
             })
     }
