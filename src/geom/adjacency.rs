@@ -68,6 +68,31 @@ pub fn level_adjacency<'a>(
     nodes: &[usize],
     scale: f64,
 ) -> LevelAdjacency {
+    let ids = with_cells(&polygon, nodes);
+    let pairs = adjacent_pairs_among(&polygon, &ids, scale, |_, _| true);
+    LevelAdjacency::from_pairs(ids, pairs)
+}
+
+/// The pairs `(i, j)`, `i < j`, of [`level_adjacency`] among `nodes` for which
+/// `consider(i, j)` holds, sorted; `consider` is asked before any polygon is
+/// compared, so a caller that knows a pair cannot count (two cells of one
+/// power diagram, two cells whose adjacency it already has) pays nothing for
+/// it. Each pair kept is exactly one of [`level_adjacency`]'s.
+pub fn adjacent_pairs<'a>(
+    polygon: impl Fn(usize) -> Option<&'a ConvexPolygon>,
+    nodes: &[usize],
+    scale: f64,
+    consider: impl Fn(usize, usize) -> bool,
+) -> Vec<(usize, usize)> {
+    let ids = with_cells(&polygon, nodes);
+    adjacent_pairs_among(&polygon, &ids, scale, consider)
+}
+
+/// The indices of `nodes` that have a cell, sorted, without duplicates.
+fn with_cells<'a>(
+    polygon: &impl Fn(usize) -> Option<&'a ConvexPolygon>,
+    nodes: &[usize],
+) -> Vec<usize> {
     let mut ids: Vec<usize> = nodes
         .iter()
         .copied()
@@ -75,15 +100,30 @@ pub fn level_adjacency<'a>(
         .collect();
     ids.sort_unstable();
     ids.dedup();
+    ids
+}
+
+/// How far a cell's bounding box is widened before boxes are compared: an
+/// edge within the perpendicular tolerance of another's line may lie just
+/// outside that cell's box.
+pub fn box_pad(scale: f64) -> f64 {
+    2.0 * PERPENDICULAR_TOL * scale
+}
+
+/// [`adjacent_pairs`] on `ids` (sorted, without duplicates, each with a cell).
+fn adjacent_pairs_among<'a>(
+    polygon: &impl Fn(usize) -> Option<&'a ConvexPolygon>,
+    ids: &[usize],
+    scale: f64,
+    consider: impl Fn(usize, usize) -> bool,
+) -> Vec<(usize, usize)> {
     if ids.is_empty() {
-        return LevelAdjacency::default();
+        return Vec::new();
     }
     let cell = |i: usize| polygon(i).expect("filtered to indices with a cell");
-
-    let diag = scale;
-    let tol = PERPENDICULAR_TOL * diag;
-    let threshold = MIN_SHARED * diag;
-    let pad = 2.0 * tol;
+    let tol = PERPENDICULAR_TOL * scale;
+    let threshold = MIN_SHARED * scale;
+    let pad = box_pad(scale);
     let boxes: Vec<(Point, Point)> = ids
         .iter()
         .map(|&i| {
@@ -91,15 +131,28 @@ pub fn level_adjacency<'a>(
             (lo - Point::splat(pad), hi + Point::splat(pad))
         })
         .collect();
-    let grid = Grid::new(&boxes, diag);
-    let pairs = grid.candidate_pairs(&boxes, |k, m| {
+    let pairs = overlapping_boxes(&boxes, scale, |k, m| {
         // k < m, so ids[k] < ids[m]: the smaller node index goes first, as the
         // checker passes cells in file (= node) order.
         let (a, b) = (ids[k], ids[m]);
-        shared_length(cell(a), cell(b), tol) >= threshold
+        consider(a, b) && shared_length(cell(a), cell(b), tol) >= threshold
     });
-    let pairs: Vec<(usize, usize)> = pairs.into_iter().map(|(k, m)| (ids[k], ids[m])).collect();
-    LevelAdjacency::from_pairs(ids, pairs)
+    pairs.into_iter().map(|(k, m)| (ids[k], ids[m])).collect()
+}
+
+/// Every pair `(k, m)`, `k < m`, of `boxes` (each `(lo, hi)`) that overlap,
+/// edges included, and for which `accept(k, m)` holds, sorted. Candidates
+/// come from a bucket grid, so n boxes of similar size cost about O(n);
+/// `diag` is the length scale that bounds the buckets from below.
+pub fn overlapping_boxes(
+    boxes: &[(Point, Point)],
+    diag: f64,
+    accept: impl FnMut(usize, usize) -> bool,
+) -> Vec<(usize, usize)> {
+    if boxes.is_empty() {
+        return Vec::new();
+    }
+    Grid::new(boxes, diag).candidate_pairs(boxes, accept)
 }
 
 impl LevelAdjacency {

@@ -66,6 +66,10 @@ fn for_each_overlap(
 /// end points are within `tol` of that edge's line. Touching at a vertex gives 0.
 /// Same definition and edge order as the checker's `shared_length`.
 pub fn shared_length(a: &ConvexPolygon, b: &ConvexPolygon, tol: f64) -> f64 {
+    #[cfg(test)]
+    {
+        CALLS.with(|c| c.set(c.get() + 1));
+    }
     let mut total = 0.0;
     for_each_overlap(a, b, tol, |_, _, lo, hi| total += hi - lo);
     total
@@ -96,6 +100,26 @@ pub fn extent_diagonal<'a>(polygons: impl IntoIterator<Item = &'a ConvexPolygon>
         });
     }
     bounds.map(|(lo, hi)| (hi - lo).length())
+}
+
+#[cfg(test)]
+thread_local! {
+    /// [`shared_length`] calls on this thread, so that tests can bound how
+    /// many polygon pairs a computation compares.
+    static CALLS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+/// [`shared_length`] calls made on this thread so far (test builds).
+#[cfg(test)]
+pub(crate) fn shared_length_calls() -> usize {
+    CALLS.with(std::cell::Cell::get)
+}
+
+/// Sets the count of [`shared_length_calls`] (test builds), for a check that
+/// compares polygons without counting against the code it checks.
+#[cfg(test)]
+pub(crate) fn set_shared_length_calls(to: usize) {
+    CALLS.with(|c| c.set(to));
 }
 
 #[cfg(test)]

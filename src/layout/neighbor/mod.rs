@@ -6,6 +6,8 @@
 //! - [`params`]: the settings and the distance rules;
 //! - `links`: a level's constraints and what an arrangement scores;
 //! - `level`: a level's diagrams and the snapshot every step reads;
+//! - `cross`: what of the snapshot's adjacency across diagrams is fixed for
+//!   the level (only children's pairs), computed once;
 //! - `start`: CVT, matching and the baselines' starts;
 //! - `swap`: greedy swap rounds and the small levels' exhaustive polish;
 //! - `attract`: the attraction moves;
@@ -28,6 +30,7 @@
 //!   cells; issue 12).
 
 mod attract;
+mod cross;
 mod delaunay;
 mod flip;
 mod level;
@@ -224,11 +227,7 @@ fn descend(
     if links.is_empty() && ctx.method == Method::Neighbor && !ctx.np.prototype {
         return plain_level(ctx, depth, &parents, polygons, cells);
     }
-    let lv = LevelCtx {
-        links: &links,
-        scale: ctx.scale,
-        np: ctx.np,
-    };
+    let lv = LevelCtx::new(&links, ctx.scale, ctx.np);
     let starts = if ctx.method == Method::Neighbor && !ctx.np.prototype {
         starts_for(level.len(), ctx.np)
     } else {

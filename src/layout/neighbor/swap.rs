@@ -339,11 +339,7 @@ mod tests {
     }
 
     fn ctx<'a>(links: &'a LevelLinks, np: &'a NeighborParams) -> LevelCtx<'a> {
-        LevelCtx {
-            links,
-            scale: 40f64.sqrt(),
-            np,
-        }
+        LevelCtx::new(links, 40f64.sqrt(), np)
     }
 
     #[test]
