@@ -452,7 +452,7 @@ mod tests {
     /// The same on the paper's files (copies in the unbalanced ones).
     #[test]
     fn snapshot_pairs_are_the_full_comparison_on_the_paper_data() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/paper-data");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/paper");
         let files = [
             "2_level_4_cousin_constraints.json",
             "cifar10.json",
