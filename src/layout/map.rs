@@ -394,7 +394,13 @@ impl MapSimulation {
         for &(a, b) in pairs {
             self.sites.swap(a, b);
         }
-        self.recompute();
+        // The same sites in other slots make the same diagram, relabelled, so
+        // nothing can be swallowed; `prevent_domination` would read the old
+        // diagram's adjacency by slot, now another site's, and raise weights
+        // against cells far from the site (with weights 1:10⁵ that emptied
+        // cells, and no weight-only settle could bring them back).
+        self.diagram = power_diagram(&self.sites, &self.clip);
+        self.repair();
         self.error = self.area_error();
     }
 
@@ -896,5 +902,55 @@ mod tests {
             "{}",
             state.convergence_ratio
         );
+    }
+    #[test]
+    fn swapping_sites_exchanges_their_cells_and_nothing_else() {
+        // Weights 1:10^4 (as in tests/data/real/usr-bin): a site that takes
+        // over a small cell's place beside a huge one must keep exactly the
+        // cell it took over. Exchanging sites only relabels the diagram, so
+        // every cell's area moves with its site, unchanged.
+        let clip = ConvexPolygon::rectangle(0.0, 0.0, 100.0, 100.0).expect("rect");
+        let n = 60;
+        let mut rng = Rng::new(5);
+        let raw: Vec<f64> = (0..n).map(|i| if i % 7 == 0 { 1e4 } else { 1.0 + (i % 5) as f64 }).collect();
+        let total: f64 = raw.iter().sum();
+        let targets: Vec<f64> = raw.iter().map(|r| clip.area() * r / total).collect();
+        let positions = crate::layout::seed::halton_positions(&clip, n, &mut rng);
+        let mut sim = MapSimulation::new(clip, targets, positions, None, settings(), rng);
+        // Weights alone, sites held (as the polish settles): big cells'
+        // weights then reach over their small neighbours' sites.
+        for _ in 0..60 {
+            sim.settle_weights();
+        }
+        assert!(sim.state().convergence_ratio < 0.01, "{}", sim.state().convergence_ratio);
+        // Exchange small cells beside a big one with small cells elsewhere.
+        let cells = &sim.state().diagram.cells;
+        let small = |i: usize| i % 7 != 0;
+        let mut pairs = Vec::new();
+        let mut used = vec![false; n];
+        for big in (0..n).step_by(7) {
+            for nb in &cells[big].neighbors {
+                let a = nb.site;
+                let far = (0..n).find(|&b| {
+                    small(b) && !used[b] && b != a && cells[b].neighbors.iter().all(|x| x.site != big)
+                });
+                if let Some(b) = far.filter(|_| small(a) && !used[a]) {
+                    used[a] = true;
+                    used[b] = true;
+                    pairs.push((a, b));
+                }
+            }
+        }
+        assert!(pairs.len() >= 10, "{} pairs", pairs.len());
+        let before: Vec<f64> = sim.state().diagram.cells.iter().map(|c| c.area).collect();
+        sim.swap_sites(&pairs);
+        let after: Vec<f64> = sim.state().diagram.cells.iter().map(|c| c.area).collect();
+        let mut moved = before.clone();
+        for &(a, b) in &pairs {
+            moved.swap(a, b);
+        }
+        for (i, (m, a)) in moved.iter().zip(&after).enumerate() {
+            assert!((m - a).abs() <= 1e-9 * m.max(1.0), "cell {i}: {a} after the swap, {m} expected");
+        }
     }
 }
