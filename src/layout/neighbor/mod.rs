@@ -477,6 +477,7 @@ fn run_level(
     tick_done: &dyn Fn(usize) -> bool,
 ) -> Result<(f64, Vec<Diagram>, Vec<Diagram>), LayoutError> {
     let (dataset, method, params, np) = (ctx.dataset, ctx.method, ctx.params, ctx.np);
+    tracing::debug!(depth, start, "level run");
     let mut run_params = params.clone();
     run_params.seed = params
         .seed
@@ -497,10 +498,12 @@ fn run_level(
             )
         })
         .collect();
+    tracing::debug!("level initialised");
     if matches!(method, Method::MatchSwap | Method::Neighbor) {
         for _ in 0..np.swap_rounds {
             swap::swap_round(&mut diagrams, lv);
         }
+        tracing::debug!(rounds = np.swap_rounds, "level start swapped");
     }
     if let Some(r) = recorder.as_deref_mut() {
         let label = match method {

@@ -63,12 +63,16 @@ const POLISH_SETTLE: usize = 10;
 /// ticks and is arranged by the swap rounds of [`polish`] alone. In one flat
 /// diagram of 10,000 cells (`benches/scale.py` flat10000) the ticks cost a
 /// power diagram of the whole level each and lowered the score until the
-/// next swap round (3,380 at tick 0, 2,777 at tick 15); the polish rounds
-/// realised as much without them (6,950 vs 7,025 constraints) in half the
-/// time. At 1,200 cells (`tests/data/real/usr-bin`, weights 1:10⁵ that
-/// swaps of similar cells cannot exchange) the ticks more than double the
-/// realised constraints, so the bound sits above that.
-const ATTRACT_MAX_CHILDREN: usize = 3000;
+/// next swap round (3,380 at tick 0, 2,777 at tick 15). Once the polish's
+/// swaps kept their cells (`MapSimulation::swap_sites`), the ticks stopped
+/// paying above a few hundred cells: over seeds 1–5, without them the
+/// median realised constraints were 951 instead of 944 on
+/// `tests/data/real/usr-bin` (1,061 cells, weights 1:10⁵), 1,561 instead of
+/// 1,559 on flat2000 and 443 instead of 437 on `debian-packages`, in half
+/// the time or less; below the bound they still pay (`man-pages` 1,213
+/// with them, 1,170 without; `python-stdlib` 577 and 557). BENCHMARKS.md,
+/// "Attraction ticks on large diagrams".
+const ATTRACT_MAX_CHILDREN: usize = 300;
 /// The finished level's areas are settled to this share of the run's area
 /// target (the cells are final; the target is for diagrams still moving).
 const FINAL_SHARE: f64 = 0.1;
@@ -128,7 +132,9 @@ pub(super) fn optimize_level(
     let cells = lv.links.nodes.len();
     let unit = (total / cells.max(1) as f64).sqrt();
     let limits = Distances::relative(unit, np);
+    tracing::debug!(cells, diagrams = diagrams.len(), "level start");
     grow(&mut diagrams);
+    tracing::debug!("level grown");
     let patience = patience(cells, np);
     let mut best: Option<(Score, Saved)> = None;
     let mut progress = Progress::default();
@@ -175,6 +181,7 @@ pub(super) fn optimize_level(
     }
     let snap = lv.snapshot(&diagrams);
     keep_if_best(&mut best, &snap.score, snap.area_error, &diagrams);
+    tracing::debug!(ticks_run = progress.ticks, best = ?best.as_ref().map(|b| b.0.realized), "ticks done");
     let score = match best {
         Some((score, saved)) => {
             restore(&mut diagrams, &saved);
@@ -183,6 +190,7 @@ pub(super) fn optimize_level(
         None => snap.score,
     };
     let score = relax(&mut diagrams, score, lv);
+    tracing::debug!(realized = score.realized, "relaxed");
     polish(&mut diagrams, score, lv);
     diagrams.par_iter_mut().for_each(|d| {
         if let Diagram::Sim { sim, .. } = d {
@@ -191,6 +199,7 @@ pub(super) fn optimize_level(
         }
     });
     let score = lv.snapshot(&diagrams).score;
+    tracing::debug!(realized = score.realized, "level settled");
     Ok((score, diagrams))
 }
 
@@ -223,12 +232,15 @@ fn grow(diagrams: &mut [Diagram]) {
 struct Progress {
     reference: Option<f64>,
     idle: usize,
+    /// Ticks observed in all (for the log).
+    ticks: usize,
 }
 
 impl Progress {
     /// Takes the best score after a tick (`None` while no state is a
     /// candidate yet) and returns the ticks since the last progress.
     fn observe(&mut self, best: Option<f64>) -> usize {
+        self.ticks += 1;
         // The first candidate is progress over nothing (a reference of -inf
         // would make the step, and so the comparison, NaN).
         let rises = |value: f64| self.reference.is_none_or(|r| value >= r + progress_step(r));
