@@ -166,7 +166,7 @@ pub const ALIKE: f64 = 0.1;
 /// (`adjacent` pairs) get colours at least [`ALIKE`] apart whenever the
 /// palette allows, and every group its own colour while the palette has
 /// enough (past that, colours are reused evenly). `order` lists the groups by
-/// priority (heaviest first): earlier groups get earlier palette colours.
+/// priority: earlier groups get earlier palette colours.
 /// `fixed[g]` is a group's own colour, kept as given. Deterministic greedy:
 /// each group takes, among the first `WINDOW` least-used colours in palette
 /// order, the first far enough from its coloured neighbours, else the one

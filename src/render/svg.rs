@@ -176,7 +176,8 @@ pub(crate) fn stroke_width(top: f64, depth: usize) -> f64 {
 
 /// Fill colour of every node, indexed like the dataset. A node's own valid
 /// `color` always wins; otherwise the top-level groups take `palette`'s
-/// colours, assigned heaviest first so that groups sharing an edge
+/// colours, assigned in the data's order (so a weight edit recolours
+/// nothing) and so that groups sharing an edge
 /// (`adjacent`, pairs of node indices) never look alike
 /// ([`palette::assign`]), and deeper nodes a lightness variation of their
 /// parent's colour, the heaviest child the parent's own
@@ -203,11 +204,11 @@ pub(crate) fn cell_colors(
         }
     }
     let position = |i: usize| group_of.get(i).copied().flatten();
-    let mut order: Vec<usize> = (0..groups.len()).collect();
-    order.sort_by(|&a, &b| {
-        let (va, vb) = (dataset.node(groups[a]).value, dataset.node(groups[b]).value);
-        vb.total_cmp(&va).then(a.cmp(&b))
-    });
+    // Groups take colours in the data's order, not by weight: an edit that
+    // lets one group outgrow another must not recolour the picture (the
+    // daemon redraws after every edit, and a picture that stays put is its
+    // point). The order of first appearance is d3's ordinal scale's too.
+    let order: Vec<usize> = (0..groups.len()).collect();
     let pairs: Vec<(usize, usize)> = adjacent
         .iter()
         .filter_map(|&(a, b)| Some((position(a)?, position(b)?)))
@@ -399,6 +400,7 @@ pub(crate) fn escape(text: &str) -> String {
 mod tests {
     use super::*;
     use crate::render::test_support::sample;
+    use nptreemap_formats::{DatasetBuilder, NodeSpec};
 
     fn count(hay: &str, needle: &str) -> usize {
         hay.matches(needle).count()
@@ -497,6 +499,37 @@ mod tests {
         assert_ne!(colors[idx("A2")], Some(a));
         let text = svg(&dataset, &layout, &SvgStyle::default());
         assert!(text.contains("fill=\"#ff0000\""));
+    }
+
+    #[test]
+    fn group_colours_survive_a_weight_edit_that_reorders_the_groups() {
+        // `nptreemap watch` re-renders after every edit: a group that grows
+        // past another must keep its colour, or the whole picture changes
+        // colour for one edited value (seen on tests/data/real/man-pages:
+        // 1,320 of 1,434 cells after man8 outgrew man5).
+        let groups = |weights: [f64; 4]| {
+            let mut builder = DatasetBuilder::new();
+            builder.add(NodeSpec::new("root"));
+            for (k, w) in weights.iter().enumerate() {
+                let g = format!("g{k}");
+                builder.add(NodeSpec::new(&g).parent("root"));
+                builder.add(NodeSpec::new(format!("{g}-leaf")).parent(&g).weight(*w));
+            }
+            let dataset = builder.build().expect("valid");
+            let colors = cell_colors(&dataset, &[], PaletteKind::Tableau);
+            (0..4)
+                .map(|k| {
+                    let i = dataset.nodes().iter().position(|n| n.id == format!("g{k}"));
+                    colors[i.expect("group")]
+                })
+                .collect::<Vec<_>>()
+        };
+        let before = groups([40.0, 30.0, 20.0, 10.0]);
+        let after = groups([40.0, 30.0, 20.0, 90.0]);
+        assert_eq!(before, after);
+        // Still four different colours.
+        let distinct: std::collections::HashSet<_> = after.iter().collect();
+        assert_eq!(distinct.len(), 4, "{after:?}");
     }
 
     #[test]
