@@ -903,6 +903,7 @@ mod tests {
             state.convergence_ratio
         );
     }
+
     #[test]
     fn swapping_sites_exchanges_their_cells_and_nothing_else() {
         // Weights 1:10^4 (as in tests/data/real/usr-bin): a site that takes

@@ -24,12 +24,7 @@ fn same_lists(dataset: &Dataset, kind: Option<SimilarityKind>, what: &str) {
 
 #[test]
 fn paper_files_derive_the_recomputed_lists() {
-    let mut files: Vec<_> = std::fs::read_dir(support::paper_data())
-        .expect("tests/data/paper exists")
-        .map(|e| e.expect("entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .collect();
-    files.sort();
+    let files = support::paper_files();
     assert!(files.len() >= 8, "paper files: {}", files.len());
     for file in files {
         let bytes = std::fs::read(&file).expect("readable");

@@ -6,12 +6,7 @@ use crate::support;
 #[test]
 fn every_paper_file_passes_check_layout() {
     let dir = support::temp_dir("paper_data");
-    let mut files: Vec<_> = std::fs::read_dir(support::paper_data())
-        .expect("tests/data/paper exists")
-        .map(|e| e.expect("dir entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .collect();
-    files.sort();
+    let files = support::paper_files();
     assert!(
         files.len() >= 11,
         "expected the paper's 11 files, found {}",

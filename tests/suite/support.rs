@@ -12,6 +12,17 @@ pub(crate) fn paper_data() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/paper")
 }
 
+/// Every JSON file of [`paper_data`], sorted by name.
+pub(crate) fn paper_files() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(paper_data())
+        .expect("tests/data/paper exists")
+        .map(|e| e.expect("dir entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    files.sort();
+    files
+}
+
 /// The repository's test tools, `tests/tools/` (the checker, the generator).
 fn tools() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/tools")

@@ -147,7 +147,9 @@ pub(super) fn optimize_level(
     } else {
         np.ticks
     };
+    let mut ticks_run = 0;
     for tick in 0..ticks {
+        ticks_run = tick + 1;
         if np.swap_every > 0 && tick > 0 && tick % np.swap_every == 0 && tick + 20 < np.ticks {
             swap_round(&mut diagrams, lv);
             grow(&mut diagrams);
@@ -181,7 +183,7 @@ pub(super) fn optimize_level(
     }
     let snap = lv.snapshot(&diagrams);
     keep_if_best(&mut best, &snap.score, snap.area_error, &diagrams);
-    tracing::debug!(ticks_run = progress.ticks, best = ?best.as_ref().map(|b| b.0.realized), "ticks done");
+    tracing::debug!(ticks_run, best = ?best.as_ref().map(|b| b.0.realized), "ticks done");
     let score = match best {
         Some((score, saved)) => {
             restore(&mut diagrams, &saved);
@@ -232,15 +234,12 @@ fn grow(diagrams: &mut [Diagram]) {
 struct Progress {
     reference: Option<f64>,
     idle: usize,
-    /// Ticks observed in all (for the log).
-    ticks: usize,
 }
 
 impl Progress {
     /// Takes the best score after a tick (`None` while no state is a
     /// candidate yet) and returns the ticks since the last progress.
     fn observe(&mut self, best: Option<f64>) -> usize {
-        self.ticks += 1;
         // The first candidate is progress over nothing (a reference of -inf
         // would make the step, and so the comparison, NaN).
         let rises = |value: f64| self.reference.is_none_or(|r| value >= r + progress_step(r));
