@@ -76,6 +76,10 @@ pub struct Applied {
     pub missing: bool,
     /// True when the scale is logarithmic (see `LOG_SPAN`).
     pub log: bool,
+    /// True when `lo` and `hi` are not the values' extremes but the ends of
+    /// the values inside the outlier fences (see `OUTLIER_STRETCH`): values
+    /// beyond them take the scale's end colours, and the legend says so.
+    pub clipped: bool,
 }
 
 /// The number of each node's `field` (leaves only); a virtual leaf (method
@@ -112,17 +116,36 @@ pub fn values(dataset: &Dataset, field: &str) -> Vec<Option<f64>> {
 /// same dark one (lines of code, file sizes, downloads).
 const LOG_SPAN: f64 = 100.0;
 
+/// How far the values' whole range may stretch beyond the range inside
+/// Tukey's far-out fences (three interquartile ranges past the quartiles)
+/// before the linear scale is clipped to the fenced range: past 10x, nine
+/// tenths of the colours would go to a few outliers and every other leaf
+/// would share one colour.
+const OUTLIER_STRETCH: f64 = 10.0;
+
+/// `(v - a) / (b - a)`, computed on halves so that no difference of two
+/// finite values overflows (with `a = -1e308` and `b = 1e308` the plain
+/// difference is infinite and the quotient NaN); NaN-free for finite input.
+fn fraction(a: f64, b: f64, v: f64) -> f64 {
+    let span = b / 2.0 - a / 2.0;
+    if span > 0.0 {
+        ((v / 2.0 - a / 2.0) / span).clamp(0.0, 1.0)
+    } else {
+        0.5
+    }
+}
+
 /// A sequential scale's position of `v` in `[lo, hi]`, from 0 to 1:
 /// linear, or `ln(v + shift)` when `shift` (the smallest positive value)
 /// is given.
 fn position(lo: f64, hi: f64, v: f64, shift: Option<f64>) -> f64 {
     let f = |x: f64| shift.map_or(x, |s| (x + s).ln());
-    let (a, b) = (f(lo), f(hi));
-    if b > a {
-        ((f(v) - a) / (b - a)).clamp(0.0, 1.0)
-    } else {
-        0.5
-    }
+    fraction(f(lo), f(hi), f(v))
+}
+
+/// The value a fraction `t` of the way from `a` to `b` (no overflow).
+fn between(a: f64, b: f64, t: f64) -> f64 {
+    a * (1.0 - t) + b * t
 }
 
 /// The colour of value `v` on `by`'s scale over `[lo, hi]` (linear).
@@ -141,9 +164,14 @@ fn color_on(by: &ColorBy, lo: f64, hi: f64, v: f64, shift: Option<f64>) -> Rgb {
         ColorScale::Diverging => {
             // Each side spans from the midpoint to the farther end, so equal
             // distances from the midpoint get equal strengths of colour.
-            let m = by.midpoint;
-            let reach = (hi - m).abs().max((m - lo).abs());
-            let t = if reach > 0.0 { (v - m) / reach } else { 0.0 };
+            // On halves, so that no finite range overflows.
+            let m = by.midpoint / 2.0;
+            let reach = (hi / 2.0 - m).abs().max((m - lo / 2.0).abs());
+            let t = if reach > 0.0 {
+                (v / 2.0 - m) / reach
+            } else {
+                0.0
+            };
             let t = t.clamp(-1.0, 1.0);
             // A straight line in OKLab from a light neutral to each hue.
             let (l_end, c_end, hue) = if t < 0.0 {
@@ -167,21 +195,26 @@ pub fn apply(dataset: &Dataset, colors: &mut [Option<Rgb>], by: &ColorBy) -> Opt
         range = Some(range.map_or((*v, *v), |(lo, hi)| (lo.min(*v), hi.max(*v))));
     }
     let (mut lo, mut hi) = range?;
-    if by.scale == ColorScale::Diverging {
-        lo = lo.min(by.midpoint);
-        hi = hi.max(by.midpoint);
-    }
-    let smallest = values
-        .iter()
-        .flatten()
-        .copied()
-        .filter(|v| *v > 0.0)
-        .fold(f64::INFINITY, f64::min);
+    let smallest = smallest_positive(&values);
     let shift = (by.scale == ColorScale::Sequential
         && lo >= 0.0
         && smallest.is_finite()
         && hi >= LOG_SPAN * smallest)
         .then_some(smallest);
+    // A logarithmic scale already spreads a heavy tail; a linear one whose
+    // range a few outliers stretch is clipped to the values inside the
+    // fences.
+    let mut clipped = false;
+    if let (None, Some((flo, fhi))) = (shift, fenced(&values)) {
+        let inner = fhi / 2.0 - flo / 2.0;
+        if inner > 0.0 && hi / 2.0 - lo / 2.0 > OUTLIER_STRETCH * inner {
+            (lo, hi, clipped) = (flo, fhi, true);
+        }
+    }
+    if by.scale == ColorScale::Diverging {
+        lo = lo.min(by.midpoint);
+        hi = hi.max(by.midpoint);
+    }
     let mut missing = false;
     for (i, color) in colors.iter_mut().enumerate().take(dataset.len()) {
         if !dataset.is_leaf(i) {
@@ -201,20 +234,52 @@ pub fn apply(dataset: &Dataset, colors: &mut [Option<Rgb>], by: &ColorBy) -> Opt
         .map(|k| {
             let t = k as f64 / (LEGEND_STOPS - 1) as f64;
             let v = match shift {
-                Some(s) => ((lo + s).ln() + t * ((hi + s).ln() - (lo + s).ln())).exp() - s,
-                None => lo + (hi - lo) * t,
+                Some(s) => between((lo + s).ln(), (hi + s).ln(), t).exp() - s,
+                None => between(lo, hi, t),
             };
             color_on(by, lo, hi, v, shift)
         })
         .collect();
     Some(Applied {
         log: shift.is_some(),
+        clipped,
         field: by.field.clone(),
         lo,
         hi,
         stops,
         missing,
     })
+}
+
+/// The smallest positive value (infinity when there is none).
+fn smallest_positive(values: &[Option<f64>]) -> f64 {
+    values
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|v| *v > 0.0)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The smallest and largest values inside Tukey's far-out fences (three
+/// interquartile ranges beyond the quartiles; computed on halves so that
+/// no finite value overflows), or `None` with fewer than four values.
+fn fenced(values: &[Option<f64>]) -> Option<(f64, f64)> {
+    let mut sorted: Vec<f64> = values.iter().flatten().copied().collect();
+    if sorted.len() < 4 {
+        return None;
+    }
+    sorted.sort_by(f64::total_cmp);
+    let quartile = |q: usize| sorted[(sorted.len() - 1) * q / 4] / 2.0;
+    let (q1, q3) = (quartile(1), quartile(3));
+    let iqr = q3 - q1;
+    let (low_fence, high_fence) = (q1 - 3.0 * iqr, q3 + 3.0 * iqr);
+    let mut inside = sorted
+        .iter()
+        .copied()
+        .filter(|v| *v / 2.0 >= low_fence && *v / 2.0 <= high_fence);
+    let first = inside.next()?;
+    Some((first, inside.next_back().unwrap_or(first)))
 }
 
 #[cfg(test)]
@@ -307,5 +372,84 @@ mod tests {
         assert!(below[0] < 0.75 && above[0] < 0.75);
         // The two sides differ in hue: blue has b < 0, red a > 0.
         assert!(below[2] < 0.0 && above[1] > 0.0, "{below:?} {above:?}");
+    }
+
+    /// A dataset of leaves with these scores, and their colours on `scale`.
+    fn coloured(scores: &[&str], scale: ColorScale) -> (Dataset, Vec<Option<Rgb>>, Applied) {
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("r"));
+        for (k, v) in scores.iter().enumerate() {
+            b.add(leaf(&format!("n{k}"), Some(v)));
+        }
+        let ds = b.build().expect("valid");
+        let by = ColorBy {
+            field: "score".into(),
+            scale,
+            midpoint: 0.0,
+        };
+        let mut colors = vec![None; ds.len()];
+        let applied = apply(&ds, &mut colors, &by).expect("values");
+        (ds, colors, applied)
+    }
+
+    #[test]
+    fn the_widest_finite_range_keeps_its_ends_on_the_scale() {
+        // Issue 30 item 13: hi - lo overflowed to infinity, so 1e308 was
+        // drawn black (NaN on the scale) and -1e308 a middle colour.
+        let (ds, colors, applied) = coloured(&["-1e308", "0", "1e308"], ColorScale::Sequential);
+        let at = |id: &str| colors[ds.find(id).expect("node")].expect("colour");
+        assert_eq!(
+            at("n0"),
+            applied.stops[0],
+            "the lowest value is the first stop"
+        );
+        assert_eq!(
+            at("n2"),
+            applied.stops[LEGEND_STOPS - 1],
+            "the highest the last"
+        );
+        assert_ne!(at("n2"), Rgb::new(0, 0, 0));
+        assert!(applied.lo.is_finite() && applied.hi.is_finite());
+        let light = |id: &str| oklab(at(id))[0];
+        assert!(light("n0") < light("n1") && light("n1") < light("n2"));
+
+        let (ds, colors, _) = coloured(&["-1e308", "0", "1e308"], ColorScale::Diverging);
+        let at = |id: &str| oklab(colors[ds.find(id).expect("node")].expect("colour"));
+        assert!(at("n1")[0] > 0.9, "the midpoint is light: {:?}", at("n1"));
+        for end in ["n0", "n2"] {
+            assert!(
+                at(end)[0] < 0.6,
+                "{end} is a full end colour: {:?}",
+                at(end)
+            );
+        }
+    }
+
+    #[test]
+    fn a_few_outliers_clip_a_linear_scale_and_say_so() {
+        // Most values within -5..5, two far outliers: a linear scale over
+        // the whole range would give every ordinary leaf the middle colour.
+        let mut scores: Vec<String> = (-5..=5).map(|v| v.to_string()).collect();
+        scores.push("1e12".into());
+        scores.push("-3e9".into());
+        let refs: Vec<&str> = scores.iter().map(String::as_str).collect();
+        let (ds, colors, applied) = coloured(&refs, ColorScale::Sequential);
+        assert!(applied.clipped && !applied.log);
+        assert_eq!((applied.lo, applied.hi), (-5.0, 5.0));
+        let at = |k: usize| colors[ds.find(&format!("n{k}")).expect("node")].expect("colour");
+        // The ordinary values spread over the scale; the outliers take its ends.
+        assert_eq!(at(0), applied.stops[0]);
+        assert_eq!(at(10), applied.stops[LEGEND_STOPS - 1]);
+        assert_eq!(at(11), at(10));
+        assert_eq!(at(12), at(0));
+        let l: Vec<f64> = (0..=10).map(|k| oklab(at(k))[0]).collect();
+        assert!(l.windows(2).all(|w| w[1] > w[0]), "{l:?}");
+
+        // Without outliers, no clipping.
+        let (_, _, applied) = coloured(&["-5", "-1", "0", "2", "5"], ColorScale::Sequential);
+        assert!(!applied.clipped);
+        // A heavy tail of non-negative values is logarithmic, not clipped.
+        let (_, _, applied) = coloured(&["1", "2", "3", "4", "1e9"], ColorScale::Sequential);
+        assert!(applied.log && !applied.clipped);
     }
 }

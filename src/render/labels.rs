@@ -328,9 +328,23 @@ fn wrap(text: &str) -> Option<(String, String)> {
     (!first.is_empty() && !second.is_empty()).then_some((first, second))
 }
 
+/// Beyond this magnitude a value is written in scientific notation: its
+/// digits past the 15th are noise of the binary fraction, and 1e300 written
+/// out would be 301 digits wide.
+const SCIENTIFIC_ABOVE: f64 = 1e15;
+/// Below this magnitude (other than zero) too: two decimals would round it
+/// to 0.
+const SCIENTIFIC_BELOW: f64 = 0.005;
+
 /// `value` with thousands separators (at most two decimals, trailing zeros
-/// dropped) and the unit.
+/// dropped) and the unit; a magnitude of at least 10^15, or a non-zero one
+/// under 0.005, in scientific notation with three significant digits
+/// (`1.23e308`, `4e-7`).
 pub fn format_value(value: f64, unit: &str) -> String {
+    let magnitude = value.abs();
+    if magnitude >= SCIENTIFIC_ABOVE || (magnitude > 0.0 && magnitude < SCIENTIFIC_BELOW) {
+        return format!("{}{unit}", scientific(value));
+    }
     let rounded = (value * 100.0).round() / 100.0;
     let negative = rounded < 0.0;
     let whole = rounded.abs().trunc();
@@ -353,6 +367,19 @@ pub fn format_value(value: f64, unit: &str) -> String {
     }
     out.push_str(unit);
     out
+}
+
+/// `value` (finite) as `d.dde±x` with trailing zeros of the mantissa
+/// dropped.
+fn scientific(value: f64) -> String {
+    let text = format!("{value:.2e}");
+    match text.split_once('e') {
+        Some((mantissa, exponent)) => {
+            let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+            format!("{mantissa}e{exponent}")
+        }
+        None => text,
+    }
 }
 
 /// The label of leaf `node` in `polygon`, at font sizes within
@@ -724,6 +751,18 @@ mod tests {
         assert_eq!(format_value(999.0, " KiB"), "999 KiB");
         assert_eq!(format_value(1234.5, ""), "1,234.5");
         assert_eq!(format_value(0.125, "%"), "0.13%");
+        // Readable at any magnitude (issue 30 item 13): 1e300 is not 301
+        // digits, 1e308 not `inf`, and a tiny value not 0.
+        assert_eq!(format_value(1e300, ""), "1e300");
+        assert_eq!(format_value(-1e308, ""), "-1e308");
+        assert_eq!(format_value(f64::MAX, ""), "1.8e308");
+        assert_eq!(format_value(1.2345e15, " B"), "1.23e15 B");
+        assert_eq!(format_value(0.000042, ""), "4.2e-5");
+        assert_eq!(
+            format_value(999_999_999_999_999.0, ""),
+            "999,999,999,999,999"
+        );
+        assert_eq!(format_value(0.0, ""), "0");
         assert_eq!(format_value(-1000.0, ""), "-1,000");
     }
 

@@ -520,14 +520,22 @@ pub(crate) fn legend_items(
     // Coloured by a field, the colours mean its values, not the groups
     // (whose names are on the map).
     if let Some(a) = applied {
+        // A clipped scale's ends hold every value beyond them.
+        let (below, above) = if a.clipped {
+            ("≤ ", "≥ ")
+        } else {
+            ("", "")
+        };
         items.push(LegendItem::Scale {
             field: if a.log {
                 format!("{} (log scale)", a.field)
+            } else if a.clipped {
+                format!("{} (scale clipped at outliers)", a.field)
             } else {
                 a.field.clone()
             },
-            low: format_value(a.lo, ""),
-            high: format_value(a.hi, ""),
+            low: format!("{below}{}", format_value(a.lo, "")),
+            high: format!("{above}{}", format_value(a.hi, "")),
             stops: a.stops.clone(),
         });
         if a.missing {

@@ -237,3 +237,55 @@ fn init_offers_the_page_keys_for_such_columns() {
     write(&dir, "nptreemap.yaml", &(uncommented + "\n"));
     support::build(&dir.join("nptreemap.yaml"));
 }
+
+/// Issue 30 item 13: `color_by` over the widest finite range. The legend
+/// printed `-inf … inf` and 1e300 as 301 digits, and the 1e308 leaf was
+/// drawn black, a colour the scale never makes.
+#[test]
+fn color_by_takes_any_finite_range_and_prints_it_readably() {
+    let dir = support::temp_dir("render-fields-extreme");
+    let mut nodes = String::from("id,group,size,score\n");
+    for (k, score) in ["-1e308", "1e308", "1e300", "-2", "0", "3", "1", "2"]
+        .iter()
+        .enumerate()
+    {
+        nodes.push_str(&format!("n{k},{},1,{score}\n", ["x", "y"][k % 2]));
+    }
+    write(&dir, "nodes.csv", &nodes);
+    write(&dir, "pairs.csv", "n0,n1\n");
+    write(
+        &dir,
+        "nptreemap.yaml",
+        &config("", "  color_by: score\n").replace("out/t.html, out/t.svg", "out/t.svg, out/t.png"),
+    );
+    support::build(&dir.join("nptreemap.yaml"));
+    let svg = std::fs::read_to_string(dir.join("out/t.svg")).expect("svg");
+    let legend = &svg[svg.find("np-legend").expect("legend")..];
+    assert!(!legend.contains("inf"), "{legend}");
+    // The two values beyond the fences are outliers: the scale is clipped
+    // to the others and the legend says so, in short numbers.
+    assert!(
+        legend.contains("score (scale clipped at outliers): ≤ -2</text>"),
+        "{legend}"
+    );
+    assert!(legend.contains(">≥ 3</text>"), "{legend}");
+    let longest = legend
+        .split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0);
+    assert!(longest < 16, "a number of {longest} digits in {legend}");
+    // Every leaf has a colour of the scale, none black.
+    assert!(!svg.contains("fill=\"#000000\""), "{svg}");
+    let fill = |id: &str| {
+        let at = svg.find(&format!("data-id=\"{id}\"")).expect("cell");
+        let rest = &svg[at..];
+        let f = rest.find("fill=\"").expect("fill") + 6;
+        rest[f..f + 7].to_owned()
+    };
+    // The outliers take the ends of the scale, like the values at the fences.
+    assert_eq!(fill("n1"), fill("n5"));
+    assert_eq!(fill("n0"), fill("n3"));
+    assert_eq!(fill("n2"), fill("n1"));
+    assert_ne!(fill("n3"), fill("n5"));
+}
