@@ -268,7 +268,7 @@ pub(super) fn a_first_tap_shows_the_tooltip(browser: &mut Browser, page: &Page) 
     let (x, y) = hover_point(browser, page);
     browser.tap(x, y);
     // Give a zoom, if the tap caused one, time to show.
-    browser.eval("new Promise(function (r) { setTimeout(r, 400); })");
+    browser.settle(400);
     let crumbs = browser.eval("document.querySelectorAll('.np-crumbs button').length");
     assert_eq!(crumbs, 1, "the first tap does not zoom");
     browser.wait_for(
@@ -459,9 +459,7 @@ pub(super) fn hover_dims_the_tabs_on_screen(browser: &mut Browser, page: &Page) 
             }
         },
     );
-    browser.eval(
-        "new Promise(function (r) { requestAnimationFrame(function () { setTimeout(r, 300); }); })",
-    );
+    browser.settle(300);
     let tabs = browser.eval(&format!("{TABS}({})", json!(kept)));
     let tabs = tabs.as_array().expect("tabs");
     assert!(

@@ -305,9 +305,7 @@ pub(super) fn a_found_group_keeps_its_cells_bright(browser: &mut Browser, html: 
             }
         },
     );
-    browser.eval(
-        "new Promise(function (r) { requestAnimationFrame(function () { setTimeout(r, 300); }); })",
-    );
+    browser.settle(300);
     for (id, inside) in [("alpha", true), ("eta", false)] {
         let (x, y) = point_of(browser, id);
         let fill = browser.eval(&format!(
