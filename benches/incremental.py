@@ -213,9 +213,13 @@ def main() -> int:
         leaf["size"] = round(leaf["size"] * 1.1) + 1
         (folder / "tree.json").write_text(json.dumps(tree, separators=(",", ":")))
         step("one weight +10%", ["build"])
-        vector = leaf["embeddings"]
-        k = vector.index(0) if 0 in vector else 0
-        vector[k] = 1 - vector[k]
+        features = leaf["embeddings"]
+        if features and isinstance(features[0], str):
+            # A set of included names: include one name more.
+            features.append("one_more_included_name.h")
+        else:
+            k = features.index(0) if 0 in features else 0
+            features[k] = 1 - features[k]
         (folder / "tree.json").write_text(json.dumps(tree, separators=(",", ":")))
         step("one similarity row", ["build"])
         (folder / "nptreemap.yaml").write_text(CONFIG.format(border=3))

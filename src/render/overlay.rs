@@ -103,9 +103,11 @@ pub struct Tab {
     pub width: f64,
 }
 
-/// Where a tab may go: the longest shared segment of the two cells.
-pub fn tab_edge(layout: &Layout, link: &Link) -> Option<[Point; 2]> {
-    let tol = PERPENDICULAR_TOL * layout.diagonal();
+/// Where a tab may go: the longest shared segment of the two cells, with
+/// `diagonal` the layout's ([`Layout::diagonal`], which walks every cell:
+/// computed once per picture, not once per tab).
+pub fn tab_edge(layout: &Layout, link: &Link, diagonal: f64) -> Option<[Point; 2]> {
+    let tol = PERPENDICULAR_TOL * diagonal;
     shared_segments(
         &layout.cells[link.a].polygon,
         &layout.cells[link.b].polygon,
@@ -180,23 +182,97 @@ pub fn place_tabs(
             .push(l.rect.grown(0.5 * u));
     }
     let mut tabs: Vec<Tab> = Vec::new();
+    let mut grid = TabGrid::new(TAB_GRID_EM * u);
+    let diagonal = layout.diagonal();
     for link in links.iter().filter(|l| l.realized) {
-        if let Some(tab) = place_tab(layout, link, &by_cell, &tabs, u, width(link.a, link.b)) {
+        let line = width(link.a, link.b);
+        if let Some(tab) = place_tab(layout, link, diagonal, &by_cell, &grid, u, line) {
+            grid.insert([tab.fill[0], tab.outline[1], tab.outline[2], tab.fill[5]]);
             tabs.push(tab);
         }
     }
     tabs
 }
 
+/// Side of a [`TabGrid`] square in canvas units per unit of scale: about
+/// the largest tab (`TAB_WIDTH_MAX` wide, as deep), so a tab's box spans
+/// few squares.
+const TAB_GRID_EM: f64 = 2.0 * TAB_WIDTH_MAX;
+
+/// The hulls of the tabs placed so far, bucketed by their bounding boxes
+/// on a square grid, so that a new tab is tested against the tabs near it
+/// rather than every tab of the picture (which made placing the tabs
+/// quadratic in their number). Exact: convex hulls whose bounding boxes are
+/// disjoint are disjoint, and the separating-axis test finds them so.
+struct TabGrid {
+    side: f64,
+    hulls: Vec<[Point; 4]>,
+    squares: std::collections::HashMap<(i64, i64), Vec<usize>>,
+}
+
+impl TabGrid {
+    fn new(side: f64) -> Self {
+        TabGrid {
+            side: if side > 0.0 && side.is_finite() {
+                side
+            } else {
+                1.0
+            },
+            hulls: Vec::new(),
+            squares: Default::default(),
+        }
+    }
+
+    /// The grid squares `hull`'s bounding box touches (bounded: a hull is
+    /// a tab's, at most a few squares across; a degenerate one is clamped).
+    fn squares_of(&self, hull: &[Point]) -> impl Iterator<Item = (i64, i64)> {
+        let (mut lo, mut hi) = (
+            Point::new(f64::INFINITY, f64::INFINITY),
+            Point::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+        );
+        for p in hull {
+            lo = Point::new(lo.x.min(p.x), lo.y.min(p.y));
+            hi = Point::new(hi.x.max(p.x), hi.y.max(p.y));
+        }
+        let square = |v: f64| (v / self.side).floor().clamp(-1e9, 1e9) as i64;
+        let (x0, y0) = (square(lo.x), square(lo.y));
+        let (x1, y1) = (square(hi.x).min(x0 + 64), square(hi.y).min(y0 + 64));
+        (x0..=x1).flat_map(move |x| (y0..=y1).map(move |y| (x, y)))
+    }
+
+    fn insert(&mut self, hull: [Point; 4]) {
+        let k = self.hulls.len();
+        let squares: Vec<(i64, i64)> = self.squares_of(&hull).collect();
+        for square in squares {
+            self.squares.entry(square).or_default().push(k);
+        }
+        self.hulls.push(hull);
+    }
+
+    /// The placed hulls whose squares `hull` touches, each once.
+    fn near<'g>(&'g self, hull: &[Point]) -> impl Iterator<Item = &'g [Point; 4]> + 'g {
+        let mut seen: Vec<usize> = self
+            .squares_of(hull)
+            .filter_map(|square| self.squares.get(&square))
+            .flatten()
+            .copied()
+            .collect();
+        seen.sort_unstable();
+        seen.dedup();
+        seen.into_iter().map(move |k| &self.hulls[k])
+    }
+}
+
 fn place_tab(
     layout: &Layout,
     link: &Link,
+    diagonal: f64,
     labels: &std::collections::HashMap<usize, Vec<Rect>>,
-    placed: &[Tab],
+    placed: &TabGrid,
     u: f64,
     line: f64,
 ) -> Option<Tab> {
-    let [p0, p1] = tab_edge(layout, link)?;
+    let [p0, p1] = tab_edge(layout, link, diagonal)?;
     let (pa, pb) = (&layout.cells[link.a].polygon, &layout.cells[link.b].polygon);
     let (from, into) = if pa.area() <= pb.area() {
         (link.a, link.b)
@@ -267,10 +343,9 @@ fn place_tab(
                     .get(c)
                     .is_none_or(|rs| rs.iter().all(|r| !hits_rect(&hull, r)))
             });
-            let clear_of_tabs = placed.iter().all(|o| {
-                let other = [o.fill[0], o.outline[1], o.outline[2], o.fill[5]];
-                !convex_overlap(&hull, &other)
-            });
+            let clear_of_tabs = placed
+                .near(&hull)
+                .all(|other| !convex_overlap(&hull, other));
             if clear_of_labels && clear_of_tabs {
                 return Some(Tab {
                     a: link.a,
