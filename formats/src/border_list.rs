@@ -21,7 +21,7 @@ use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 use crate::node_table::{node_tree, TableTree, NODES_ROLE};
-use crate::table::{read_table_bounded, FieldCap, Table};
+use crate::table::{read_table_bounded, Cap, Table};
 use crate::warning::{Warning, WarningKind};
 
 /// The border-list [`Format`] (name `border-list`, inputs `nodes` and `pairs`).
@@ -52,7 +52,7 @@ impl Format for BorderList {
         let in_nodes = |error| InputError::new("nodes", error);
         let in_pairs = |error| InputError::new("pairs", error);
         let mut tree = node_tree(inputs, options)?;
-        let columns = FieldCap::columns(options.limits);
+        let columns = Cap::columns(options.limits);
         let pair_table =
             read_table_bounded(pairs, options.delimiter, None, Some(columns)).map_err(in_pairs)?;
         tree.warnings.append(pair_table.warnings_in("pairs"));

@@ -30,7 +30,7 @@ use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role
 use crate::limits::{Limit, Limits};
 use crate::node_table::{node_tree, TableTree, NODES_ROLE};
 use crate::npy::{is_npy, read_npy, Matrix};
-use crate::table::{read_rows_bounded, FieldCap, Row, RowCap};
+use crate::table::{read_rows_bounded, Cap, Row};
 use crate::warning::{Warning, WarningKind};
 
 /// The embedding-matrix [`Format`] (name `embedding-matrix`, inputs `nodes` and
@@ -88,8 +88,8 @@ impl Format for EmbeddingMatrix {
             }
             // One vector per node, plus an optional header row; an id and at
             // most max_dimensions values per row.
-            let cap = RowCap::new(options.limits, Limit::Nodes, 1, "vector rows");
-            let width = FieldCap::new(options.limits, Limit::Dimensions, 1, "values");
+            let cap = Cap::new(options.limits, Limit::Nodes, 1, "vector rows");
+            let width = Cap::new(options.limits, Limit::Dimensions, 1, "values");
             let rows = read_rows_bounded(vectors, options.delimiter, Some(cap), Some(width))
                 .map_err(in_vectors)?;
             add_vectors(&mut tree, &rows, &options.limits, options.on_unknown_id)
@@ -277,8 +277,8 @@ fn matrix_owners(
     };
     let in_ids = |error| InputError::new("ids", error);
     // One id per matrix row, plus an optional header.
-    let cap = RowCap::new(options.limits, Limit::Nodes, 1, "ids");
-    let width = FieldCap::new(options.limits, Limit::Dimensions, 1, "fields after the id");
+    let cap = Cap::new(options.limits, Limit::Nodes, 1, "ids");
+    let width = Cap::new(options.limits, Limit::Dimensions, 1, "fields after the id");
     let rows = read_rows_bounded(ids, options.delimiter, Some(cap), Some(width)).map_err(in_ids)?;
     // A first line that names no node is a header (`id`); a typo there shows in
     // the count, and the message says it was taken for one.

@@ -48,7 +48,7 @@ use crate::dataset::{
 use crate::error::FormatError;
 use crate::format::{FormatOptions, InputError, Inputs, Role};
 use crate::limits::{Limit, Limits};
-use crate::table::{read_table_capped, RowCap, Table};
+use crate::table::{read_table_capped, Cap, Table};
 use crate::warning::{Warning, WarningKind, Warnings};
 
 /// The node specs of a table's hierarchy, ready for [`DatasetBuilder`], with the
@@ -522,6 +522,6 @@ pub fn node_tree(inputs: &Inputs<'_>, options: &FormatOptions) -> Result<TableTr
 /// Reads a node table within `options.limits` (one row per node, so at most
 /// `max_nodes` rows are kept).
 pub fn read_node_table(bytes: &[u8], options: &FormatOptions) -> Result<Table, FormatError> {
-    let cap = RowCap::new(options.limits, Limit::Nodes, 0, "rows");
+    let cap = Cap::new(options.limits, Limit::Nodes, 0, "rows");
     read_table_capped(bytes, options.delimiter, Some(cap))
 }

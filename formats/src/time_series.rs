@@ -28,7 +28,7 @@ use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 use crate::limits::Limit;
 use crate::node_table::{node_tree, TableTree, NODES_ROLE};
-use crate::table::{read_table_capped, RowCap, Table};
+use crate::table::{read_table_capped, Cap, Table};
 use crate::warning::{Warning, WarningKind};
 
 /// The time-series [`Format`] (name `time-series`, inputs `nodes` and `series`).
@@ -63,7 +63,7 @@ impl Format for TimeSeries {
         let in_series = |error| InputError::new("series", error);
         let mut tree = node_tree(inputs, options)?;
         // One row per date, and the dates are each node's dimensions.
-        let cap = RowCap::new(options.limits, Limit::Dimensions, 0, "dates");
+        let cap = Cap::new(options.limits, Limit::Dimensions, 0, "dates");
         let series = read_table_capped(series, options.delimiter, Some(cap)).map_err(in_series)?;
         tree.warnings.append(series.warnings_in("series"));
         add_series(
