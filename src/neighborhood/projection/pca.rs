@@ -69,9 +69,24 @@ pub fn pca_2d(vectors: &[Vec<f64>]) -> Vec<Point> {
         }
     }
 
-    // Loadings (unit vectors in feature space) of the two leading axes.
-    let axes: Vec<Vec<f64>> = if n.min(d) > DENSE_MAX {
-        leading_axes(top2_singular(&x, n, d))
+    let axes = loadings(&x, n, d);
+    let mut coords = [vec![0.0; n], vec![0.0; n]];
+    for (axis, mut v) in axes.into_iter().enumerate() {
+        orient(&mut v);
+        for (c, r) in coords[axis].iter_mut().zip(x.chunks_exact(d)) {
+            *c = finite_or_clamped(dot(r, &v) * scale);
+        }
+    }
+    to_points(coords)
+}
+
+/// The loadings (unit vectors in feature space) of the two leading axes of the
+/// centred n×d data `x` (row-major): from the partial SVD of the data when both
+/// sides are above [`DENSE_MAX`], else from the dense EVD of the smaller of the
+/// covariance and the Gram matrix.
+fn loadings(x: &[f64], n: usize, d: usize) -> Vec<Vec<f64>> {
+    if n.min(d) > DENSE_MAX {
+        leading_axes(top2_singular(x, n, d))
             .into_iter()
             .map(|(_, v)| v)
             .collect()
@@ -117,16 +132,7 @@ pub fn pca_2d(vectors: &[Vec<f64>]) -> Vec<Point> {
                 v
             })
             .collect()
-    };
-
-    let mut coords = [vec![0.0; n], vec![0.0; n]];
-    for (axis, mut v) in axes.into_iter().enumerate() {
-        orient(&mut v);
-        for (c, r) in coords[axis].iter_mut().zip(x.chunks_exact(d)) {
-            *c = finite_or_clamped(dot(r, &v) * scale);
-        }
     }
-    to_points(coords)
 }
 
 /// The two leading right singular vectors of the centred n×d data `x` (row-major) as
