@@ -441,7 +441,35 @@ impl DatasetBuilder {
         if let Some(limits) = &limits {
             limits.check_nodes(specs.len())?;
         }
+        let links = Links::resolve(&specs)?;
+        let (order, new_index) = breadth_first(&specs, &links)?;
+        let (mut nodes, index) =
+            place_nodes(specs, &links, &order, &new_index, &virtual_flags, limits)?;
+        sum_values(&mut nodes)?;
+        let max_depth = nodes.last().map_or(0, |node| node.depth);
+        Ok(Dataset {
+            nodes,
+            index,
+            similarity_hint,
+            max_depth,
+            warnings,
+        })
+    }
+}
 
+/// The specs' parents, children and relations as spec indices.
+struct Links {
+    root: usize,
+    parent_of: Vec<Option<usize>>,
+    /// In the order added.
+    children_of: Vec<Vec<usize>>,
+    relations_of: Vec<Vec<usize>>,
+}
+
+impl Links {
+    /// Resolves the ids, checking in a fixed order: per spec (id unique, its
+    /// values), then parents exist and there is one root, then relations exist.
+    fn resolve(specs: &[NodeSpec]) -> Result<Links, ModelError> {
         let mut index_of: HashMap<&str, usize> = HashMap::with_capacity(specs.len());
         for (i, spec) in specs.iter().enumerate() {
             if index_of.insert(spec.id.as_str(), i).is_some() {
@@ -452,7 +480,6 @@ impl DatasetBuilder {
             check_values(spec)?;
         }
 
-        // Parent of each spec, as a spec index.
         let mut parent_of: Vec<Option<usize>> = Vec::with_capacity(specs.len());
         let mut root: Option<usize> = None;
         for (i, spec) in specs.iter().enumerate() {
@@ -480,7 +507,7 @@ impl DatasetBuilder {
         }
         let root = root.ok_or(ModelError::NoRoot)?;
 
-        for spec in &specs {
+        for spec in specs {
             if let Some(target) = spec
                 .relations
                 .iter()
@@ -492,8 +519,6 @@ impl DatasetBuilder {
                 });
             }
         }
-
-        // Relations as spec indices, resolved while the id index still borrows `specs`.
         let relations_of: Vec<Vec<usize>> = specs
             .iter()
             .map(|spec| {
@@ -504,105 +529,128 @@ impl DatasetBuilder {
             })
             .collect();
 
-        // Children per spec, in the order added.
         let mut children_of: Vec<Vec<usize>> = vec![Vec::new(); specs.len()];
         for (i, parent) in parent_of.iter().enumerate() {
             if let Some(p) = parent {
                 children_of[*p].push(i);
             }
         }
-
-        // Breadth-first from the root. A node never reached has a parent chain that
-        // does not end at the root, which (as every parent exists) means a cycle.
-        let mut order: Vec<usize> = Vec::with_capacity(specs.len());
-        let mut new_index: Vec<Option<usize>> = vec![None; specs.len()];
-        order.push(root);
-        new_index[root] = Some(0);
-        let mut head = 0;
-        while head < order.len() {
-            let current = order[head];
-            head += 1;
-            for &child in &children_of[current] {
-                new_index[child] = Some(order.len());
-                order.push(child);
-            }
-        }
-        if order.len() < specs.len() {
-            let unreached = new_index.iter().position(Option::is_none).unwrap_or(0);
-            return Err(ModelError::Cycle {
-                id: specs[node_on_cycle(unreached, &parent_of)].id.clone(),
-            });
-        }
-        // Every spec was reached, so every entry is set.
-        let new_index: Vec<usize> = new_index.into_iter().map(|i| i.unwrap_or(0)).collect();
-
-        let mut specs = specs;
-        let mut nodes: Vec<Node> = Vec::with_capacity(order.len());
-        let mut index: HashMap<String, usize> = HashMap::with_capacity(order.len());
-        for (position, &old) in order.iter().enumerate() {
-            // `order` visits each spec exactly once, so taking it leaves nothing behind
-            // that is read later.
-            let spec = std::mem::take(&mut specs[old]);
-            let parent = parent_of[old].map(|p| new_index[p]);
-            let depth = parent.map_or(0, |p| nodes[p].depth + 1);
-            if let Some(limits) = limits.filter(|l| depth > l.max_depth) {
-                return Err(limits
-                    .exceeded(
-                        Limit::Depth,
-                        format_args!("node {:?} is at depth {depth}", spec.id),
-                    )
-                    .into());
-            }
-            let mut relations: Vec<usize> = relations_of[old]
-                .iter()
-                .map(|&target| new_index[target])
-                .filter(|&target| target != position)
-                .collect();
-            relations.sort_unstable();
-            relations.dedup();
-            index.insert(spec.id.clone(), position);
-            nodes.push(Node {
-                label: spec.label.unwrap_or_else(|| spec.id.clone()),
-                id: spec.id,
-                parent,
-                children: children_of[old].iter().map(|&c| new_index[c]).collect(),
-                depth,
-                weight: spec.weight,
-                value: 0.0,
-                color: spec.color,
-                features: spec.features,
-                relations,
-                is_virtual: virtual_flags.get(old).copied().unwrap_or(false),
-                fields: spec.fields,
-            });
-        }
-
-        // Children come after their parent in BFS order, so a reverse sweep sees
-        // every child's value before its parent's. Children are summed last to first
-        // because d3's `hierarchy.sum` does, which keeps floating-point totals equal
-        // to the prototype's.
-        for i in (0..nodes.len()).rev() {
-            let mut value = nodes[i].weight.unwrap_or(0.0);
-            for &child in nodes[i].children.iter().rev() {
-                value += nodes[child].value;
-            }
-            if !value.is_finite() {
-                return Err(ModelError::WeightOverflow {
-                    id: nodes[i].id.clone(),
-                });
-            }
-            nodes[i].value = value;
-        }
-
-        let max_depth = nodes.last().map_or(0, |node| node.depth);
-        Ok(Dataset {
-            nodes,
-            index,
-            similarity_hint,
-            max_depth,
-            warnings,
+        Ok(Links {
+            root,
+            parent_of,
+            children_of,
+            relations_of,
         })
     }
+}
+
+/// The specs in breadth-first order from the root, and each spec's position
+/// in it. A node never reached has a parent chain that does not end at the
+/// root, which (as every parent exists) means a cycle: an error naming a node
+/// on it.
+fn breadth_first(
+    specs: &[NodeSpec],
+    links: &Links,
+) -> Result<(Vec<usize>, Vec<usize>), ModelError> {
+    let mut order: Vec<usize> = Vec::with_capacity(specs.len());
+    let mut new_index: Vec<Option<usize>> = vec![None; specs.len()];
+    order.push(links.root);
+    new_index[links.root] = Some(0);
+    let mut head = 0;
+    while head < order.len() {
+        let current = order[head];
+        head += 1;
+        for &child in &links.children_of[current] {
+            new_index[child] = Some(order.len());
+            order.push(child);
+        }
+    }
+    if order.len() < specs.len() {
+        let unreached = new_index.iter().position(Option::is_none).unwrap_or(0);
+        return Err(ModelError::Cycle {
+            id: specs[node_on_cycle(unreached, &links.parent_of)].id.clone(),
+        });
+    }
+    // Every spec was reached, so every entry is set.
+    let new_index: Vec<usize> = new_index.into_iter().map(|i| i.unwrap_or(0)).collect();
+    Ok((order, new_index))
+}
+
+/// The nodes in breadth-first `order` (`new_index`: each spec's place in
+/// it; `virtual_flags` by spec), with their depth checked against `limits`, relations sorted and
+/// without repeats or the node itself, and values still 0; and the index by id.
+fn place_nodes(
+    mut specs: Vec<NodeSpec>,
+    links: &Links,
+    order: &[usize],
+    new_index: &[usize],
+    virtual_flags: &[bool],
+    limits: Option<Limits>,
+) -> Result<(Vec<Node>, HashMap<String, usize>), ModelError> {
+    let mut nodes: Vec<Node> = Vec::with_capacity(order.len());
+    let mut index: HashMap<String, usize> = HashMap::with_capacity(order.len());
+    for (position, &old) in order.iter().enumerate() {
+        // `order` visits each spec exactly once, so taking it leaves nothing behind
+        // that is read later.
+        let spec = std::mem::take(&mut specs[old]);
+        let parent = links.parent_of[old].map(|p| new_index[p]);
+        let depth = parent.map_or(0, |p| nodes[p].depth + 1);
+        if let Some(limits) = limits.filter(|l| depth > l.max_depth) {
+            return Err(limits
+                .exceeded(
+                    Limit::Depth,
+                    format_args!("node {:?} is at depth {depth}", spec.id),
+                )
+                .into());
+        }
+        let mut relations: Vec<usize> = links.relations_of[old]
+            .iter()
+            .map(|&target| new_index[target])
+            .filter(|&target| target != position)
+            .collect();
+        relations.sort_unstable();
+        relations.dedup();
+        index.insert(spec.id.clone(), position);
+        nodes.push(Node {
+            label: spec.label.unwrap_or_else(|| spec.id.clone()),
+            id: spec.id,
+            parent,
+            children: links.children_of[old]
+                .iter()
+                .map(|&c| new_index[c])
+                .collect(),
+            depth,
+            weight: spec.weight,
+            value: 0.0,
+            color: spec.color,
+            features: spec.features,
+            relations,
+            is_virtual: virtual_flags.get(old).copied().unwrap_or(false),
+            fields: spec.fields,
+        });
+    }
+    Ok((nodes, index))
+}
+
+/// Each node's value: its own weight plus its children's values. Children
+/// come after their parent in BFS order, so a reverse sweep sees every
+/// child's value before its parent's. Children are summed last to first
+/// because d3's `hierarchy.sum` does, which keeps floating-point totals equal
+/// to the prototype's.
+fn sum_values(nodes: &mut [Node]) -> Result<(), ModelError> {
+    for i in (0..nodes.len()).rev() {
+        let mut value = nodes[i].weight.unwrap_or(0.0);
+        for &child in nodes[i].children.iter().rev() {
+            value += nodes[child].value;
+        }
+        if !value.is_finite() {
+            return Err(ModelError::WeightOverflow {
+                id: nodes[i].id.clone(),
+            });
+        }
+        nodes[i].value = value;
+    }
+    Ok(())
 }
 
 /// Checks the per-node values that do not depend on other nodes.

@@ -28,9 +28,9 @@ use crate::dataset::{ModelError, FEATURE_BOUND};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 use crate::limits::{Limit, Limits};
-use crate::node_table::{node_tree, TableTree, NODES_ROLE};
+use crate::node_table::{parse_with_input, TableTree, NODES_ROLE};
 use crate::npy::{is_npy, read_npy, Matrix};
-use crate::table::{read_rows_bounded, FieldCap, Row, RowCap};
+use crate::table::{read_rows_bounded, Cap, Row};
 use crate::warning::{Warning, WarningKind};
 
 /// The embedding-matrix [`Format`] (name `embedding-matrix`, inputs `nodes` and
@@ -64,40 +64,53 @@ impl Format for EmbeddingMatrix {
         ROLES
     }
 
+    #[allow(clippy::result_large_err)] // InputError's shape is the Format API's
     fn parse(&self, inputs: &Inputs<'_>, options: &FormatOptions) -> Result<Dataset, InputError> {
-        let vectors = inputs.require("vectors")?;
-        let in_nodes = |error| InputError::new("nodes", error);
         let in_vectors = |error| InputError::new("vectors", error);
-        let mut tree = node_tree(inputs, options)?;
-        if is_npy(vectors) {
-            let matrix = read_npy(vectors, &options.limits).map_err(in_vectors)?;
-            let owners = matrix_owners(&tree, &matrix, inputs.get("ids"), options)?;
-            add_matrix(&mut tree, matrix, &owners).map_err(in_vectors)?;
-        } else {
-            if inputs.get("ids").is_some() {
-                return Err(InputError::new(
-                    "ids",
-                    FormatError::Structure {
-                        line: None,
-                        column: None,
-                        message: "ids are for a .npy vectors file; a CSV/TSV vectors file \
-                                  names each row's node in its first column"
-                            .to_owned(),
-                    },
-                ));
+        let hint = SimilarityHint::Cosine;
+        parse_with_input(inputs, options, "vectors", hint, |tree, vectors| {
+            if is_npy(vectors) {
+                let matrix = read_npy(vectors, &options.limits).map_err(in_vectors)?;
+                let owners = matrix_owners(tree, &matrix, inputs.get("ids"), options)?;
+                add_matrix(tree, matrix, &owners).map_err(in_vectors)?;
+            } else {
+                read_vector_rows(tree, vectors, inputs, options)?;
             }
-            // One vector per node, plus an optional header row; an id and at
-            // most max_dimensions values per row.
-            let cap = RowCap::new(options.limits, Limit::Nodes, 1, "vector rows");
-            let width = FieldCap::new(options.limits, Limit::Dimensions, 1, "values");
-            let rows = read_rows_bounded(vectors, options.delimiter, Some(cap), Some(width))
-                .map_err(in_vectors)?;
-            add_vectors(&mut tree, &rows, &options.limits, options.on_unknown_id)
-                .map_err(in_vectors)?;
-        }
-        check_leaves(&tree).map_err(in_vectors)?;
-        tree.build(Some(SimilarityHint::Cosine)).map_err(in_nodes)
+            // Every leaf of the table needs a vector.
+            tree.check_leaf_features(None, "vector").map_err(in_vectors)
+        })
     }
+}
+
+/// Reads the CSV/TSV `vectors` and sets them as features on the tree's nodes
+/// (an `ids` input is for a `.npy` matrix only).
+#[allow(clippy::result_large_err)] // InputError's shape is the Format API's
+fn read_vector_rows(
+    tree: &mut TableTree,
+    vectors: &[u8],
+    inputs: &Inputs<'_>,
+    options: &FormatOptions,
+) -> Result<(), InputError> {
+    let in_vectors = |error| InputError::new("vectors", error);
+    if inputs.get("ids").is_some() {
+        return Err(InputError::new(
+            "ids",
+            FormatError::Structure {
+                line: None,
+                column: None,
+                message: "ids are for a .npy vectors file; a CSV/TSV vectors file \
+                          names each row's node in its first column"
+                    .to_owned(),
+            },
+        ));
+    }
+    // One vector per node, plus an optional header row; an id and at
+    // most max_dimensions values per row.
+    let cap = Cap::new(options.limits, Limit::Nodes, 1, "vector rows");
+    let width = Cap::new(options.limits, Limit::Dimensions, 1, "values");
+    let rows = read_rows_bounded(vectors, options.delimiter, Some(cap), Some(width))
+        .map_err(in_vectors)?;
+    add_vectors(tree, &rows, &options.limits, options.on_unknown_id).map_err(in_vectors)
 }
 
 /// True when every field after the id parses as a number.
@@ -105,7 +118,6 @@ fn all_numbers(row: &Row) -> bool {
     row.fields[1..].iter().all(|f| f.parse::<f64>().is_ok())
 }
 
-/// Reads the vector rows and sets them as features on the tree's nodes.
 /// Gives each leaf its vector from the rows; a row naming no node is skipped
 /// with a warning or is an error, as `on_unknown` says.
 fn add_vectors(
@@ -120,6 +132,38 @@ fn add_vectors(
         .first()
         .filter(|row| !all_numbers(row) && tree.find(&row.fields[0]).is_none());
     let data = &rows[usize::from(header.is_some())..];
+    let (first, width) = first_row(header, data, limits)?;
+    // Line of the vector given for each spec, to report repeats.
+    let mut seen: Vec<Option<usize>> = vec![None; tree.specs.len()];
+    for row in data {
+        if row.fields.len() != width {
+            return Err(FormatError::Structure {
+                line: Some(row.line),
+                column: None,
+                message: format!(
+                    "the row has {} values, the first row (line {}) has {}",
+                    row.fields.len() - 1,
+                    first.line,
+                    width - 1
+                ),
+            });
+        }
+        let Some(index) = row_owner(tree, header, row, on_unknown, &mut seen)? else {
+            continue;
+        };
+        let vector = row_vector(header, row)?;
+        tree.specs[index].features = Some(vector.into());
+    }
+    Ok(())
+}
+
+/// The first data row and its width (the id and the values), which every
+/// row must have: at least one value, at most `limits.max_dimensions`.
+fn first_row<'r>(
+    header: Option<&Row>,
+    data: &'r [Row],
+    limits: &Limits,
+) -> Result<(&'r Row, usize), FormatError> {
     let Some(first) = data.first() else {
         return Err(FormatError::Structure {
             line: header.map(|h| h.line),
@@ -142,94 +186,97 @@ fn add_vectors(
             column: None,
             source: ModelError::TooLarge(e),
         })?;
+    Ok((first, width))
+}
+
+/// The node (index into the tree's specs) `row` gives a vector to; `None`
+/// when its id names no node and `on_unknown` says to skip the row (with a
+/// warning). A second vector for a node is an error; `seen` holds the line
+/// of each node's vector.
+fn row_owner(
+    tree: &mut TableTree,
+    header: Option<&Row>,
+    row: &Row,
+    on_unknown: OnUnknownId,
+    seen: &mut [Option<usize>],
+) -> Result<Option<usize>, FormatError> {
+    let id = &row.fields[0];
+    let Some(index) = tree.find(id) else {
+        if on_unknown == OnUnknownId::Warn {
+            tree.warnings.push(Warning::new(
+                WarningKind::UnknownId,
+                "vectors",
+                Some(row.line),
+                format!(
+                    "unknown id {id:?}: no node of the node table has it; the row is \
+                     skipped (fields.on_unknown_id: error makes this an error)"
+                ),
+            ));
+            return Ok(None);
+        }
+        return Err(FormatError::Field {
+            line: Some(row.line),
+            column: Some(1),
+            node: None,
+            field: header
+                .and_then(|h| h.fields.first())
+                .cloned()
+                .unwrap_or_else(|| "id".to_owned()),
+            message: format!("unknown id {id:?}: no node of the node table has it"),
+        });
+    };
+    if let Some(previous) = seen[index] {
+        return Err(FormatError::Structure {
+            line: Some(row.line),
+            column: Some(1),
+            message: format!("node {id:?} has a second vector (the first is on line {previous})"),
+        });
+    }
+    seen[index] = Some(row.line);
+    Ok(Some(index))
+}
+
+/// The values of `row` after its id: finite numbers within
+/// [`FEATURE_BOUND`], not all zero. Errors name the value's header cell, or
+/// `v1`, `v2`, ... without a header.
+fn row_vector(header: Option<&Row>, row: &Row) -> Result<Vec<f64>, FormatError> {
+    let id = &row.fields[0];
     let value_name = |index: usize| -> String {
         header
             .and_then(|h| h.fields.get(index))
             .cloned()
             .unwrap_or_else(|| format!("v{index}"))
     };
-    // Line of the vector given for each spec, to report repeats.
-    let mut seen: Vec<Option<usize>> = vec![None; tree.specs.len()];
-    for row in data {
-        if row.fields.len() != width {
-            return Err(FormatError::Structure {
-                line: Some(row.line),
-                column: None,
-                message: format!(
-                    "the row has {} values, the first row (line {}) has {}",
-                    row.fields.len() - 1,
-                    first.line,
-                    width - 1
-                ),
-            });
-        }
-        let id = &row.fields[0];
-        let Some(index) = tree.find(id) else {
-            if on_unknown == OnUnknownId::Warn {
-                tree.warnings.push(Warning::new(
-                    WarningKind::UnknownId,
-                    "vectors",
-                    Some(row.line),
-                    format!(
-                        "unknown id {id:?}: no node of the node table has it; the row is \
-                         skipped (fields.on_unknown_id: error makes this an error)"
-                    ),
-                ));
-                continue;
-            }
+    let mut vector = Vec::with_capacity(row.fields.len() - 1);
+    for (offset, text) in row.fields[1..].iter().enumerate() {
+        let column = offset + 1;
+        let value = text.parse::<f64>().ok().filter(|v| v.is_finite());
+        let Some(value) = value else {
             return Err(FormatError::Field {
                 line: Some(row.line),
-                column: Some(1),
-                node: None,
-                field: header
-                    .and_then(|h| h.fields.first())
-                    .cloned()
-                    .unwrap_or_else(|| "id".to_owned()),
-                message: format!("unknown id {id:?}: no node of the node table has it"),
+                column: Some(column + 1),
+                node: Some(id.clone()),
+                field: value_name(column),
+                message: format!("expected a finite number, found {text:?}"),
             });
         };
-        if let Some(previous) = seen[index] {
-            return Err(FormatError::Structure {
+        if value.abs() > FEATURE_BOUND {
+            return Err(FormatError::Field {
                 line: Some(row.line),
-                column: Some(1),
+                column: Some(column + 1),
+                node: Some(id.clone()),
+                field: value_name(column),
                 message: format!(
-                    "node {id:?} has a second vector (the first is on line {previous})"
+                    "{text}: vector values must lie within ±{FEATURE_BOUND:e} (sums of their squares would overflow)"
                 ),
             });
         }
-        seen[index] = Some(row.line);
-        let mut vector = Vec::with_capacity(width - 1);
-        for (offset, text) in row.fields[1..].iter().enumerate() {
-            let column = offset + 1;
-            let value = text.parse::<f64>().ok().filter(|v| v.is_finite());
-            let Some(value) = value else {
-                return Err(FormatError::Field {
-                    line: Some(row.line),
-                    column: Some(column + 1),
-                    node: Some(id.clone()),
-                    field: value_name(column),
-                    message: format!("expected a finite number, found {text:?}"),
-                });
-            };
-            if value.abs() > FEATURE_BOUND {
-                return Err(FormatError::Field {
-                    line: Some(row.line),
-                    column: Some(column + 1),
-                    node: Some(id.clone()),
-                    field: value_name(column),
-                    message: format!(
-                        "{text}: vector values must lie within ±{FEATURE_BOUND:e} (sums of their squares would overflow)"
-                    ),
-                });
-            }
-            vector.push(value);
-        }
-        if vector.iter().all(|&v| v == 0.0) {
-            return Err(zero_vector(Some(row.line), &format!("node {id:?}")));
-        }
-        tree.specs[index].features = Some(vector.into());
+        vector.push(value);
     }
-    Ok(())
+    if vector.iter().all(|&v| v == 0.0) {
+        return Err(zero_vector(Some(row.line), &format!("node {id:?}")));
+    }
+    Ok(vector)
 }
 
 fn zero_vector(line: Option<usize>, what: &str) -> FormatError {
@@ -277,8 +324,8 @@ fn matrix_owners(
     };
     let in_ids = |error| InputError::new("ids", error);
     // One id per matrix row, plus an optional header.
-    let cap = RowCap::new(options.limits, Limit::Nodes, 1, "ids");
-    let width = FieldCap::new(options.limits, Limit::Dimensions, 1, "fields after the id");
+    let cap = Cap::new(options.limits, Limit::Nodes, 1, "ids");
+    let width = Cap::new(options.limits, Limit::Dimensions, 1, "fields after the id");
     let rows = read_rows_bounded(ids, options.delimiter, Some(cap), Some(width)).map_err(in_ids)?;
     // A first line that names no node is a header (`id`); a typo there shows in
     // the count, and the message says it was taken for one.
@@ -368,26 +415,6 @@ fn add_matrix(
             return Err(zero_vector(None, &what()));
         }
         tree.specs[index].features = Some(row.into());
-    }
-    Ok(())
-}
-
-/// Every leaf of the table needs a vector.
-fn check_leaves(tree: &TableTree) -> Result<(), FormatError> {
-    let leaves = tree.leaf_flags();
-    for (index, spec) in tree.specs.iter().enumerate() {
-        if leaves[index] && spec.features.is_none() {
-            let place =
-                tree.lines[index].map_or_else(String::new, |line| format!(" (nodes line {line})"));
-            return Err(FormatError::Structure {
-                line: None,
-                column: None,
-                message: format!(
-                    "node {:?}{place} has no vector; every leaf needs one",
-                    spec.id
-                ),
-            });
-        }
     }
     Ok(())
 }

@@ -48,7 +48,7 @@ use crate::dataset::{
 use crate::error::FormatError;
 use crate::format::{FormatOptions, InputError, Inputs, Role};
 use crate::limits::{Limit, Limits};
-use crate::table::{read_table_capped, RowCap, Table};
+use crate::table::{read_table_capped, Cap, Row, Table};
 use crate::warning::{Warning, WarningKind, Warnings};
 
 /// The node specs of a table's hierarchy, ready for [`DatasetBuilder`], with the
@@ -86,6 +86,32 @@ impl TableTree {
             }
         }
         leaf
+    }
+
+    /// An error for the first leaf without features, naming it and its line
+    /// of the node table, at `line` of the input that should have given them
+    /// (its `what`: a vector, a column).
+    pub(crate) fn check_leaf_features(
+        &self,
+        line: Option<usize>,
+        what: &str,
+    ) -> Result<(), FormatError> {
+        let leaves = self.leaf_flags();
+        for (index, spec) in self.specs.iter().enumerate() {
+            if leaves[index] && spec.features.is_none() {
+                let place = self.lines[index]
+                    .map_or_else(String::new, |line| format!(" (nodes line {line})"));
+                return Err(FormatError::Structure {
+                    line,
+                    column: None,
+                    message: format!(
+                        "node {:?}{place} has no {what}; every leaf needs one",
+                        spec.id
+                    ),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Adds a node, rejecting a repeated id with the line of the repeat.
@@ -163,93 +189,17 @@ pub const ROOT_ID: &str = "root";
 
 /// Builds the hierarchy of a node table (see the module docs for the rules).
 pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTree, FormatError> {
-    let hierarchy_kinds = usize::from(options.parent.is_some())
-        + usize::from(options.path.is_some())
-        + usize::from(!options.groups.is_empty());
-    if hierarchy_kinds > 1 {
-        return Err(FormatError::Structure {
-            line: None,
-            column: None,
-            message: "give only one of a parent column, a path column or grouping columns"
-                .to_owned(),
-        });
-    }
-    let path_column = match &options.path {
-        Some(name) => Some(table.required_column(name, "the path column")?),
-        None => None,
-    };
-    let id_column = match (&options.id, path_column) {
-        (Some(name), _) => Some(table.required_column(name, "the id column")?),
-        (None, Some(_)) => table.column("id"),
-        (None, None) => Some(table.required_column("id", "the id column")?),
-    };
-    let label_column = table.optional_column(
-        options.label.as_deref(),
-        "the label column",
-        &["label", "name"],
-    )?;
-    let weight_column = table.optional_column(
-        options.weight.as_deref(),
-        "the weight column",
-        &["weight", "value", "size"],
-    )?;
-    let color_column =
-        table.optional_column(options.color.as_deref(), "the color column", &["color"])?;
-    let parent_column = match &options.parent {
-        Some(name) => Some(table.required_column(name, "the parent column")?),
-        None => None,
-    };
-    let group_columns = options
-        .groups
-        .iter()
-        .map(|name| table.required_column(name, "a grouping column"))
-        .collect::<Result<Vec<_>, _>>()?;
-    // Each carried column must exist; the error names what asked for it.
-    let carried = options
-        .carry
-        .iter()
-        .map(|c| {
-            Ok((
-                c.column.clone(),
-                table.required_column(&c.column, &c.asked_by)?,
-            ))
-        })
-        .collect::<Result<Vec<_>, FormatError>>()?;
-    let separator = options.path_separator.unwrap_or('/');
-    let id_field = id_column
-        .or(path_column)
-        .map_or_else(|| "id".to_owned(), |c| table.header[c].clone());
-
+    let columns = Columns::find(table, options)?;
     let mut tree = TableTree {
         limits: options.limits,
         ..TableTree::default()
     };
     tree.warnings.append(table.warnings_in(NODES_ROLE.name));
-    if table.rows.is_empty() {
-        tree.warnings.push(Warning::new(
-            WarningKind::EmptyTable,
-            NODES_ROLE.name,
-            Some(table.header_line),
-            "the table has a header but no rows: the picture is empty",
-        ));
-    } else if weight_column.is_none() {
-        // Equal cells are rarely what a table of sizes meant, so say so.
-        tree.warnings.push(Warning::new(
-            WarningKind::NoWeight,
-            NODES_ROLE.name,
-            Some(table.header_line),
-            "no weight column (set fields.weight, or name a column weight, value or size): \
-             every row weighs 1",
-        ));
-    }
-    let root_label = options
-        .root_label
-        .clone()
-        .unwrap_or_else(|| "root".to_owned());
+    warn_of_the_table(&mut tree, table, columns.weight);
 
     // With a parent column, a single parentless row is the root; otherwise (or with
     // several) a synthetic root collects the top-level nodes.
-    let parentless = parent_column.map(|column| {
+    let parentless = columns.parent.map(|column| {
         table
             .rows
             .iter()
@@ -258,28 +208,202 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
     });
     let synthetic_root = parentless != Some(1);
     if synthetic_root {
+        let root_label = options
+            .root_label
+            .clone()
+            .unwrap_or_else(|| "root".to_owned());
         tree.push(NodeSpec::new(ROOT_ID).label(root_label), None, None, false)?;
     }
 
     for row in &table.rows {
-        // `get`, not indexing: a hand-made Table may have short rows; read as empty.
-        let field = |column: usize| row.fields.get(column).map_or("", String::as_str);
-        // Groups of this row, outermost first, as (value, column).
-        let mut groups: Vec<(String, usize)> = group_columns
+        columns.add_row(&mut tree, table, row, synthetic_root)?;
+    }
+    check_parent_cycles(&tree)?;
+    Ok(tree)
+}
+
+/// A table without rows makes an empty picture, and one without a weight
+/// column equal cells, which a table of sizes rarely meant: both are said.
+fn warn_of_the_table(tree: &mut TableTree, table: &Table, weight_column: Option<usize>) {
+    if table.rows.is_empty() {
+        tree.warnings.push(Warning::new(
+            WarningKind::EmptyTable,
+            NODES_ROLE.name,
+            Some(table.header_line),
+            "the table has a header but no rows: the picture is empty",
+        ));
+    } else if weight_column.is_none() {
+        tree.warnings.push(Warning::new(
+            WarningKind::NoWeight,
+            NODES_ROLE.name,
+            Some(table.header_line),
+            "no weight column (set fields.weight, or name a column weight, value or size): \
+             every row weighs 1",
+        ));
+    }
+}
+
+/// The columns of a node table the options name (or the defaults find),
+/// looked up once, before any row is read.
+struct Columns {
+    id: Option<usize>,
+    path: Option<usize>,
+    label: Option<usize>,
+    weight: Option<usize>,
+    color: Option<usize>,
+    parent: Option<usize>,
+    groups: Vec<usize>,
+    /// Each carried column's name and index.
+    carried: Vec<(String, usize)>,
+    path_separator: char,
+    /// The name errors give the ids' column (`id` when no column has them).
+    id_field: String,
+}
+
+/// Where a row's node goes, from its id, path and grouping cells.
+struct Place {
+    id: String,
+    /// The groups the node hangs in, outermost first, as (value, column).
+    groups: Vec<(String, usize)>,
+    /// The last segment of the path, when it is the node (no id column).
+    path_leaf: Option<String>,
+}
+
+impl Columns {
+    /// Looks the columns up, in a fixed order, so that the same table always
+    /// reports the same missing column.
+    fn find(table: &Table, options: &FormatOptions) -> Result<Columns, FormatError> {
+        let hierarchy_kinds = usize::from(options.parent.is_some())
+            + usize::from(options.path.is_some())
+            + usize::from(!options.groups.is_empty());
+        if hierarchy_kinds > 1 {
+            return Err(FormatError::Structure {
+                line: None,
+                column: None,
+                message: "give only one of a parent column, a path column or grouping columns"
+                    .to_owned(),
+            });
+        }
+        let path = match &options.path {
+            Some(name) => Some(table.required_column(name, "the path column")?),
+            None => None,
+        };
+        let id = match (&options.id, path) {
+            (Some(name), _) => Some(table.required_column(name, "the id column")?),
+            (None, Some(_)) => table.column("id"),
+            (None, None) => Some(table.required_column("id", "the id column")?),
+        };
+        let label = table.optional_column(
+            options.label.as_deref(),
+            "the label column",
+            &["label", "name"],
+        )?;
+        let weight = table.optional_column(
+            options.weight.as_deref(),
+            "the weight column",
+            &["weight", "value", "size"],
+        )?;
+        let color =
+            table.optional_column(options.color.as_deref(), "the color column", &["color"])?;
+        let parent = match &options.parent {
+            Some(name) => Some(table.required_column(name, "the parent column")?),
+            None => None,
+        };
+        let groups = options
+            .groups
             .iter()
-            .map(|&column| (field(column).to_owned(), column))
+            .map(|name| table.required_column(name, "a grouping column"))
+            .collect::<Result<Vec<_>, _>>()?;
+        // Each carried column must exist; the error names what asked for it.
+        let carried = options
+            .carry
+            .iter()
+            .map(|c| {
+                Ok((
+                    c.column.clone(),
+                    table.required_column(&c.column, &c.asked_by)?,
+                ))
+            })
+            .collect::<Result<Vec<_>, FormatError>>()?;
+        let id_field = id
+            .or(path)
+            .map_or_else(|| "id".to_owned(), |c| table.header[c].clone());
+        Ok(Columns {
+            id,
+            path,
+            label,
+            weight,
+            color,
+            parent,
+            groups,
+            carried,
+            path_separator: options.path_separator.unwrap_or('/'),
+            id_field,
+        })
+    }
+
+    /// The 1-based column of the row's id, for errors.
+    fn id_column(&self) -> Option<usize> {
+        self.id.or(self.path).map(|c| c + 1)
+    }
+
+    /// Adds the node of `row`, and the groups it hangs in that are new. The
+    /// checks run in a fixed order (id, groups, fields, then the id against
+    /// the groups'), so the same table always reports the same error.
+    fn add_row(
+        &self,
+        tree: &mut TableTree,
+        table: &Table,
+        row: &Row,
+        synthetic_root: bool,
+    ) -> Result<(), FormatError> {
+        let place = self.place(row)?;
+        let mut parent = self.add_groups(tree, table, row, &place, synthetic_root)?;
+        if let Some(column) = self.parent {
+            let value = cell(row, column);
+            if !value.is_empty() {
+                parent = Some(value.to_owned());
+            } else if !synthetic_root {
+                parent = None;
+            }
+        }
+        let spec = self.spec(table, row, place, parent)?;
+        // A generated group took this id first (a synthetic root, line None,
+        // is a plain duplicate for `push`).
+        if let Some(group) = tree.find(&spec.id).filter(|&i| !tree.from_row[i]) {
+            if let (Some(group_line), Some(value)) = (tree.lines[group], &tree.specs[group].label) {
+                return Err(group_id_taken(
+                    row.line,
+                    self.id_column(),
+                    &self.id_field,
+                    &spec.id,
+                    value,
+                    group_line,
+                ));
+            }
+        }
+        tree.push(spec, Some(row.line), self.id_column(), true)
+    }
+
+    /// The row's id and groups: from the id and grouping columns, or from
+    /// its path. An empty id is an error.
+    fn place(&self, row: &Row) -> Result<Place, FormatError> {
+        let mut groups: Vec<(String, usize)> = self
+            .groups
+            .iter()
+            .map(|&column| (cell(row, column).to_owned(), column))
             .collect();
         let mut path_leaf: Option<String> = None;
-        let mut id = id_column.map(|column| field(column).to_owned());
-        if let Some(column) = path_column {
-            let mut segments: Vec<String> = field(column)
-                .split(separator)
+        let mut id = self.id.map(|column| cell(row, column).to_owned());
+        if let Some(column) = self.path {
+            let mut segments: Vec<String> = cell(row, column)
+                .split(self.path_separator)
                 .map(|segment| segment.trim().to_owned())
                 .collect();
-            if id_column.is_none() {
+            if self.id.is_none() {
                 path_leaf = segments.pop();
                 // The whole path is the id: the last segment alone may repeat.
-                id = Some(field(column).to_owned());
+                id = Some(cell(row, column).to_owned());
             }
             groups = segments
                 .into_iter()
@@ -287,26 +411,42 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
                 .collect();
         }
         let id = id.unwrap_or_default();
-        let id_col = id_column.or(path_column).map(|c| c + 1);
         if id.is_empty() || path_leaf.as_deref() == Some("") {
             return Err(FormatError::Field {
                 line: Some(row.line),
-                column: id_col,
+                column: self.id_column(),
                 node: None,
-                field: id_field.clone(),
+                field: self.id_field.clone(),
                 message: "the id is empty".to_owned(),
             });
         }
+        Ok(Place {
+            id,
+            groups,
+            path_leaf,
+        })
+    }
 
-        // Create the row's groups as needed; the parent is the innermost.
+    /// Creates the groups of the row's `place` that do not exist yet, outermost first,
+    /// and returns the innermost one's id: the row's parent (the synthetic
+    /// root's without groups). A group value that is empty, or whose id a row
+    /// took first, is an error.
+    fn add_groups(
+        &self,
+        tree: &mut TableTree,
+        table: &Table,
+        row: &Row,
+        place: &Place,
+        synthetic_root: bool,
+    ) -> Result<Option<String>, FormatError> {
         let mut parent = synthetic_root.then(|| ROOT_ID.to_owned());
         let mut joined = String::new();
-        for (value, column) in &groups {
+        for (value, column) in &place.groups {
             if value.is_empty() {
                 return Err(FormatError::Field {
                     line: Some(row.line),
                     column: Some(column + 1),
-                    node: Some(id.clone()),
+                    node: Some(place.id.clone()),
                     field: table.header[*column].clone(),
                     message: "the group value is empty".to_owned(),
                 });
@@ -326,8 +466,8 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
                 Some(taken) if tree.from_row[taken] => {
                     return Err(group_id_taken(
                         tree.lines[taken].unwrap_or(row.line),
-                        id_col,
-                        &id_field,
+                        self.id_column(),
+                        &self.id_field,
                         &group_id,
                         value,
                         row.line,
@@ -337,34 +477,40 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
             }
             parent = Some(group_id);
         }
-        if let Some(column) = parent_column {
-            let value = field(column);
-            if !value.is_empty() {
-                parent = Some(value.to_owned());
-            } else if !synthetic_root {
-                parent = None;
-            }
-        }
+        Ok(parent)
+    }
 
+    /// The row's node under `parent`: its carried fields, label, weight and
+    /// colour, each checked.
+    fn spec(
+        &self,
+        table: &Table,
+        row: &Row,
+        place: Place,
+        parent: Option<String>,
+    ) -> Result<NodeSpec, FormatError> {
+        let Place { id, path_leaf, .. } = place;
+        let field = |column: usize| cell(row, column);
         let mut spec = NodeSpec::new(id.clone());
         spec.parent = parent;
-        spec.fields = carried
+        spec.fields = self
+            .carried
             .iter()
             .filter(|(_, column)| !field(*column).is_empty())
             .map(|(name, column)| (name.clone(), field(*column).to_owned()))
             .collect();
-        spec.label = match (label_column, &path_leaf) {
+        spec.label = match (self.label, &path_leaf) {
             (Some(column), _) if !field(column).is_empty() => Some(field(column).to_owned()),
             (_, Some(leaf)) => Some(leaf.clone()),
             _ => None,
         };
-        spec.weight = Some(match weight_column {
+        spec.weight = Some(match self.weight {
             Some(column) => {
                 parse_weight(field(column), row.line, column, &table.header[column], &id)?
             }
             None => 1.0,
         });
-        if let Some(column) = color_column {
+        if let Some(column) = self.color {
             let text = field(column);
             if !text.is_empty() {
                 spec.color = Some(Rgb::from_hex(text).ok_or_else(|| FormatError::Field {
@@ -376,19 +522,14 @@ pub fn tree_from_table(table: &Table, options: &FormatOptions) -> Result<TableTr
                 })?);
             }
         }
-        // A generated group took this id first (a synthetic root, line None,
-        // is a plain duplicate for `push`).
-        if let Some(group) = tree.find(&spec.id).filter(|&i| !tree.from_row[i]) {
-            if let (Some(group_line), Some(value)) = (tree.lines[group], &tree.specs[group].label) {
-                return Err(group_id_taken(
-                    row.line, id_col, &id_field, &spec.id, value, group_line,
-                ));
-            }
-        }
-        tree.push(spec, Some(row.line), id_col, true)?;
+        Ok(spec)
     }
-    check_parent_cycles(&tree)?;
-    Ok(tree)
+}
+
+/// The cell of `row` in `column`, read as empty where a hand-made [`Table`]
+/// has a short row (`get`, not indexing).
+fn cell(row: &Row, column: usize) -> &str {
+    row.fields.get(column).map_or("", String::as_str)
 }
 
 /// The error for the row on `row_line` whose id `id` is also the id of the
@@ -519,9 +660,28 @@ pub fn node_tree(inputs: &Inputs<'_>, options: &FormatOptions) -> Result<TableTr
     tree_from_table(&table, options).map_err(in_nodes)
 }
 
+/// The parse of a format that reads a node table plus one more input, `role`
+/// (border list, embedding matrix, time series): `role` is required first,
+/// then the table's tree is built, `add` puts on it what the input says, and
+/// the tree becomes the dataset with `hint`. Errors name their input.
+#[allow(clippy::result_large_err)] // InputError's shape is the Format API's
+pub(crate) fn parse_with_input(
+    inputs: &Inputs<'_>,
+    options: &FormatOptions,
+    role: &'static str,
+    hint: SimilarityHint,
+    add: impl FnOnce(&mut TableTree, &[u8]) -> Result<(), InputError>,
+) -> Result<Dataset, InputError> {
+    let bytes = inputs.require(role)?;
+    let mut tree = node_tree(inputs, options)?;
+    add(&mut tree, bytes)?;
+    tree.build(Some(hint))
+        .map_err(|error| InputError::new(NODES_ROLE.name, error))
+}
+
 /// Reads a node table within `options.limits` (one row per node, so at most
 /// `max_nodes` rows are kept).
 pub fn read_node_table(bytes: &[u8], options: &FormatOptions) -> Result<Table, FormatError> {
-    let cap = RowCap::new(options.limits, Limit::Nodes, 0, "rows");
+    let cap = Cap::new(options.limits, Limit::Nodes, 0, "rows");
     read_table_capped(bytes, options.delimiter, Some(cap))
 }

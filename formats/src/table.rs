@@ -17,8 +17,8 @@
 //! Records are read field by field, so every bound holds before memory is spent:
 //! a table's data row is refused at its first field past the header's width (the
 //! rest of it is counted for the message, not kept), rows without a header and
-//! headers stop at a [`FieldCap`](crate::table::FieldCap), and a
-//! [`RowCap`](crate::table::RowCap) stops at a record count. Checking the header
+//! headers stop at a [`Cap`](crate::table::Cap) on fields, and a `Cap` on
+//! records stops at a record count. Checking the header
 //! for repeated names is one pass with a map.
 
 use std::collections::hash_map::Entry;
@@ -120,68 +120,32 @@ fn strip_bom(bytes: &[u8]) -> &[u8] {
     bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
 }
 
-/// A bound on the records a reader keeps: past `rows` records it stops with
-/// `limit`'s error (naming what the records are, e.g. `rows`, `dates`), so an
-/// oversized input costs memory for `rows` records only.
+/// A bound on what a reader keeps, from one of the [`Limits`]: past `max`
+/// records of an input (a cap on rows) or `max` fields of one record (a cap on
+/// fields) it stops with `limit`'s error, naming what they are (`rows`,
+/// `dates`, `values`), so an oversized input costs memory for `max` of them
+/// only. (A table's data rows are bounded by its header anyway; a cap on
+/// fields bounds rows with no header to compare with, and headers.)
 #[derive(Clone, Copy, Debug)]
-pub struct RowCap {
-    /// Most records kept (a header row included).
-    pub rows: usize,
+pub struct Cap {
+    /// Most records kept (a header row included), or most fields kept of one
+    /// record.
+    pub max: usize,
     /// The limit this enforces.
     pub limit: Limit,
     /// The limits (for the error's figures).
     pub limits: Limits,
-    /// What a record is, for the message.
+    /// What a record is, or what the fields past the first `extra` are, for
+    /// the message.
     pub what: &'static str,
 }
 
-impl RowCap {
-    /// A cap of `limit`'s value plus `extra` records (a header).
+impl Cap {
+    /// A cap of `limit`'s value plus `extra` records (a header) or fields (an
+    /// id before the values).
     pub fn new(limits: Limits, limit: Limit, extra: usize, what: &'static str) -> Self {
-        RowCap {
-            rows: usize::try_from(limits.get(limit))
-                .unwrap_or(usize::MAX)
-                .saturating_add(extra),
-            limit,
-            limits,
-            what,
-        }
-    }
-
-    fn error(&self, line: usize) -> FormatError {
-        let allowed = self.limits.get(self.limit);
-        FormatError::Model {
-            line: Some(line),
-            column: None,
-            source: ModelError::TooLarge(self.limits.exceeded(
-                self.limit,
-                format_args!("more than {allowed} {}", self.what),
-            )),
-        }
-    }
-}
-
-/// A bound on the fields of one record: past `fields` fields a reader stops
-/// keeping them and fails with `limit`'s error, so a row of a hundred million
-/// commas costs no memory. (A table's data rows are bounded by its header
-/// anyway; this bounds rows with no header to compare with, and headers.)
-#[derive(Clone, Copy, Debug)]
-pub struct FieldCap {
-    /// Most fields kept of one record.
-    pub fields: usize,
-    /// The limit this enforces.
-    pub limit: Limit,
-    /// The limits (for the error's figures).
-    pub limits: Limits,
-    /// What the fields past the first `extra` are, for the message ("values").
-    pub what: &'static str,
-}
-
-impl FieldCap {
-    /// A cap of `limit`'s value plus `extra` fields (an id before the values).
-    pub fn new(limits: Limits, limit: Limit, extra: usize, what: &'static str) -> Self {
-        FieldCap {
-            fields: usize::try_from(limits.get(limit))
+        Cap {
+            max: usize::try_from(limits.get(limit))
                 .unwrap_or(usize::MAX)
                 .saturating_add(extra),
             limit,
@@ -193,17 +157,27 @@ impl FieldCap {
     /// The bound on a table's header: one column per node (a time series'
     /// header names every node) plus the first. No table format reads more.
     pub fn columns(limits: Limits) -> Self {
-        FieldCap::new(limits, Limit::Nodes, 1, "columns after the first")
+        Cap::new(limits, Limit::Nodes, 1, "columns after the first")
     }
 
-    fn error(&self, line: usize) -> FormatError {
+    /// The error for a record past the cap on records, on `line`.
+    fn too_many_records(&self, line: usize) -> FormatError {
+        self.error(line, "")
+    }
+
+    /// The error for a record past the cap on fields, on `line`.
+    fn too_many_fields(&self, line: usize) -> FormatError {
+        self.error(line, "a row of ")
+    }
+
+    fn error(&self, line: usize, prefix: &str) -> FormatError {
         let allowed = self.limits.get(self.limit);
         FormatError::Model {
             line: Some(line),
             column: None,
             source: ModelError::TooLarge(self.limits.exceeded(
                 self.limit,
-                format_args!("a row of more than {allowed} {}", self.what),
+                format_args!("{prefix}more than {allowed} {}", self.what),
             )),
         }
     }
@@ -215,26 +189,17 @@ pub fn read_rows(bytes: &[u8], delimiter: Option<u8>) -> Result<Vec<Row>, Format
     read_rows_bounded(bytes, delimiter, None, None)
 }
 
-/// [`read_rows`], stopping with an error past `cap`'s records.
-pub fn read_rows_capped(
-    bytes: &[u8],
-    delimiter: Option<u8>,
-    cap: Option<RowCap>,
-) -> Result<Vec<Row>, FormatError> {
-    read_rows_bounded(bytes, delimiter, cap, None)
-}
-
 /// [`read_rows`], stopping with an error past `rows`' records or at a record
 /// with more than `fields`' fields.
 pub fn read_rows_bounded(
     bytes: &[u8],
     delimiter: Option<u8>,
-    rows: Option<RowCap>,
-    fields: Option<FieldCap>,
+    rows: Option<Cap>,
+    fields: Option<Cap>,
 ) -> Result<Vec<Row>, FormatError> {
     let mut records = Records::new(bytes, delimiter)?;
     let mut out = Vec::new();
-    let max_fields = fields.map_or(usize::MAX, |cap| cap.fields);
+    let max_fields = fields.map_or(usize::MAX, |cap| cap.max);
     while let Some(record) = records.next(max_fields)? {
         let row = match record {
             Record::Row(row) => row,
@@ -246,13 +211,13 @@ pub fn read_rows_bounded(
                         column: None,
                         message: "the row has too many fields".to_owned(),
                     },
-                    |cap| cap.error(line),
+                    |cap| cap.too_many_fields(line),
                 ));
             }
         };
         if let Some(cap) = &rows {
-            if out.len() >= cap.rows {
-                return Err(cap.error(row.line));
+            if out.len() >= cap.max {
+                return Err(cap.too_many_records(row.line));
             }
         }
         out.push(row);
@@ -278,13 +243,13 @@ pub fn read_table(bytes: &[u8], delimiter: Option<u8>) -> Result<Table, FormatEr
 }
 
 /// [`read_table`], stopping with an error past `cap`'s data rows (the header
-/// does not count) and at a header of more than [`FieldCap::columns`].
+/// does not count) and at a header of more than [`Cap::columns`].
 pub fn read_table_capped(
     bytes: &[u8],
     delimiter: Option<u8>,
-    cap: Option<RowCap>,
+    cap: Option<Cap>,
 ) -> Result<Table, FormatError> {
-    let header = cap.map(|c| FieldCap::columns(c.limits));
+    let header = cap.map(|c| Cap::columns(c.limits));
     read_table_bounded(bytes, delimiter, cap, header)
 }
 
@@ -295,15 +260,15 @@ pub fn read_table_capped(
 pub fn read_table_bounded(
     bytes: &[u8],
     delimiter: Option<u8>,
-    rows: Option<RowCap>,
-    header: Option<FieldCap>,
+    rows: Option<Cap>,
+    header: Option<Cap>,
 ) -> Result<Table, FormatError> {
     let mut records = Records::new(bytes, delimiter)?;
-    let header_row = match records.next(header.map_or(usize::MAX, |cap| cap.fields))? {
+    let header_row = match records.next(header.map_or(usize::MAX, |cap| cap.max))? {
         None => return Err(empty_input()),
         Some(Record::Row(row)) => row,
         Some(Record::TooWide { line, .. }) => {
-            return Err(header.map_or_else(empty_input, |cap| cap.error(line)))
+            return Err(header.map_or_else(empty_input, |cap| cap.too_many_fields(line)))
         }
     };
     for (index, name) in header_row.fields.iter().enumerate() {
@@ -335,8 +300,8 @@ pub fn read_table_bounded(
             Record::Row(row) => row,
         };
         if let Some(cap) = &rows {
-            if data.len() >= cap.rows {
-                return Err(cap.error(row.line));
+            if data.len() >= cap.max {
+                return Err(cap.too_many_records(row.line));
             }
         }
         data.push(row);

@@ -27,8 +27,8 @@ use crate::dataset::{Dataset, SimilarityHint};
 use crate::error::FormatError;
 use crate::format::{Format, FormatOptions, InputError, Inputs, OnUnknownId, Role};
 use crate::limits::Limit;
-use crate::node_table::{node_tree, TableTree, NODES_ROLE};
-use crate::table::{read_table_capped, RowCap, Table};
+use crate::node_table::{parse_with_input, TableTree, NODES_ROLE};
+use crate::table::{read_table_capped, Cap, Table};
 use crate::warning::{Warning, WarningKind};
 
 /// The time-series [`Format`] (name `time-series`, inputs `nodes` and `series`).
@@ -57,23 +57,19 @@ impl Format for TimeSeries {
         ROLES
     }
 
+    #[allow(clippy::result_large_err)] // InputError's shape is the Format API's
     fn parse(&self, inputs: &Inputs<'_>, options: &FormatOptions) -> Result<Dataset, InputError> {
-        let series = inputs.require("series")?;
-        let in_nodes = |error| InputError::new("nodes", error);
         let in_series = |error| InputError::new("series", error);
-        let mut tree = node_tree(inputs, options)?;
-        // One row per date, and the dates are each node's dimensions.
-        let cap = RowCap::new(options.limits, Limit::Dimensions, 0, "dates");
-        let series = read_table_capped(series, options.delimiter, Some(cap)).map_err(in_series)?;
-        tree.warnings.append(series.warnings_in("series"));
-        add_series(
-            &mut tree,
-            &series,
-            options.fill_missing,
-            options.on_unknown_id,
-        )
-        .map_err(in_series)?;
-        tree.build(Some(SimilarityHint::Pearson)).map_err(in_nodes)
+        let hint = SimilarityHint::Pearson;
+        parse_with_input(inputs, options, "series", hint, |tree, series| {
+            // One row per date, and the dates are each node's dimensions.
+            let cap = Cap::new(options.limits, Limit::Dimensions, 0, "dates");
+            let series =
+                read_table_capped(series, options.delimiter, Some(cap)).map_err(in_series)?;
+            tree.warnings.append(series.warnings_in("series"));
+            add_series(tree, &series, options.fill_missing, options.on_unknown_id)
+                .map_err(in_series)
+        })
     }
 }
 
@@ -86,6 +82,21 @@ fn add_series(
     fill: bool,
     on_unknown: OnUnknownId,
 ) -> Result<(), FormatError> {
+    check_shape(series)?;
+    // Column (0-based) that gave each spec its series, to report repeats.
+    let mut seen: Vec<Option<usize>> = vec![None; tree.specs.len()];
+    for column in 1..series.header.len() {
+        let Some(index) = column_owner(tree, series, column, on_unknown, &mut seen)? else {
+            continue;
+        };
+        let vector = column_values(series, column, fill)?;
+        tree.specs[index].features = Some(vector.into());
+    }
+    tree.check_leaf_features(Some(series.header_line), "column")
+}
+
+/// A date column and at least one id column, and at least [`MIN_DATES`] dates.
+fn check_shape(series: &Table) -> Result<(), FormatError> {
     if series.header.len() < 2 {
         return Err(FormatError::Structure {
             line: Some(series.header_line),
@@ -108,106 +119,121 @@ fn add_series(
             ),
         });
     }
+    Ok(())
+}
+
+/// The error at the header cell of `column`, which names an id.
+fn header_error(series: &Table, column: usize, message: String) -> FormatError {
+    FormatError::Field {
+        line: Some(series.header_line),
+        column: Some(column + 1),
+        node: None,
+        field: series.header[column].clone(),
+        message,
+    }
+}
+
+/// The node (index into the tree's specs) whose id heads `column`; `None`
+/// when it names no node and `on_unknown` says to skip the column (with a
+/// warning). A second column for a node is an error; `seen` holds the
+/// column that gave each node its series.
+fn column_owner(
+    tree: &mut TableTree,
+    series: &Table,
+    column: usize,
+    on_unknown: OnUnknownId,
+    seen: &mut [Option<usize>],
+) -> Result<Option<usize>, FormatError> {
+    let id = &series.header[column];
+    let Some(index) = tree.find(id) else {
+        if on_unknown == OnUnknownId::Warn {
+            tree.warnings.push(Warning::new(
+                WarningKind::UnknownId,
+                "series",
+                Some(series.header_line),
+                format!(
+                    "column {}: unknown id {id:?}: no node of the node table has it; the \
+                     column is skipped (fields.on_unknown_id: error makes this an error)",
+                    column + 1
+                ),
+            ));
+            return Ok(None);
+        }
+        return Err(header_error(
+            series,
+            column,
+            format!("unknown id {id:?}: no node of the node table has it"),
+        ));
+    };
+    if let Some(previous) = seen[index] {
+        return Err(header_error(
+            series,
+            column,
+            format!(
+                "id {id:?} has a second column (the first is column {})",
+                previous + 1
+            ),
+        ));
+    }
+    seen[index] = Some(column);
+    Ok(Some(index))
+}
+
+/// The series in `column`, one value per date: each cell a finite number
+/// within [`FEATURE_BOUND`]; empty cells are an error, or with `fill` take
+/// the value before them (leading ones the first value).
+fn column_values(series: &Table, column: usize, fill: bool) -> Result<Vec<f64>, FormatError> {
+    let id = &series.header[column];
     let date_name = &series.header[0];
-    // Column (0-based) that gave each spec its series, to report repeats.
-    let mut seen: Vec<Option<usize>> = vec![None; tree.specs.len()];
-    for (column, id) in series.header.iter().enumerate().skip(1) {
-        let header_error = |message: String| FormatError::Field {
-            line: Some(series.header_line),
+    let mut values: Vec<Option<f64>> = Vec::with_capacity(series.rows.len());
+    for row in &series.rows {
+        let text = row.fields.get(column).map_or("", String::as_str);
+        let date = row.fields.first().map_or("", String::as_str);
+        let cell_error = |message: String| FormatError::Field {
+            line: Some(row.line),
             column: Some(column + 1),
-            node: None,
+            node: Some(id.clone()),
             field: id.clone(),
             message,
         };
-        let Some(index) = tree.find(id) else {
-            if on_unknown == OnUnknownId::Warn {
-                tree.warnings.push(Warning::new(
-                    WarningKind::UnknownId,
-                    "series",
-                    Some(series.header_line),
-                    format!(
-                        "column {}: unknown id {id:?}: no node of the node table has it; the \
-                         column is skipped (fields.on_unknown_id: error makes this an error)",
-                        column + 1
-                    ),
-                ));
-                continue;
+        if text.is_empty() {
+            if !fill {
+                return Err(cell_error(format!(
+                    "missing value for {date_name} {date:?} (set fill_missing to carry \
+                     the previous value forward)"
+                )));
             }
-            return Err(header_error(format!(
-                "unknown id {id:?}: no node of the node table has it"
-            )));
-        };
-        if let Some(previous) = seen[index] {
-            return Err(header_error(format!(
-                "id {id:?} has a second column (the first is column {})",
-                previous + 1
-            )));
+            values.push(None);
+            continue;
         }
-        seen[index] = Some(column);
-
-        let mut values: Vec<Option<f64>> = Vec::with_capacity(series.rows.len());
-        for row in &series.rows {
-            let text = row.fields.get(column).map_or("", String::as_str);
-            let date = row.fields.first().map_or("", String::as_str);
-            let cell_error = |message: String| FormatError::Field {
-                line: Some(row.line),
-                column: Some(column + 1),
-                node: Some(id.clone()),
-                field: id.clone(),
-                message,
-            };
-            if text.is_empty() {
-                if !fill {
-                    return Err(cell_error(format!(
-                        "missing value for {date_name} {date:?} (set fill_missing to carry \
-                         the previous value forward)"
-                    )));
-                }
-                values.push(None);
-                continue;
+        match text.parse::<f64>().ok().filter(|v| v.is_finite()) {
+            Some(value) if value.abs() > FEATURE_BOUND => {
+                return Err(cell_error(format!(
+                    "{text}: values must lie within ±{FEATURE_BOUND:e} (sums of their squares would overflow)"
+                )))
             }
-            match text.parse::<f64>().ok().filter(|v| v.is_finite()) {
-                Some(value) if value.abs() > FEATURE_BOUND => {
-                    return Err(cell_error(format!(
-                        "{text}: values must lie within ±{FEATURE_BOUND:e} (sums of their squares would overflow)"
-                    )))
-                }
-                Some(value) => values.push(Some(value)),
-                None => {
-                    return Err(cell_error(format!(
-                        "expected a finite number for {date_name} {date:?}, found {text:?}"
-                    )))
-                }
+            Some(value) => values.push(Some(value)),
+            None => {
+                return Err(cell_error(format!(
+                    "expected a finite number for {date_name} {date:?}, found {text:?}"
+                )))
             }
-        }
-        let Some(first) = values.iter().flatten().next().copied() else {
-            return Err(header_error(format!("id {id:?} has no value on any date")));
-        };
-        // Leading gaps take the first value; later gaps the value before them.
-        let mut last = first;
-        let vector: Vec<f64> = values
-            .into_iter()
-            .map(|value| {
-                last = value.unwrap_or(last);
-                last
-            })
-            .collect();
-        tree.specs[index].features = Some(vector.into());
-    }
-    let leaves = tree.leaf_flags();
-    for (index, spec) in tree.specs.iter().enumerate() {
-        if leaves[index] && spec.features.is_none() {
-            let place =
-                tree.lines[index].map_or_else(String::new, |line| format!(" (nodes line {line})"));
-            return Err(FormatError::Structure {
-                line: Some(series.header_line),
-                column: None,
-                message: format!(
-                    "node {:?}{place} has no column; every leaf needs one",
-                    spec.id
-                ),
-            });
         }
     }
-    Ok(())
+    let Some(first) = values.iter().flatten().next().copied() else {
+        return Err(header_error(
+            series,
+            column,
+            format!("id {id:?} has no value on any date"),
+        ));
+    };
+    // Leading gaps take the first value; later gaps the value before them.
+    let mut last = first;
+    Ok(values
+        .into_iter()
+        .map(|value| {
+            last = value.unwrap_or(last);
+            last
+        })
+        .collect())
 }

@@ -148,16 +148,6 @@ impl ConvexPolygon {
         (hi - lo).length()
     }
 
-    /// Largest distance from `p` to a vertex (the radius of the smallest circle
-    /// around `p` holding the polygon).
-    pub fn max_distance_from(&self, p: Point) -> f64 {
-        self.points
-            .iter()
-            .map(|q| q.distance_squared(p))
-            .fold(0.0, f64::max)
-            .sqrt()
-    }
-
     /// True when `p` is inside or on the boundary (within round-off).
     pub fn contains(&self, p: Point) -> bool {
         let n = self.points.len();

@@ -15,6 +15,7 @@
 //! Written by hand: no maintained crate offers an assignment solver of this shape.
 
 use crate::geom::Point;
+use crate::neighborhood::pow2::pow2_floor;
 
 /// Marks a row that has no column (only when there are more rows than columns).
 const UNASSIGNED: usize = usize::MAX;
@@ -271,18 +272,6 @@ fn hungarian(cost: &[f64], rows: usize, cols: usize) -> Vec<usize> {
         }
     }
     out
-}
-
-/// The largest power of two not above `x` (finite, > 0); dividing by it is exact.
-fn pow2_floor(x: f64) -> f64 {
-    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
-    const TWO_52: f64 = 4_503_599_627_370_496.0;
-    if x >= f64::MIN_POSITIVE {
-        f64::from_bits(x.to_bits() & EXPONENT)
-    } else {
-        // Subnormal: lift into the normal range first.
-        f64::from_bits((x * TWO_52).to_bits() & EXPONENT) / TWO_52
-    }
 }
 
 #[cfg(test)]

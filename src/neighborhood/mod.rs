@@ -20,6 +20,8 @@ mod filtered_rows;
 mod knn_rows;
 /// Assignment: Kuhn–Munkres, and recursive bisection for large groups.
 pub mod matching;
+/// Exact rescaling by the largest power of two below a value.
+mod pow2;
 /// Virtual nodes for uniform depth and bottom-up aggregation (paper §4).
 pub mod prepare;
 /// 2-D projections: PCA of feature vectors, classical (landmark) MDS of a dissimilarity.
