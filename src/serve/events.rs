@@ -2,18 +2,22 @@
 //! small JSON events, sent to every open page as server-sent events
 //! (`text/event-stream`). Owns the event's shape, the set of open streams
 //! (capped) and the problems that still stand (a page opened during a bad
-//! edit sees it at once). Publishing never blocks the daemon: each stream has
-//! a small bounded queue, and a stream too slow to empty it is dropped (the
-//! browser reconnects by itself and is sent what stands).
+//! edit sees it at once). Publishing never
+//! blocks the daemon: each stream has a small bounded queue, and a stream
+//! too slow to empty it is dropped (the browser reconnects by itself).
+//!
 
 use std::collections::BTreeMap;
-use std::io::Write;
+use std::pin::Pin;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError, SyncSender, TrySendError};
 use std::sync::{Arc, Mutex, PoisonError};
+use std::task::{Context, Poll};
 use std::time::Duration;
 
+use bytes::Bytes;
 use serde::Serialize;
+use tokio::sync::mpsc::{channel, error::TrySendError, Receiver, Sender};
+use tokio::time::{Instant, Interval};
 
 use crate::daemon::status::Status;
 
@@ -104,7 +108,7 @@ fn where_(message: &str) -> Option<(String, Option<u64>)> {
 
 #[derive(Default)]
 struct State {
-    streams: Vec<SyncSender<Arc<str>>>,
+    streams: Vec<Sender<Arc<str>>>,
     /// The standing problem of each subject, as sent.
     standing: BTreeMap<String, Arc<str>>,
     seq: u64,
@@ -144,51 +148,69 @@ impl Hub {
         // are dropped here, never waited for.
         state.streams.retain(|tx| match tx.try_send(text.clone()) {
             Ok(()) => true,
-            Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) => false,
+            Err(TrySendError::Full(_) | TrySendError::Closed(_)) => false,
         });
     }
 
-    /// A new stream's queue and the events it starts with, or `None` when
+    /// A new stream (its queue, and first what stands), or `None` when
     /// [`MAX_STREAMS`] are open.
-    fn subscribe(&self) -> Option<Subscription> {
+    pub(crate) fn subscribe(&self) -> Option<EventStream> {
         let mut state = self.state.lock().unwrap_or_else(PoisonError::into_inner);
         if self.open.load(Ordering::SeqCst) >= MAX_STREAMS {
             return None;
         }
         self.open.fetch_add(1, Ordering::SeqCst);
         let guard = StreamGuard(self.open.clone());
-        let (tx, rx) = sync_channel(QUEUE);
+        let (tx, rx) = channel(QUEUE);
         state.streams.push(tx);
-        let standing = state.standing.values().cloned().collect();
-        Some(Subscription(rx, standing, guard))
-    }
-
-    /// Answers an event-stream request on a thread of its own (or with 503
-    /// when too many are open). The thread ends when the page goes away, the
-    /// stream is dropped as stuck, or the process ends.
-    pub(crate) fn serve(&self, request: tiny_http::Request, headers: &str) {
-        let Some(Subscription(rx, standing, guard)) = self.subscribe() else {
-            let _ = request.respond(super::plain(503, "too many open pages"));
-            return;
-        };
-        let head = format!(
-            "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n{headers}\r\n"
-        );
-        let spawned = std::thread::Builder::new()
-            .name("np-serve-events".to_string())
-            .spawn(move || {
-                let _guard = guard;
-                let mut out = request.into_writer();
-                let _ = stream(&mut out, &head, &standing, &rx);
-            });
-        if let Err(e) = spawned {
-            tracing::warn!(error = %e, "cannot start an event stream");
+        // Reconnect soon after the daemon restarts.
+        let mut first = String::from("retry: 1000\n\n");
+        for event in state.standing.values() {
+            first.push_str(&format!("data: {event}\n\n"));
         }
+        Some(EventStream {
+            first: Some(Bytes::from(first)),
+            rx,
+            keepalive: None,
+            _guard: guard,
+        })
     }
 }
 
-/// A new stream: its queue, the events it starts with, its place in the count.
-struct Subscription(Receiver<Arc<str>>, Vec<Arc<str>>, StreamGuard);
+/// One page's stream: what it starts with, then its queue's events, and a
+/// comment after every quiet [`KEEPALIVE`].
+pub(crate) struct EventStream {
+    first: Option<Bytes>,
+    rx: Receiver<Arc<str>>,
+    keepalive: Option<Pin<Box<Interval>>>,
+    _guard: StreamGuard,
+}
+
+impl EventStream {
+    /// The next piece of the stream; `None` once the hub has dropped it.
+    pub(crate) fn poll_next(&mut self, cx: &mut Context<'_>) -> Poll<Option<Bytes>> {
+        if let Some(first) = self.first.take() {
+            return Poll::Ready(Some(first));
+        }
+        match self.rx.poll_recv(cx) {
+            Poll::Ready(Some(event)) => {
+                if let Some(k) = &mut self.keepalive {
+                    k.reset();
+                }
+                return Poll::Ready(Some(Bytes::from(format!("data: {event}\n\n"))));
+            }
+            Poll::Ready(None) => return Poll::Ready(None),
+            Poll::Pending => {}
+        }
+        let keepalive = self.keepalive.get_or_insert_with(|| {
+            Box::pin(tokio::time::interval_at(Instant::now() + KEEPALIVE, KEEPALIVE))
+        });
+        match keepalive.as_mut().poll_tick(cx) {
+            Poll::Ready(_) => Poll::Ready(Some(Bytes::from_static(b": keepalive\n\n"))),
+            Poll::Pending => Poll::Pending,
+        }
+    }
+}
 
 /// Counts an open stream until dropped.
 struct StreamGuard(Arc<AtomicUsize>);
@@ -199,43 +221,19 @@ impl Drop for StreamGuard {
     }
 }
 
-/// Writes the stream until a write fails or the queue is gone.
-fn stream(
-    out: &mut dyn Write,
-    head: &str,
-    standing: &[Arc<str>],
-    rx: &Receiver<Arc<str>>,
-) -> std::io::Result<()> {
-    out.write_all(head.as_bytes())?;
-    // Reconnect soon after the daemon restarts.
-    out.write_all(b"retry: 1000\n\n")?;
-    for event in standing {
-        write!(out, "data: {event}\n\n")?;
-    }
-    out.flush()?;
-    loop {
-        match rx.recv_timeout(KEEPALIVE) {
-            Ok(event) => write!(out, "data: {event}\n\n")?,
-            Err(RecvTimeoutError::Timeout) => out.write_all(b": keepalive\n\n")?,
-            Err(RecvTimeoutError::Disconnected) => return Ok(()),
-        }
-        out.flush()?;
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::daemon::change::Reason;
     use crate::daemon::status::LayoutKind;
 
-    fn built(dataset: &str) -> Status {
+    fn built(dataset: &str, changed: bool) -> Status {
         Status::Built {
             dataset: dataset.to_string(),
             reason: Reason::Start,
             layout: LayoutKind::Warm,
             ms: 1.0,
-            written: vec!["out/a.html".into()],
+            written: if changed { vec!["out/a.html".into()] } else { Vec::new() },
             unchanged: 0,
             failed: 0,
             recovered: false,
@@ -250,28 +248,46 @@ mod tests {
         }
     }
 
+    /// The events a new stream starts with (after `retry:`).
+    fn first_events(stream: &mut EventStream) -> Vec<String> {
+        let first = stream.first.take().expect("a start");
+        String::from_utf8_lossy(&first)
+            .split("\n\n")
+            .filter_map(|e| e.strip_prefix("data: ").map(str::to_string))
+            .collect()
+    }
+
+    fn queued(stream: &mut EventStream) -> Vec<String> {
+        let mut out = Vec::new();
+        while let Ok(e) = stream.rx.try_recv() {
+            out.push(e.to_string());
+        }
+        out
+    }
+
     #[test]
     fn a_problem_stands_until_its_dataset_builds() {
         let hub = Hub::default();
         hub.publish(&problem("a"));
-        let Subscription(_, standing, _g) = hub.subscribe().expect("room");
-        assert_eq!(standing.len(), 1);
-        assert!(standing[0].contains("\"problem\""));
-        assert!(standing[0].contains("\"file\":\"a.csv\",\"line\":3"), "{}", standing[0]);
-        hub.publish(&built("a"));
-        let Subscription(_, standing, _g2) = hub.subscribe().expect("room");
-        assert!(standing.is_empty());
+        let mut s = hub.subscribe().expect("room");
+        let events = first_events(&mut s);
+        assert_eq!(events.len(), 1, "{events:?}");
+        assert!(events[0].contains("\"problem\""));
+        assert!(events[0].contains("\"file\":\"a.csv\",\"line\":3"), "{}", events[0]);
+        hub.publish(&built("a", true));
+        let mut s2 = hub.subscribe().expect("room");
+        assert!(first_events(&mut s2).is_empty());
     }
 
     #[test]
     fn a_stuck_stream_is_dropped_and_publishing_never_waits() {
         let hub = Hub::default();
-        let Subscription(rx, _, _g) = hub.subscribe().expect("room");
-        // Nobody reads `rx`: far more events than its queue holds.
+        let mut s = hub.subscribe().expect("room");
+        // Nobody reads the stream: far more events than its queue holds.
         for _ in 0..QUEUE * 4 {
-            hub.publish(&built("a"));
+            hub.publish(&built("a", true));
         }
-        assert_eq!(rx.try_iter().count(), QUEUE);
+        assert_eq!(queued(&mut s).len(), QUEUE);
         assert!(hub.state.lock().expect("lock").streams.is_empty());
     }
 

@@ -8,6 +8,7 @@
 //! with a stream open. `serve/live.rs` drives a real browser through an
 //! update.
 
+mod hardening;
 mod history;
 mod live;
 
@@ -215,10 +216,18 @@ fn request(addr: SocketAddr, method: &str, target: &str) -> Reply {
     .expect("send");
     let mut raw = Vec::new();
     s.read_to_end(&mut raw).expect("read answer");
-    let end = raw
-        .windows(4)
-        .position(|w| w == b"\r\n\r\n")
-        .expect("a header end");
+    parse_reply(&raw)
+}
+
+/// An answer as read off the wire; status 0 when there is no whole head.
+fn parse_reply(raw: &[u8]) -> Reply {
+    let Some(end) = raw.windows(4).position(|w| w == b"\r\n\r\n") else {
+        return Reply {
+            status: 0,
+            headers: Vec::new(),
+            body: raw.to_vec(),
+        };
+    };
     let head = String::from_utf8_lossy(&raw[..end]).into_owned();
     let mut lines = head.lines();
     let status = lines
@@ -336,6 +345,13 @@ fn the_preview_serves_outputs_and_nothing_else() {
 
 /// Reads server-sent events from `stream` until one contains every part.
 fn next_event(stream: &mut BufReader<TcpStream>, parts: &[&str]) -> String {
+    events_until(stream, parts).pop().expect("an event")
+}
+
+/// Reads server-sent events from `stream` until one contains every part;
+/// returns every event read, that one last.
+fn events_until(stream: &mut BufReader<TcpStream>, parts: &[&str]) -> Vec<String> {
+    let mut seen = Vec::new();
     let deadline = Instant::now() + WAIT;
     let mut line = String::new();
     loop {
@@ -344,8 +360,11 @@ fn next_event(stream: &mut BufReader<TcpStream>, parts: &[&str]) -> String {
         match stream.read_line(&mut line) {
             Ok(0) => panic!("the stream ended before an event with {parts:?}"),
             Ok(_) => {
-                if line.starts_with("data:") && parts.iter().all(|p| line.contains(p)) {
-                    return line;
+                if line.starts_with("data:") {
+                    seen.push(line.clone());
+                    if parts.iter().all(|p| line.contains(p)) {
+                        return seen;
+                    }
                 }
             }
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
@@ -435,3 +454,4 @@ fn a_taken_port_moves_on_and_a_bad_address_is_refused() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("example.org:80"));
 }
+
