@@ -9,19 +9,28 @@
 // over: zoom, search text, hovered or focused cell. With
 // prefers-reduced-motion, or on a big map, it swaps at once. A failed
 // rebuild shows its message over the last good picture until the next good
-// one. A small panel gives the last update's stability figures (as `eval
+// one, or until the config reloads. A small panel gives the last update's stability figures (as `eval
 // --previous` defines them: leaf centroid displacement as a share of the
 // canvas diagonal, mean and largest; realised constraints kept), and steps
 // through the last layouts of the session (`history:`). The morph and the
 // step control are src/render/page/history.js's (`npMorph`), served ahead
 // of this file: the page on disk steps through its past layouts with them.
 // The page's own step control is hidden here: the panel's steps do its job.
+//
+// Catching up (issue 30): the page knows the build key it was served with
+// (src/serve/events.rs); every stream, the first and each reconnection,
+// starts with the current keys, and a page whose key is not the current
+// one fetches the page again. So a page that missed rebuilds while its
+// stream was down, or outlived the daemon that served it, shows the
+// current map once the stream is back.
 (function () {
   "use strict";
   var me = document.currentScript;
   var NONCE = me.nonce || me.getAttribute("nonce") || "";
   var DATASET = me.getAttribute("data-dataset");
   var HISTORY = parseInt(me.getAttribute("data-history"), 10) || 0;
+  // The build key of the map shown (src/serve/events.rs).
+  var KEY = me.getAttribute("data-key") || "";
   var EVENTS = me.getAttribute("data-events") || "/_np/events";
   // The morph, then the new labels fading in: 360 + 120 ms, under 500.
   var MORPH_MS = 360, FADE_MS = 120;
@@ -286,37 +295,51 @@
   steps.set(0, -1);
 
   // ---- the stream ----
+  // The key a fetched page was served with (its live script's data-key).
+  function keyOf(html) {
+    var m = /<script src="\/_np\/live\.js"[^>]* data-key="([^"]*)"/.exec(html);
+    return m ? m[1] : "";
+  }
+  // Fetches the current page (shown unless `first`: the page as loaded);
+  // of several fetches under way only the last started is used.
+  var fetches = 0;
   function load(first) {
+    var mine = ++fetches;
     return fetch(location.pathname, { cache: "no-store", credentials: "same-origin" })
       .then(function (r) { return r.ok ? r.text() : Promise.reject(new Error("HTTP " + r.status)); })
       .then(function (html) {
+        if (mine !== fetches) { return; }
         remember(html);
-        if (!first) { show(html); }
+        if (!first) { KEY = keyOf(html); show(html); }
       })
       .catch(function (err) { statusLine.textContent = "live: cannot fetch the page (" + err.message + ")"; });
   }
   if (HISTORY > 0) { load(true); }
-  var lastSeq = 0;
   var source = new EventSource(EVENTS);
   source.onopen = function () { statusLine.textContent = "live: following " + DATASET; };
   source.onerror = function () { statusLine.textContent = "live: reconnecting\u2026"; };
   source.onmessage = function (m) {
     var e;
     try { e = JSON.parse(m.data); } catch (err) { return; }
-    if (e.kind === "problem") {
+    if (e.kind === "current") {
+      // A new stream: what stood before is sent again after this.
+      problems.clear();
+      showProblems();
+      var now = (e.keys && Object.prototype.hasOwnProperty.call(e.keys, DATASET)) ? e.keys[DATASET] : e.instance + ".0";
+      if (now !== KEY) { load(false); }
+    } else if (e.kind === "problem") {
       if (e.dataset !== DATASET && e.dataset !== "config") { return; }
       live.errors++;
       problems.set(e.dataset, e);
       showProblems();
+    } else if (e.kind === "cleared") {
+      if (problems.delete(e.dataset)) { showProblems(); }
     } else if (e.kind === "built") {
       if (e.dataset !== DATASET) { return; }
       problems.delete(DATASET);
       problems.delete("config");
       showProblems();
-      if (e.changed && e.seq !== lastSeq) {
-        lastSeq = e.seq;
-        load(false);
-      }
+      if (e.key !== KEY) { load(false); }
     }
   };
 })();

@@ -257,7 +257,7 @@ pub fn start(addr: &str, config_path: &Path) -> Result<Preview, ServeError> {
         .thread_name("np-serve-worker")
         .build()
         .map_err(failed)?;
-    let hub = Hub::default();
+    let hub = Hub::new(&nonce()[..16]);
     let shared = Arc::new(Shared {
         routes: Mutex::new(Routes::new(config_path)),
         hub: hub.clone(),
@@ -356,6 +356,7 @@ struct FileAnswer {
     kind: OutputKind,
     dataset: String,
     history: usize,
+    key: String,
 }
 
 enum Routed {
@@ -390,6 +391,8 @@ fn route(target: &str, shared: &Shared) -> Routed {
     let Some(route) = route else {
         return Routed::Ready(plain(404, "not found"));
     };
+    // The key before the file: a page's key is never newer than its bytes.
+    let key = shared.hub.key(&route.dataset);
     match paths::inside(&route).and_then(|file| open(&file)) {
         Some((file, len)) => Routed::File(FileAnswer {
             file,
@@ -397,6 +400,7 @@ fn route(target: &str, shared: &Shared) -> Routed {
             kind: route.kind,
             dataset: route.dataset,
             history,
+            key,
         }),
         None => Routed::Ready(plain(404, "not found")),
     }
@@ -419,7 +423,7 @@ async fn load(file: FileAnswer, shared: &Shared) -> Answer {
         Some(match file.kind {
             OutputKind::Html => {
                 let text = String::from_utf8_lossy(&bytes);
-                let page = index::live_page(&text, &file.dataset, &nonce, file.history);
+                let page = index::live_page(&text, &file.dataset, &nonce, file.history, &file.key);
                 ok(page, HTML, &nonce)
             }
             OutputKind::Svg => ok(bytes, "image/svg+xml", &nonce),

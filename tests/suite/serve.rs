@@ -11,6 +11,7 @@
 mod hardening;
 mod history;
 mod live;
+mod restart;
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpStream};
@@ -455,3 +456,28 @@ fn a_taken_port_moves_on_and_a_bad_address_is_refused() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("example.org:80"));
 }
 
+#[test]
+fn a_fixed_config_error_no_longer_stands() {
+    let (dir, config) = setup("serve_config_fixed");
+    let mut served = Served::start(&config, None);
+    served.expect(&["grid", "wrote"]);
+    let mut stream = open_stream(served.addr);
+    std::fs::write(&config, format!("{CONFIG}bogus: [\n")).expect("bad config");
+    next_event(&mut stream, &["\"problem\"", "\"config\""]);
+    // The fix: the config as it was, so no dataset needs a rebuild.
+    std::fs::write(&config, CONFIG).expect("fixed config");
+    served.expect(&["config", "ok again"]);
+    // The open page hears that it is fixed ...
+    next_event(&mut stream, &["\"config\""]);
+    // ... and a page opened now is told of no problem before the next
+    // rebuild's event.
+    let mut late = open_stream(served.addr);
+    let mut w = weights();
+    w[2] *= 3.0;
+    write_nodes(&dir, &nodes_with(&w));
+    let seen = events_until(&mut late, &["\"built\"", "\"grid\""]);
+    assert!(
+        seen.iter().all(|e| !e.contains("\"problem\"")),
+        "a fixed config still stands: {seen:?}"
+    );
+}

@@ -292,7 +292,10 @@ fn readers_that_never_read_hold_only_their_own_connections() {
     // Every stuck request has its connection (and its answer under way).
     let started = Instant::now();
     while open_fds(pid) < fds + 4 {
-        assert!(started.elapsed() < ANSWERED, "the stuck requests never arrived");
+        assert!(
+            started.elapsed() < ANSWERED,
+            "the stuck requests never arrived"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
     answers(&mut served, "four stuck readers of a 12 MB output");
@@ -366,7 +369,11 @@ fn serve_takes_loopback_names_and_refuses_broadcast_and_multicast() {
         );
         let stderr = String::from_utf8_lossy(&out.stderr);
         let stdout = String::from_utf8_lossy(&out.stdout);
-        assert_eq!(out.status.code(), Some(2), "--serve {addr}: {stdout}{stderr}");
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "--serve {addr}: {stdout}{stderr}"
+        );
         assert!(
             stderr.contains(addr) && stderr.contains(word),
             "--serve {addr}: {stderr}"
