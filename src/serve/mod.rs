@@ -355,7 +355,6 @@ struct FileAnswer {
     len: u64,
     kind: OutputKind,
     dataset: String,
-    history: usize,
     key: String,
 }
 
@@ -379,14 +378,14 @@ fn route(target: &str, shared: &Shared) -> Routed {
         }
         _ => {}
     }
-    let (route, history) = {
+    let route = {
         let mut routes = shared.routes.lock().unwrap_or_else(PoisonError::into_inner);
         routes.refresh();
         if decoded.as_deref() == Some("/") {
             let page = index::index(&routes, &shared.title);
             return Routed::Ready(ok(page, HTML, "none"));
         }
-        (routes.find(target).cloned(), routes.history)
+        routes.find(target).cloned()
     };
     let Some(route) = route else {
         return Routed::Ready(plain(404, "not found"));
@@ -399,7 +398,6 @@ fn route(target: &str, shared: &Shared) -> Routed {
             len,
             kind: route.kind,
             dataset: route.dataset,
-            history,
             key,
         }),
         None => Routed::Ready(plain(404, "not found")),
@@ -423,7 +421,7 @@ async fn load(file: FileAnswer, shared: &Shared) -> Answer {
         Some(match file.kind {
             OutputKind::Html => {
                 let text = String::from_utf8_lossy(&bytes);
-                let page = index::live_page(&text, &file.dataset, &nonce, file.history, &file.key);
+                let page = index::live_page(&text, &file.dataset, &nonce, &file.key);
                 ok(page, HTML, &nonce)
             }
             OutputKind::Svg => ok(bytes, "image/svg+xml", &nonce),

@@ -11,6 +11,7 @@
 mod hardening;
 mod history;
 mod live;
+mod memory;
 mod restart;
 
 use std::io::{BufRead, BufReader, Read, Write};
