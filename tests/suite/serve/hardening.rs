@@ -10,7 +10,7 @@
 //!
 //! Deadlines here are bounds on a hang, several seconds wide for a loaded
 //! two-core machine; the real latencies are printed and measured in
-//! `benches/serve_attacks.sh` (BENCHMARKS.md).
+//! `benches/serve_attacks.py` (BENCHMARKS.md).
 
 use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpStream};
