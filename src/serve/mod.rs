@@ -19,9 +19,12 @@
 //! connection is a task: an idle or stuck client costs a few KiB, not a
 //! thread, and no client can hold a worker that others need. File reads
 //! and the page's rewriting run on at most [`WORKERS`] blocking threads.
-//! Cost (BENCHMARKS.md, "The preview server's crates"): a bigger binary and
-//! a longer clean build, both small beside the rest; only HTTP/1, the server
-//! side, and tokio's current-thread scheduler are compiled. The daemon only
+//! Cost (BENCHMARKS.md, "The preview server's crates"): the release binary
+//! grows by 0.36 MB (2%), a clean release build by about 15 s on two cores
+//! (of about 7 minutes); only HTTP/1, the server side and tokio's
+//! current-thread scheduler are compiled. Under attack `/` is answered in
+//! well under a millisecond (median), where tiny_http spent 1,900 threads,
+//! 300 MB, or did not answer at all. The daemon only
 //! ever hands events to bounded queues without waiting, so no client can
 //! slow a rebuild.
 
