@@ -53,12 +53,14 @@ pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
     let preview = match &args.serve {
         Some(addr) => {
             let config = std::path::absolute(args.config.path()?)?;
-            let preview = crate::serve::start(addr, &config).map_err(|e| match e {
-                // A malformed address is the arguments' fault (exit code 2).
-                crate::serve::ServeError::Address(_) => {
+            let preview = crate::serve::start(addr, &config).map_err(|e| {
+                // A malformed or refused address is the arguments' fault
+                // (exit code 2).
+                if e.is_usage() {
                     anyhow::Error::new(super::UsageError(e.to_string()))
+                } else {
+                    anyhow::Error::new(e)
                 }
-                e => anyhow::Error::new(e),
             })?;
             super::say(preview.first_line());
             Some(preview)

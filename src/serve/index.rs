@@ -8,7 +8,6 @@
 use super::paths::{encode, Routes};
 use crate::render::svg::escape as escape_html;
 
-
 /// The header value for a response whose scripts carry `nonce`: nothing from
 /// another origin, scripts only with the nonce or from this server, no
 /// plugins, frames, forms or base changes. Styles may be inline (the page's
@@ -60,16 +59,18 @@ pub(crate) fn index(routes: &Routes, title: &str) -> String {
 }
 
 /// A dataset's page as served: every inline `<script>` gets `nonce`, and
-/// the live script (told the dataset's name and the history length) goes
-/// in before the last `</body>`. Our pages escape every `<` of user text, so
-/// `<script>` and `</body>` only occur as the page's own tags.
-pub(crate) fn live_page(html: &str, dataset: &str, nonce: &str, history: usize) -> String {
+/// the live script (told the dataset's name and the build key of the page,
+/// `events.rs`) goes in before the last `</body>`. Our pages escape every
+/// `<` of user text, so `<script>` and `</body>` only occur as the page's
+/// own tags.
+pub(crate) fn live_page(html: &str, dataset: &str, nonce: &str, key: &str) -> String {
     let tagged = html.replace("<script>", &format!("<script nonce=\"{nonce}\">"));
     let live = format!(
         "<link rel=\"stylesheet\" href=\"/_np/live.css\">\n\
-         <script src=\"/_np/live.js\" nonce=\"{nonce}\" data-dataset=\"{}\" data-history=\"{history}\" \
+         <script src=\"/_np/live.js\" nonce=\"{nonce}\" data-dataset=\"{}\" data-key=\"{}\" \
          data-events=\"/_np/events\"></script>\n",
-        escape_html(dataset)
+        escape_html(dataset),
+        escape_html(key)
     );
     match tagged.rfind("</body>") {
         Some(at) => format!("{}{live}{}", &tagged[..at], &tagged[at..]),
@@ -84,10 +85,10 @@ mod tests {
     #[test]
     fn the_served_page_gets_nonces_and_the_live_script() {
         let page = "<html><body><script>a()</script><script type=\"application/json\">{}</script></body></html>";
-        let served = live_page(page, "a\"b<", "N0", 4);
+        let served = live_page(page, "a\"b<", "N0", "k.4");
         assert!(served.contains("<script nonce=\"N0\">a()"));
         assert!(served.contains("data-dataset=\"a&quot;b&lt;\""));
-        assert!(served.contains("data-history=\"4\""));
+        assert!(served.contains("data-key=\"k.4\""));
         assert!(served.find("/_np/live.js").expect("live") < served.find("</body>").expect("end"));
     }
 

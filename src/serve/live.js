@@ -9,19 +9,30 @@
 // over: zoom, search text, hovered or focused cell. With
 // prefers-reduced-motion, or on a big map, it swaps at once. A failed
 // rebuild shows its message over the last good picture until the next good
-// one. A small panel gives the last update's stability figures (as `eval
-// --previous` defines them: leaf centroid displacement as a share of the
-// canvas diagonal, mean and largest; realised constraints kept), and steps
-// through the last layouts of the session (`history:`). The morph and the
-// step control are src/render/page/history.js's (`npMorph`), served ahead
-// of this file: the page on disk steps through its past layouts with them.
-// The page's own step control is hidden here: the panel's steps do its job.
+// one, or until the config reloads. A small panel gives the last update's
+// stability figures (as `eval --previous` defines them: leaf centroid
+// displacement as a share of the canvas diagonal, mean and largest;
+// realised constraints kept). The morph is src/render/page/history.js's
+// (`npMorph`), served ahead of this file.
+//
+// Catching up (issue 30): the page knows the build key it was served with
+// (src/serve/events.rs); every stream, the first and each reconnection,
+// starts with the current keys, and a page whose key is not the current
+// one fetches the page again. So a page that missed rebuilds while its
+// stream was down, or outlived the daemon that served it, shows the
+// current map once the stream is back.
+//
+// Memory (issue 30): the page keeps one map. The history of layouts
+// (`history:`) is the page's own (page/past.js, its ◀/▶ control, each
+// layout once, in the served page's data), not a list of fetched pages; the
+// map that is replaced is retired (`npRetire`), so nothing keeps it alive.
 (function () {
   "use strict";
   var me = document.currentScript;
   var NONCE = me.nonce || me.getAttribute("nonce") || "";
   var DATASET = me.getAttribute("data-dataset");
-  var HISTORY = parseInt(me.getAttribute("data-history"), 10) || 0;
+  // The build key of the map shown (src/serve/events.rs).
+  var KEY = me.getAttribute("data-key") || "";
   var EVENTS = me.getAttribute("data-events") || "/_np/events";
   // The morph, then the new labels fading in: 360 + 120 ms, under 500.
   var MORPH_MS = 360, FADE_MS = 120;
@@ -34,7 +45,7 @@
   function container() { return document.querySelector(".nptreemap"); }
   function pictureOf(c) { return c ? c.querySelector(".np-map > svg:not(.np-hover)") : null; }
 
-  // ---- the panel: status, figures, history ----
+  // ---- the panel: status, figures ----
   var panel = document.createElement("div");
   panel.className = "np-live-panel";
   panel.setAttribute("role", "status");
@@ -44,19 +55,8 @@
   var figuresLine = document.createElement("div");
   figuresLine.className = "np-live-figures";
   figuresLine.textContent = "no update yet";
-  var steps = document.createElement("div");
-  steps.className = "np-live-history";
-  var back = document.createElement("button"), ahead = document.createElement("button");
-  back.type = ahead.type = "button";
-  back.textContent = "\u25c0";
-  ahead.textContent = "\u25b6";
-  back.setAttribute("aria-label", "Previous layout");
-  ahead.setAttribute("aria-label", "Next layout");
-  var stepLabel = document.createElement("span");
-  steps.appendChild(back); steps.appendChild(stepLabel); steps.appendChild(ahead);
   panel.appendChild(statusLine);
   panel.appendChild(figuresLine);
-  if (HISTORY > 0) { panel.appendChild(steps); }
   document.body.appendChild(panel);
   document.documentElement.setAttribute("data-np-live", "");
 
@@ -235,6 +235,8 @@
     });
     var fading = fadeIn ? Array.prototype.slice.call(fresh.querySelectorAll(FADING)) : [];
     fade(fading, 0, 0, 0);
+    // The old map's listeners on the window and the document go with it.
+    try { if (old.npRetire) { old.npRetire(); } } catch (err) { /* nothing to retire */ }
     old.parentNode.replaceChild(fresh, old);
     var run = document.createElement("script");
     run.nonce = NONCE;
@@ -274,49 +276,51 @@
     apply(html, pump);
   }
 
-  // ---- history ----
-  var pages = [];
-  var steps = npMorph.stepper(back, ahead, stepLabel, function (k) { show(pages[k]); });
-  function remember(html) {
-    if (HISTORY <= 0) { return; }
-    pages.push(html);
-    while (pages.length > HISTORY + 1) { pages.shift(); }
-    steps.set(pages.length, pages.length - 1);
-  }
-  steps.set(0, -1);
-
   // ---- the stream ----
-  function load(first) {
+  // The key a fetched page was served with (its live script's data-key).
+  function keyOf(html) {
+    var m = /<script src="\/_np\/live\.js"[^>]* data-key="([^"]*)"/.exec(html);
+    return m ? m[1] : "";
+  }
+  // Fetches the current page; of several fetches under way only the last
+  // started is shown.
+  var fetches = 0;
+  function load() {
+    var mine = ++fetches;
     return fetch(location.pathname, { cache: "no-store", credentials: "same-origin" })
       .then(function (r) { return r.ok ? r.text() : Promise.reject(new Error("HTTP " + r.status)); })
       .then(function (html) {
-        remember(html);
-        if (!first) { show(html); }
+        if (mine !== fetches) { return; }
+        KEY = keyOf(html);
+        show(html);
       })
       .catch(function (err) { statusLine.textContent = "live: cannot fetch the page (" + err.message + ")"; });
   }
-  if (HISTORY > 0) { load(true); }
-  var lastSeq = 0;
   var source = new EventSource(EVENTS);
   source.onopen = function () { statusLine.textContent = "live: following " + DATASET; };
   source.onerror = function () { statusLine.textContent = "live: reconnecting\u2026"; };
   source.onmessage = function (m) {
     var e;
     try { e = JSON.parse(m.data); } catch (err) { return; }
-    if (e.kind === "problem") {
+    if (e.kind === "current") {
+      // A new stream: what stood before is sent again after this.
+      problems.clear();
+      showProblems();
+      var now = (e.keys && Object.prototype.hasOwnProperty.call(e.keys, DATASET)) ? e.keys[DATASET] : e.instance + ".0";
+      if (now !== KEY) { load(); }
+    } else if (e.kind === "problem") {
       if (e.dataset !== DATASET && e.dataset !== "config") { return; }
       live.errors++;
       problems.set(e.dataset, e);
       showProblems();
+    } else if (e.kind === "cleared") {
+      if (problems.delete(e.dataset)) { showProblems(); }
     } else if (e.kind === "built") {
       if (e.dataset !== DATASET) { return; }
       problems.delete(DATASET);
       problems.delete("config");
       showProblems();
-      if (e.changed && e.seq !== lastSeq) {
-        lastSeq = e.seq;
-        load(false);
-      }
+      if (e.key !== KEY) { load(); }
     }
   };
 })();

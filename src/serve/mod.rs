@@ -2,39 +2,59 @@
 //! beside the daemon serves an index of the config's datasets, each
 //! dataset's outputs (its HTML page with a live script added), and one
 //! event stream that pushes every rebuild to the open pages, which morph to
-//! the new layout. Owns binding (loopback and a fixed port by default, the
-//! next free port when it is taken), routing, the response headers and the
-//! bounds on request handling. What a path may name is `paths.rs`'s, the
-//! stream is `events.rs`'s, the HTML `index.rs`'s, the browser side
-//! `live.js`.
+//! the new layout. Owns the address (loopback and a fixed port by default,
+//! the next free port when it is taken; host names only when they resolve
+//! to loopback; never a broadcast or multicast address), routing, the
+//! response headers and the runtime. Which requests are ours is `host.rs`'s,
+//! the connections and their bounds `conn.rs`'s, the bodies and their
+//! memory budget `body.rs`'s, what a path may name `paths.rs`'s, the stream
+//! `events.rs`'s, the HTML `index.rs`'s, the browser side `live.js`.
 //!
-//! Why tiny_http: a maintained, small, synchronous server with no async
-//! runtime; the preview answers a handful of local requests and keeps a few
-//! streams open, which plain threads do well. Requests are answered by a
-//! small fixed pool (a full queue is answered 503 at once), event streams by
-//! a thread each up to a cap; the daemon only ever hands events to bounded
-//! queues without waiting, so no client can slow a rebuild. (tiny_http
-//! reads each connection on a thread of its own pool, which it does not
-//! cap; loopback by default keeps that to this machine.)
+//! Why hyper on tokio (issue 30): the preview must stay answerable whatever
+//! a client does, and tiny_http, used before, could not: it started a
+//! thread per connection (2,000 idle sockets, 1,900 threads; a failed spawn
+//! killed its accept loop for good) and buffered a request head whole (a
+//! 300 MB header line, 319 MB of memory). hyper's HTTP/1 server bounds a
+//! head in size and time, and on a one-thread tokio runtime every
+//! connection is a task: an idle or stuck client costs a few KiB, not a
+//! thread, and no client can hold a worker that others need. File reads
+//! and the page's rewriting run on at most [`WORKERS`] blocking threads.
+//! Cost (BENCHMARKS.md, "The preview server's crates"): the release binary
+//! grows by 0.36 MB (2%), a clean release build by about 15 s on two cores
+//! (of about 7 minutes); only HTTP/1, the server side and tokio's
+//! current-thread scheduler are compiled. Under attack `/` is answered in
+//! well under a millisecond (median), where tiny_http spent 1,900 threads,
+//! 300 MB, or did not answer at all. The daemon only
+//! ever hands events to bounded queues without waiting, so no client can
+//! slow a rebuild.
 
+/// The response bodies and their memory budget.
+pub(crate) mod body;
+/// Connections: the cap, the head limits, the write timeout.
+pub(crate) mod conn;
 /// The push channel (server-sent events).
 pub(crate) mod events;
+/// Which Host values are this server's (DNS rebinding).
+pub(crate) mod host;
 /// The index page, the served page's rewriting and the security policy.
 pub(crate) mod index;
 /// Which file a request path names.
 pub(crate) mod paths;
 
 use std::hash::{BuildHasher, Hasher};
-use std::net::{IpAddr, Ipv4Addr, SocketAddr};
+use std::net::{IpAddr, Ipv4Addr, SocketAddr, ToSocketAddrs};
 use std::path::Path;
-use std::sync::mpsc::{sync_channel, Receiver, TrySendError};
 use std::sync::{Arc, Mutex, PoisonError};
+use std::time::Duration;
 
-use tiny_http::{Header, Method, Request, Response, Server};
+use hyper::header::{HeaderValue, ALLOW, HOST};
+use hyper::{Method, Request, Response, StatusCode, Version};
+use tokio::sync::Semaphore;
 
 use crate::config::OutputKind;
 use crate::daemon::status::Status;
 use crate::render::html::HISTORY_JS;
+use body::{Body, Hold};
 use events::Hub;
 use paths::Routes;
 
@@ -44,19 +64,20 @@ pub const DEFAULT_PORT: u16 = 7878;
 /// Ports tried after [`DEFAULT_PORT`] when it is taken.
 const PORT_TRIES: u16 = 32;
 
-/// Threads answering ordinary requests.
+/// Threads reading files and rewriting pages (tokio's blocking pool).
 const WORKERS: usize = 4;
-
-/// Requests waiting for a worker before more are answered 503.
-const QUEUED: usize = 64;
 
 /// Largest file served (a 20,000-leaf page is about 16 MB).
 const MAX_FILE: u64 = 512 << 20;
 
+/// How long a request waits for room in the body budget before it is
+/// answered 503.
+const BUDGET_WAIT: Duration = Duration::from_secs(5);
+
 /// The browser side of the preview (served after the morph it shares with
 /// the page's own steps, [`crate::render::html::HISTORY_JS`]).
 const LIVE_JS: &str = include_str!("live.js");
-/// Its style (the error overlay, the figures panel, the history control).
+/// Its style (the error overlay, the figures panel).
 const LIVE_CSS: &str = include_str!("live.css");
 
 /// Why the preview could not start.
@@ -66,6 +87,14 @@ pub enum ServeError {
     /// The address given is not `HOST`, `PORT` or `HOST:PORT`.
     #[error("--serve {0:?}: expected HOST, PORT or HOST:PORT (such as 127.0.0.1:7878)")]
     Address(String),
+    /// The address given is one a server cannot or should not listen on.
+    #[error("--serve {given:?}: {why}")]
+    Refused {
+        /// The address as given.
+        given: String,
+        /// What is wrong with it.
+        why: String,
+    },
     /// Nothing could be bound.
     #[error("cannot listen on {addr}: {message}")]
     Bind {
@@ -74,6 +103,14 @@ pub enum ServeError {
         /// Why.
         message: String,
     },
+}
+
+impl ServeError {
+    /// Whether the address given is at fault (the arguments' fault, exit
+    /// code 2), rather than the machine.
+    pub fn is_usage(&self) -> bool {
+        matches!(self, ServeError::Address(_) | ServeError::Refused { .. })
+    }
 }
 
 /// A running preview: where it listens and what to tell open pages.
@@ -86,12 +123,7 @@ impl Preview {
     /// The line that opens `watch --serve`'s output: the URL, and whether
     /// other machines can reach it.
     pub fn first_line(&self) -> String {
-        let reach = if self.addr.ip().is_loopback() {
-            "listening on loopback only: other machines cannot connect"
-        } else {
-            "listening beyond loopback: other machines can connect"
-        };
-        format!("serving http://{}/ ({reach})", self.addr)
+        format!("serving http://{}/ ({})", self.addr, reach(self.addr.ip()))
     }
 
     /// Hands a daemon report to the open pages; never waits for them.
@@ -100,38 +132,105 @@ impl Preview {
     }
 }
 
+/// Who can connect to a server listening on `ip`. Broadcast and multicast
+/// addresses are refused before this ([`refuse`]), so what is not loopback
+/// is the unspecified address or a unicast one: other machines can connect.
+fn reach(ip: IpAddr) -> &'static str {
+    if ip.to_canonical().is_loopback() {
+        "listening on loopback only: other machines cannot connect"
+    } else {
+        "listening beyond loopback: other machines can connect"
+    }
+}
+
+/// Why a server may not listen on `ip`, if it may not.
+fn refuse(ip: IpAddr) -> Option<&'static str> {
+    match ip.to_canonical() {
+        IpAddr::V4(v4) if v4.is_broadcast() => Some(
+            "a broadcast address cannot be listened on; give a loopback (127.0.0.1), \
+             unspecified (0.0.0.0) or unicast address of this machine",
+        ),
+        ip if ip.is_multicast() => Some(
+            "a multicast address cannot be listened on; give a loopback (127.0.0.1), \
+             unspecified (0.0.0.0) or unicast address of this machine",
+        ),
+        _ => None,
+    }
+}
+
 /// What `--serve` was given: an address to bind exactly, or a host whose
-/// default port may move on to the next free one.
+/// default port may move on to the next free one. A host name must resolve
+/// to a loopback address, which is bound (the first IPv4 one if any).
 fn parse_addr(text: &str) -> Result<(SocketAddr, bool), ServeError> {
     let text = text.trim();
     let loopback = IpAddr::V4(Ipv4Addr::LOCALHOST);
-    if text.is_empty() {
-        return Ok((SocketAddr::new(loopback, DEFAULT_PORT), true));
+    let (addr, flexible) = if text.is_empty() {
+        (SocketAddr::new(loopback, DEFAULT_PORT), true)
+    } else if let Ok(port) = text.parse::<u16>() {
+        (SocketAddr::new(loopback, port), false)
+    } else if let Ok(addr) = text.parse::<SocketAddr>() {
+        (addr, false)
+    } else if let Ok(ip) = text
+        .trim_start_matches('[')
+        .trim_end_matches(']')
+        .parse::<IpAddr>()
+    {
+        (SocketAddr::new(ip, DEFAULT_PORT), true)
+    } else {
+        by_name(text)?
+    };
+    if let Some(why) = refuse(addr.ip()) {
+        return Err(ServeError::Refused {
+            given: text.to_string(),
+            why: why.to_string(),
+        });
     }
-    if let Ok(port) = text.parse::<u16>() {
-        return Ok((SocketAddr::new(loopback, port), false));
-    }
-    if let Ok(addr) = text.parse::<SocketAddr>() {
-        return Ok((addr, false));
-    }
-    let host = text.trim_start_matches('[').trim_end_matches(']');
-    if let Ok(ip) = host.parse::<IpAddr>() {
-        return Ok((SocketAddr::new(ip, DEFAULT_PORT), true));
-    }
-    if host == "localhost" {
-        return Ok((SocketAddr::new(loopback, DEFAULT_PORT), true));
-    }
-    Err(ServeError::Address(text.to_string()))
+    Ok((addr, flexible))
 }
 
-fn bind(text: &str) -> Result<Server, ServeError> {
+/// `NAME` or `NAME:PORT`, the name resolved to a loopback address.
+fn by_name(text: &str) -> Result<(SocketAddr, bool), ServeError> {
+    let (name, port, flexible) = match text.rsplit_once(':') {
+        Some((name, port)) => match port.parse::<u16>() {
+            Ok(port) => (name, port, false),
+            Err(_) => return Err(ServeError::Address(text.to_string())),
+        },
+        None => (text, DEFAULT_PORT, true),
+    };
+    let plain = |c: char| c.is_ascii_alphanumeric() || c == '-' || c == '.';
+    if name.is_empty() || !name.chars().all(plain) {
+        return Err(ServeError::Address(text.to_string()));
+    }
+    let found: Vec<SocketAddr> = (name, port)
+        .to_socket_addrs()
+        .map(Iterator::collect)
+        .unwrap_or_default();
+    let lo = |a: &&SocketAddr| a.ip().to_canonical().is_loopback();
+    let pick = found
+        .iter()
+        .filter(lo)
+        .find(|a| a.is_ipv4())
+        .or_else(|| found.iter().find(lo));
+    match pick {
+        Some(addr) => Ok((*addr, flexible)),
+        None => Err(ServeError::Refused {
+            given: text.to_string(),
+            why: format!(
+                "{name} does not resolve to a loopback address here (a host name must name this \
+                 machine's loopback; to listen beyond it, give an IP address such as 0.0.0.0)"
+            ),
+        }),
+    }
+}
+
+fn bind(text: &str) -> Result<std::net::TcpListener, ServeError> {
     let (first, flexible) = parse_addr(text)?;
     let tries = if flexible { PORT_TRIES } else { 1 };
     let mut last = String::new();
     for k in 0..tries {
         let addr = SocketAddr::new(first.ip(), first.port().saturating_add(k));
-        match Server::http(addr) {
-            Ok(server) => return Ok(server),
+        match std::net::TcpListener::bind(addr).and_then(|l| l.set_nonblocking(true).map(|()| l)) {
+            Ok(listener) => return Ok(listener),
             Err(e) => last = e.to_string(),
         }
     }
@@ -145,121 +244,218 @@ fn bind(text: &str) -> Result<Server, ServeError> {
 /// the config at `config_path` on threads of its own, which end with the
 /// process.
 pub fn start(addr: &str, config_path: &Path) -> Result<Preview, ServeError> {
-    let server = bind(addr)?;
-    let local = server
-        .server_addr()
-        .to_ip()
-        .ok_or_else(|| ServeError::Address(addr.to_string()))?;
-    let hub = Hub::default();
+    let listener = bind(addr)?;
+    let local = listener.local_addr().map_err(|e| ServeError::Bind {
+        addr: SocketAddr::new(IpAddr::V4(Ipv4Addr::UNSPECIFIED), 0),
+        message: e.to_string(),
+    })?;
+    let failed = |e: std::io::Error| ServeError::Bind {
+        addr: local,
+        message: e.to_string(),
+    };
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_io()
+        .enable_time()
+        .max_blocking_threads(WORKERS)
+        .thread_name("np-serve-worker")
+        .build()
+        .map_err(failed)?;
+    let hub = Hub::new(&nonce()[..16]);
     let shared = Arc::new(Shared {
         routes: Mutex::new(Routes::new(config_path)),
         hub: hub.clone(),
         title: config_path
             .file_name()
             .map_or_else(|| "nptreemap".to_string(), |n| n.to_string_lossy().into_owned()),
+        port: local.port(),
+        budget: Arc::new(Semaphore::new(body::BUDGET_KIB as usize)),
     });
-    let (tx, rx) = sync_channel::<Request>(QUEUED);
-    let rx = Arc::new(Mutex::new(rx));
-    for _ in 0..WORKERS {
-        let (rx, shared) = (rx.clone(), shared.clone());
-        spawn("np-serve-worker", move || work(&rx, &shared));
-    }
-    spawn("np-serve", move || {
-        for request in server.incoming_requests() {
-            if !matches!(request.method(), Method::Get | Method::Head) {
-                let allow = header("Allow", "GET, HEAD");
-                let _ = request.respond(plain(405, "only GET and HEAD").with_header(allow));
-                continue;
-            }
-            if paths::decode(request.url()).as_deref() == Some("/_np/events") {
-                shared.hub.serve(request, &common_headers("none"));
-                continue;
-            }
-            if let Err(TrySendError::Full(r) | TrySendError::Disconnected(r)) = tx.try_send(request)
-            {
-                let _ = r.respond(plain(503, "busy"));
-            }
-        }
-    });
+    std::thread::Builder::new()
+        .name("np-serve".to_string())
+        .spawn(move || runtime.block_on(conn::accept(listener, shared)))
+        .map_err(failed)?;
     Ok(Preview { addr: local, hub })
 }
 
-fn spawn(name: &str, f: impl FnOnce() + Send + 'static) {
-    if let Err(e) = std::thread::Builder::new().name(name.to_string()).spawn(f) {
-        tracing::warn!(error = %e, "cannot start a thread of the preview server");
-    }
-}
-
-/// What the request threads share.
-struct Shared {
+/// What the connections share.
+pub(crate) struct Shared {
     routes: Mutex<Routes>,
     hub: Hub,
     title: String,
+    /// The port listened on (what `Host` must name).
+    port: u16,
+    /// Room for bodies in memory, in KiB ([`body::BUDGET_KIB`]).
+    budget: Arc<Semaphore>,
 }
 
-fn work(rx: &Mutex<Receiver<Request>>, shared: &Shared) {
-    loop {
-        let next = rx.lock().unwrap_or_else(PoisonError::into_inner).recv();
-        let Ok(request) = next else { return };
-        let response = answer(request.url(), shared);
-        let _ = request.respond(response);
+type Answer = Response<Body>;
+
+/// The answer to one request that reached `local`.
+pub(crate) async fn handle<B>(request: Request<B>, shared: &Arc<Shared>, local: SocketAddr) -> Answer {
+    if let Some(refused) = check_host(&request, shared.port, local.ip()) {
+        return refused;
+    }
+    if !matches!(*request.method(), Method::GET | Method::HEAD) {
+        let mut r = plain(405, "only GET and HEAD");
+        r.headers_mut()
+            .insert(ALLOW, HeaderValue::from_static("GET, HEAD"));
+        return r;
+    }
+    let target = request
+        .uri()
+        .path_and_query()
+        .map_or("/", |p| p.as_str())
+        .to_string();
+    if paths::decode(&target).as_deref() == Some("/_np/events") {
+        return match shared.hub.subscribe() {
+            Some(stream) => {
+                let mut r = Response::new(Body::Events(Box::new(stream), Hold::default()));
+                for (name, value) in headers("none") {
+                    insert(&mut r, name, &value);
+                }
+                insert(&mut r, "Content-Type", "text/event-stream");
+                r
+            }
+            None => plain(503, "too many open pages"),
+        };
+    }
+    let found = {
+        let shared = shared.clone();
+        tokio::task::spawn_blocking(move || route(&target, &shared)).await
+    };
+    match found {
+        Ok(Routed::Ready(answer)) => answer,
+        Ok(Routed::File(file)) => load(file, shared).await,
+        Err(_) => plain(500, "internal error"),
     }
 }
 
-type Answer = Response<std::io::Cursor<Vec<u8>>>;
-
-/// The response to a GET (or HEAD: tiny_http leaves the body out) of `url`.
-fn answer(url: &str, shared: &Shared) -> Answer {
-    let nonce = nonce();
-    let ok = |body: Vec<u8>, kind: &str| {
-        let mut r = Response::from_data(body).with_header(header("Content-Type", kind));
-        for (name, value) in headers(&nonce) {
-            r.add_header(header(name, &value));
+/// Refuses a request that does not name this server (see `host.rs`): 421,
+/// or 400 when HTTP/1.1's required `Host` is missing or repeated.
+fn check_host<B>(request: &Request<B>, port: u16, local: IpAddr) -> Option<Answer> {
+    let hosts: Vec<&HeaderValue> = request.headers().get_all(HOST).iter().collect();
+    if hosts.len() > 1 || (hosts.is_empty() && request.version() >= Version::HTTP_11) {
+        return Some(plain(400, "one Host header is required"));
+    }
+    let named = hosts
+        .iter()
+        .map(|h| h.to_str().unwrap_or(""))
+        .chain(request.uri().authority().map(|a| a.as_str()));
+    for host in named {
+        if !host::allowed(host, local, port) {
+            let text = format!(
+                "this server answers requests for localhost:{port} or 127.0.0.1:{port} only"
+            );
+            return Some(plain(421, &text));
         }
-        r
-    };
-    match paths::decode(url).as_deref() {
+    }
+    None
+}
+
+/// A file to read for a request, with what its answer needs.
+struct FileAnswer {
+    file: std::fs::File,
+    len: u64,
+    kind: OutputKind,
+    dataset: String,
+    key: String,
+}
+
+enum Routed {
+    Ready(Answer),
+    File(FileAnswer),
+}
+
+/// What `target` names: an answer at once (the index, the live script and
+/// style, 404), or an output file, opened.
+fn route(target: &str, shared: &Shared) -> Routed {
+    let decoded = paths::decode(target);
+    match decoded.as_deref() {
         Some("/_np/live.js") => {
             // One function scope: the morph's name stays out of the page's.
             let script = format!("(function () {{\n{HISTORY_JS}{LIVE_JS}}})();\n");
-            return ok(script.into_bytes(), "text/javascript; charset=utf-8");
+            return Routed::Ready(ok(script, "text/javascript; charset=utf-8", "none"));
         }
-        Some("/_np/live.css") => return ok(LIVE_CSS.into(), "text/css; charset=utf-8"),
+        Some("/_np/live.css") => {
+            return Routed::Ready(ok(LIVE_CSS, "text/css; charset=utf-8", "none"))
+        }
         _ => {}
     }
-    let (route, history) = {
+    let route = {
         let mut routes = shared.routes.lock().unwrap_or_else(PoisonError::into_inner);
         routes.refresh();
-        if paths::decode(url).as_deref() == Some("/") {
-            return ok(index::index(&routes, &shared.title).into_bytes(), HTML);
+        if decoded.as_deref() == Some("/") {
+            let page = index::index(&routes, &shared.title);
+            return Routed::Ready(ok(page, HTML, "none"));
         }
-        (routes.find(url).cloned(), routes.history)
+        routes.find(target).cloned()
     };
     let Some(route) = route else {
-        return plain(404, "not found");
+        return Routed::Ready(plain(404, "not found"));
     };
-    let Some(bytes) = paths::inside(&route).and_then(|file| read(&file)) else {
-        return plain(404, "not found");
+    // The key before the file: a page's key is never newer than its bytes.
+    let key = shared.hub.key(&route.dataset);
+    match paths::inside(&route).and_then(|file| open(&file)) {
+        Some((file, len)) => Routed::File(FileAnswer {
+            file,
+            len,
+            kind: route.kind,
+            dataset: route.dataset,
+            key,
+        }),
+        None => Routed::Ready(plain(404, "not found")),
+    }
+}
+
+/// Reads an output within the body budget and answers with it.
+async fn load(file: FileAnswer, shared: &Shared) -> Answer {
+    let share = body::share(file.len);
+    let waited = tokio::time::timeout(
+        BUDGET_WAIT,
+        shared.budget.clone().acquire_many_owned(share),
+    )
+    .await;
+    let Ok(Ok(permit)) = waited else {
+        return plain(503, "busy: too many large answers under way");
     };
-    match route.kind {
-        OutputKind::Html => {
-            let text = String::from_utf8_lossy(&bytes);
-            let page = index::live_page(&text, &route.dataset, &nonce, history);
-            ok(page.into_bytes(), HTML)
+    let read = tokio::task::spawn_blocking(move || {
+        let nonce = nonce();
+        let bytes = read(file.file)?;
+        Some(match file.kind {
+            OutputKind::Html => {
+                let text = String::from_utf8_lossy(&bytes);
+                let page = index::live_page(&text, &file.dataset, &nonce, &file.key);
+                ok(page, HTML, &nonce)
+            }
+            OutputKind::Svg => ok(bytes, "image/svg+xml", &nonce),
+            OutputKind::Png => ok(bytes, "image/png", &nonce),
+            OutputKind::Json => ok(bytes, "application/json", &nonce),
+        })
+    })
+    .await;
+    match read {
+        Ok(Some(mut answer)) => {
+            if let Body::Bytes { hold, .. } = answer.body_mut() {
+                hold.budget = Some(permit);
+            }
+            answer
         }
-        OutputKind::Svg => ok(bytes, "image/svg+xml"),
-        OutputKind::Png => ok(bytes, "image/png"),
-        OutputKind::Json => ok(bytes, "application/json"),
+        _ => plain(404, "not found"),
     }
 }
 
 const HTML: &str = "text/html; charset=utf-8";
 
-fn read(file: &Path) -> Option<Vec<u8>> {
-    use std::io::Read;
+fn open(file: &Path) -> Option<(std::fs::File, u64)> {
     let f = std::fs::File::open(file).ok()?;
+    let len = f.metadata().ok()?.len().min(MAX_FILE);
+    Some((f, len))
+}
+
+fn read(file: std::fs::File) -> Option<Vec<u8>> {
+    use std::io::Read;
     let mut bytes = Vec::new();
-    f.take(MAX_FILE).read_to_end(&mut bytes).ok()?;
+    file.take(MAX_FILE).read_to_end(&mut bytes).ok()?;
     Some(bytes)
 }
 
@@ -273,29 +469,28 @@ fn headers(nonce: &str) -> Vec<(&'static str, String)> {
     ]
 }
 
-/// The same headers as raw lines (for the event stream, written by hand).
-fn common_headers(nonce: &str) -> String {
-    headers(nonce)
-        .into_iter()
-        .map(|(k, v)| format!("{k}: {v}\r\n"))
-        .collect()
+fn insert(r: &mut Answer, name: &'static str, value: &str) {
+    // Only our own constant names, and values without line breaks.
+    if let Ok(v) = HeaderValue::from_str(value) {
+        r.headers_mut().insert(name, v);
+    }
 }
 
-/// A short plain-text answer with `status`.
-pub(crate) fn plain(status: u16, text: &str) -> Answer {
-    let mut r = Response::from_data(text.as_bytes().to_vec())
-        .with_status_code(status)
-        .with_header(header("Content-Type", "text/plain; charset=utf-8"));
-    for (name, value) in headers("none") {
-        r.add_header(header(name, &value));
+/// A 200 answer of `body` as `kind`, its scripts allowed by `nonce`.
+fn ok(body: impl Into<bytes::Bytes>, kind: &str, nonce: &str) -> Answer {
+    let mut r = Response::new(Body::bytes(body));
+    insert(&mut r, "Content-Type", kind);
+    for (name, value) in headers(nonce) {
+        insert(&mut r, name, &value);
     }
     r
 }
 
-fn header(name: &str, value: &str) -> Header {
-    // Only our own constant names and values without line breaks reach here.
-    Header::from_bytes(name.as_bytes(), value.as_bytes())
-        .unwrap_or_else(|()| Header::from_bytes(&b"X-Invalid"[..], &b"1"[..]).expect("constant"))
+/// A short plain-text answer with `status`.
+pub(crate) fn plain(status: u16, text: &str) -> Answer {
+    let mut r = ok(text.to_string(), "text/plain; charset=utf-8", "none");
+    *r.status_mut() = StatusCode::from_u16(status).unwrap_or(StatusCode::INTERNAL_SERVER_ERROR);
+    r
 }
 
 /// A fresh nonce per response: 128 bits from the standard library's
@@ -335,6 +530,41 @@ mod tests {
             "[::1]:80".parse().expect("addr")
         );
         assert!(parse_addr("example.org:80").is_err());
+        assert!(parse_addr("a b:80").is_err());
+    }
+
+    #[test]
+    fn loopback_names_resolve_and_broadcast_and_multicast_are_refused() {
+        let (addr, flexible) = parse_addr("localhost:8123").expect("localhost");
+        assert!(addr.ip().is_loopback() && addr.port() == 8123 && !flexible);
+        assert!(parse_addr("localhost").expect("localhost").1, "no port: movable");
+        for bad in [
+            "255.255.255.255",
+            "255.255.255.255:80",
+            "224.0.0.1",
+            "239.255.255.250:1900",
+            "[ff02::1]:80",
+            "ff05::2",
+            "[::ffff:224.0.0.1]:80",
+        ] {
+            let e = parse_addr(bad).expect_err(bad);
+            assert!(e.is_usage(), "{bad}: {e}");
+            let text = e.to_string();
+            assert!(text.contains(bad) && text.contains("cannot be listened on"), "{text}");
+        }
+    }
+
+    #[test]
+    fn only_loopback_says_other_machines_cannot_connect() {
+        for ip in ["127.0.0.1", "127.0.0.2", "::1", "::ffff:127.0.0.1"] {
+            let ip: IpAddr = ip.parse().expect("ip");
+            assert!(reach(ip).contains("cannot connect"), "{ip}");
+        }
+        for ip in ["0.0.0.0", "::", "192.0.2.7", "2001:db8::1", "169.254.1.1"] {
+            let ip: IpAddr = ip.parse().expect("ip");
+            assert!(reach(ip).contains("can connect"), "{ip}");
+            assert_eq!(refuse(ip), None, "{ip}");
+        }
     }
 
     #[test]

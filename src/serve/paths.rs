@@ -32,8 +32,6 @@ pub(crate) struct Routes {
     pub(crate) by_path: BTreeMap<String, Route>,
     /// Dataset names in config order, each with its URL paths.
     pub(crate) datasets: Vec<(String, Vec<String>)>,
-    /// The config's `history:`.
-    pub(crate) history: usize,
 }
 
 impl Routes {
@@ -67,7 +65,6 @@ impl Routes {
     fn set(&mut self, config: &Config) {
         self.by_path.clear();
         self.datasets.clear();
-        self.history = config.history;
         for d in &config.datasets {
             let mut urls = Vec::new();
             for out in &d.outputs {

@@ -8,8 +8,11 @@
 //! with a stream open. `serve/live.rs` drives a real browser through an
 //! update.
 
+mod hardening;
 mod history;
 mod live;
+mod memory;
+mod restart;
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpStream};
@@ -215,10 +218,18 @@ fn request(addr: SocketAddr, method: &str, target: &str) -> Reply {
     .expect("send");
     let mut raw = Vec::new();
     s.read_to_end(&mut raw).expect("read answer");
-    let end = raw
-        .windows(4)
-        .position(|w| w == b"\r\n\r\n")
-        .expect("a header end");
+    parse_reply(&raw)
+}
+
+/// An answer as read off the wire; status 0 when there is no whole head.
+fn parse_reply(raw: &[u8]) -> Reply {
+    let Some(end) = raw.windows(4).position(|w| w == b"\r\n\r\n") else {
+        return Reply {
+            status: 0,
+            headers: Vec::new(),
+            body: raw.to_vec(),
+        };
+    };
     let head = String::from_utf8_lossy(&raw[..end]).into_owned();
     let mut lines = head.lines();
     let status = lines
@@ -336,6 +347,13 @@ fn the_preview_serves_outputs_and_nothing_else() {
 
 /// Reads server-sent events from `stream` until one contains every part.
 fn next_event(stream: &mut BufReader<TcpStream>, parts: &[&str]) -> String {
+    events_until(stream, parts).pop().expect("an event")
+}
+
+/// Reads server-sent events from `stream` until one contains every part;
+/// returns every event read, that one last.
+fn events_until(stream: &mut BufReader<TcpStream>, parts: &[&str]) -> Vec<String> {
+    let mut seen = Vec::new();
     let deadline = Instant::now() + WAIT;
     let mut line = String::new();
     loop {
@@ -344,8 +362,11 @@ fn next_event(stream: &mut BufReader<TcpStream>, parts: &[&str]) -> String {
         match stream.read_line(&mut line) {
             Ok(0) => panic!("the stream ended before an event with {parts:?}"),
             Ok(_) => {
-                if line.starts_with("data:") && parts.iter().all(|p| line.contains(p)) {
-                    return line;
+                if line.starts_with("data:") {
+                    seen.push(line.clone());
+                    if parts.iter().all(|p| line.contains(p)) {
+                        return seen;
+                    }
                 }
             }
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
@@ -434,4 +455,30 @@ fn a_taken_port_moves_on_and_a_bad_address_is_refused() {
         .expect("run");
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("example.org:80"));
+}
+
+#[test]
+fn a_fixed_config_error_no_longer_stands() {
+    let (dir, config) = setup("serve_config_fixed");
+    let mut served = Served::start(&config, None);
+    served.expect(&["grid", "wrote"]);
+    let mut stream = open_stream(served.addr);
+    std::fs::write(&config, format!("{CONFIG}bogus: [\n")).expect("bad config");
+    next_event(&mut stream, &["\"problem\"", "\"config\""]);
+    // The fix: the config as it was, so no dataset needs a rebuild.
+    std::fs::write(&config, CONFIG).expect("fixed config");
+    served.expect(&["config", "ok again"]);
+    // The open page hears that it is fixed ...
+    next_event(&mut stream, &["\"config\""]);
+    // ... and a page opened now is told of no problem before the next
+    // rebuild's event.
+    let mut late = open_stream(served.addr);
+    let mut w = weights();
+    w[2] *= 3.0;
+    write_nodes(&dir, &nodes_with(&w));
+    let seen = events_until(&mut late, &["\"built\"", "\"grid\""]);
+    assert!(
+        seen.iter().all(|e| !e.contains("\"problem\"")),
+        "a fixed config still stands: {seen:?}"
+    );
 }

@@ -63,7 +63,7 @@ map.addEventListener("click", function (e) {
   zoomInto(i);
 });
 // A tap elsewhere on the page ends the touch hover.
-document.addEventListener("click", function (e) {
+globally(document, "click", function (e) {
   if (pointer === "touch" && !map.contains(e.target) && current >= 0) { tapped = -1; clear(); }
 });
 map.addEventListener("keydown", function (e) {
@@ -145,7 +145,7 @@ root.addEventListener("keydown", function (e) {
     unitPxKnown = 0;
   }
   fit();
-  window.addEventListener("resize", fit);
+  globally(window, "resize", fit);
 })();
 
 // glue: issue 25. The live preview (src/serve/live.js) replaces this map
@@ -168,5 +168,9 @@ root.npView = {
     if (c !== undefined && isLeaf(c)) { highlight(c, false); placeAt(c); }
   }
 };
+
+// glue: issue 30. The live preview calls this on the map it replaces, so
+// that nothing outside the map keeps the old one alive.
+root.npRetire = function () { if (life) { life.abort(); } };
 
 if (window.performance && performance.mark) { performance.mark("nptreemap-ready"); }

@@ -7,6 +7,14 @@
 if (window.performance && performance.mark) { performance.mark("nptreemap-start"); }
 var root = document.currentScript.parentNode;
 function part(name) { return root.querySelector(".np-" + name); }
+// Listeners on the window or the document outlive the map: they are added
+// through `globally`, so that a map that is replaced (the live preview
+// swaps in the rebuilt one) takes them with it (`root.npRetire`, in
+// main.js) instead of keeping itself alive through them.
+var life = window.AbortController ? new AbortController() : null;
+function globally(target, type, fn) {
+  target.addEventListener(type, fn, life ? { signal: life.signal } : false);
+}
 var data = JSON.parse(part("data").textContent);
 var map = part("map");
 var svg = map.querySelector("svg");

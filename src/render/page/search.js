@@ -137,7 +137,7 @@ box.addEventListener("blur", closeList);
 
 // `/` focuses the box of the map in use: the one holding the focus, else
 // the one the pointer was on last, else the first in the document.
-document.addEventListener("keydown", function (e) {
+globally(document, "keydown", function (e) {
   if (e.key !== "/" || e.ctrlKey || e.metaKey || e.altKey || e.defaultPrevented) { return; }
   var t = e.target;
   if (t && (t.isContentEditable || /^(input|textarea|select)$/i.test(t.tagName || ""))) { return; }

@@ -3,8 +3,8 @@
 //! reload (`performance.timeOrigin` unchanged): the edited cell's polygon
 //! changes, every cell keeps its id, an added node's cell appears and goes, zoom and search text survive, the
 //! figures panel fills; with `prefers-reduced-motion` no animation frame is
-//! requested; the history steps back to the previous layout and ahead to
-//! the latest; a bad edit shows its file and line over the last good picture
+//! requested; the page's own history steps back to the previous layout and
+//! ahead to the latest; a bad edit shows its file and line over the last good picture
 //! and goes away on the fix; no security-policy violation is reported; and
 //! SIGTERM ends the server with the page's stream open. Screenshots of a
 //! morph midway are left in the test's folder (`morph-*.png`) to look at.
@@ -292,13 +292,22 @@ fn a_served_page_follows_edits_without_reloading() {
     );
     assert_eq!(updates(&mut browser), 5, "the fix changed no picture");
 
-    // History: one step back shows the layout before the last edit, one
-    // step ahead the latest again (swapped at once: motion is still reduced).
-    browser.eval("document.querySelector('.np-live-history button').click()");
-    wait_updates(&mut browser, 6);
+    // History, through the page's own steps (its past layouts, each kept
+    // once): one step back shows the layout before the last edit, one step
+    // ahead the latest again (at once: motion is still reduced).
+    browser.eval("document.querySelector('.nptreemap .np-history-back').click()");
+    wait_true(
+        &mut browser,
+        "the step back",
+        "window.npHistory.count >= 1 && window.npHistory.animating === 0",
+    );
     assert_eq!(cells(&mut browser), shown, "one step back");
-    browser.eval("document.querySelectorAll('.np-live-history button')[1].click()");
-    wait_updates(&mut browser, 7);
+    browser.eval("document.querySelector('.nptreemap .np-history-ahead').click()");
+    wait_true(
+        &mut browser,
+        "the step ahead",
+        "window.npHistory.count >= 2 && window.npHistory.animating === 0",
+    );
     assert_eq!(cells(&mut browser), still, "back to the latest");
     assert_eq!(browser.eval("performance.timeOrigin"), origin, "no reload");
     assert_eq!(
