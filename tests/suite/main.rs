@@ -26,6 +26,7 @@ mod neighborhood;
 mod packaging;
 mod paper_data;
 mod picture_options;
+mod plain_method;
 mod random_hierarchies;
 mod render_fields;
 mod render_refs;
