@@ -36,5 +36,6 @@ mod sets;
 mod similarity_paths;
 mod single_dataset;
 mod tabs;
+mod threads;
 mod warm_start;
 mod watch;
