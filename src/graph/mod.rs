@@ -348,14 +348,9 @@ impl DatasetGraph {
                 let input = match planned.kind {
                     None => Prepared::Plain(Arc::clone(&dataset)),
                     Some(kind) => {
-                        let (prepared, constraints, fresh) = self.similar(
-                            Some(d),
-                            inputs,
-                            &dataset,
-                            (kind, planned.constraints),
-                            name,
-                            &mut stages,
-                        );
+                        let kind = (kind, planned.constraints);
+                        let (prepared, constraints, fresh) =
+                            self.similar(Some(d), inputs, &dataset, kind, name, &mut stages);
                         if let Some(key) = fresh {
                             pending.constraints =
                                 Some((key, Arc::clone(&prepared), Arc::clone(&constraints)));
