@@ -958,6 +958,8 @@ impl Config {
             previous: None,
             // So does a caller that shows progress (the command line).
             progress: None,
+            // `plain` computes no constraint in a build (issue 34).
+            realized: false,
         }
     }
 }

@@ -19,6 +19,11 @@ struct Cli {
     /// set, decides instead).
     #[arg(short, long, global = true, action = clap::ArgAction::Count)]
     verbose: u8,
+    /// Threads to use at most (default: NPTREEMAP_THREADS, else every core).
+    /// The outputs are the same bytes whatever the number.
+    #[arg(short = 'j', long = "jobs", global = true, value_name = "N",
+          value_parser = clap::value_parser!(u16).range(1..))]
+    jobs: Option<u16>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -100,6 +105,32 @@ fn command() -> clap::Command {
     })
 }
 
+/// Bounds the threads of every parallel loop (rayon's global pool) by `-j N`,
+/// else by `NPTREEMAP_THREADS` (for a background service), else leaves one
+/// per core. Every parallel loop collects in index order, so the number
+/// changes the time only, never the bytes (tests/suite/threads.rs).
+fn set_threads(jobs: Option<u16>) -> Result<(), String> {
+    let threads = match jobs {
+        Some(n) => usize::from(n),
+        None => match std::env::var("NPTREEMAP_THREADS") {
+            Ok(v) if !v.trim().is_empty() => match v.trim().parse::<usize>() {
+                Ok(n) if (1..=u16::MAX as usize).contains(&n) => n,
+                _ => {
+                    return Err(format!(
+                        "NPTREEMAP_THREADS={v:?}: expected a whole number from 1 to {}",
+                        u16::MAX
+                    ))
+                }
+            },
+            _ => return Ok(()),
+        },
+    };
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build_global()
+        .map_err(|e| format!("cannot start {threads} threads: {e}"))
+}
+
 /// Runs the command line on the process's arguments.
 pub fn main() -> ExitCode {
     let cli = Cli::from_arg_matches(&command().get_matches()).unwrap_or_else(|e| e.exit());
@@ -117,6 +148,10 @@ pub fn main() -> ExitCode {
         .with_writer(std::io::stderr)
         .with_ansi(colour())
         .init();
+    if let Err(message) = set_threads(cli.jobs) {
+        eprintln!("error: {message}");
+        return ExitCode::from(2);
+    }
     #[cfg(feature = "watch")]
     let stops_itself = matches!(cli.command, Command::Watch(_));
     #[cfg(not(feature = "watch"))]

@@ -29,11 +29,16 @@ pub(crate) struct BenchArgs {
     /// (median of `--repeat` runs each; the PNG time includes parsing the SVG).
     #[arg(long)]
     render: bool,
+    /// Compute the constraints and count the realised ones even for `--method
+    /// plain`, which otherwise computes none.
+    #[arg(long)]
+    realized: bool,
 }
 
 pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let job = args.options.job(args.method)?;
     let (dataset, mut request) = (&job.dataset, job.request.clone());
+    request.realized = args.realized;
     // Read even with --cold, for the stability figures.
     let previous = args.options.previous_layout()?;
     request.previous = crate::graph::start::given(previous.clone(), args.options.cold);

@@ -75,6 +75,12 @@ fn environment(roff: &mut Roff) {
     );
     entry(
         roff,
+        bold("NPTREEMAP_THREADS"),
+        "The most threads a command uses (a whole number from 1; -j N decides instead). \
+         Without either, one per core. The outputs are the same bytes whatever the number.",
+    );
+    entry(
+        roff,
         bold("NPTREEMAP_NO_CACHE"),
         "When set to anything but the empty string or 0, build, layout and eval reuse \
          nothing: no stage result, no state manifest, no constraint cache, no stored layout \

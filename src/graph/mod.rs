@@ -348,6 +348,7 @@ impl DatasetGraph {
                 let input = match planned.kind {
                     None => Prepared::Plain(Arc::clone(&dataset)),
                     Some(kind) => {
+                        let kind = (kind, planned.constraints);
                         let (prepared, constraints, fresh) =
                             self.similar(Some(d), inputs, &dataset, kind, name, &mut stages);
                         if let Some(key) = fresh {
@@ -575,14 +576,15 @@ impl DatasetGraph {
 
     /// Prepare and constraints for a similarity run: from memory when their
     /// keys match, the constraints else from the state folder's cache (for a
-    /// configured dataset `d`), else computed. The third value is the
+    /// configured dataset `d`), else computed; none when the plan needs none
+    /// (`needed` false: `plain`, issue 34). The third value is the
     /// constraints' key when they were computed (for the cache).
     fn similar(
         &mut self,
         d: Option<&DatasetConfig>,
         source: Fingerprint,
         dataset: &Dataset,
-        kind: SimilarityKind,
+        (kind, needed): (SimilarityKind, bool),
         name: &str,
         stages: &mut StageReport,
     ) -> (Arc<Dataset>, Arc<Vec<Constraint>>, Option<Fingerprint>) {
@@ -611,6 +613,10 @@ impl DatasetGraph {
             }
         };
         let t = Instant::now();
+        if !needed {
+            stages.record(name, Stage::Constraints, false, 0.0, "none needed (plain)");
+            return (prepared, Arc::new(Vec::new()), None);
+        }
         let key = keys::similarity(dataset, kind);
         if let Some((k, constraints)) = &self.constraints {
             if cache && *k == key {
@@ -660,6 +666,7 @@ impl DatasetGraph {
         })?;
         if let Some(kind) = planned.kind {
             let source = keys::dataset(dataset);
+            let kind = (kind, planned.constraints);
             self.similar(None, source, dataset, kind, &d.name, &mut StageReport::default());
         }
         Ok(())
@@ -684,6 +691,7 @@ impl DatasetGraph {
             None => Prepared::Plain(Arc::new(dataset.clone())),
             Some(kind) => {
                 let source = keys::dataset(dataset);
+                let kind = (kind, planned.constraints);
                 let (prepared, constraints, _) =
                     self.similar(None, source, dataset, kind, &d.name, stages);
                 Prepared::Similar(prepared, constraints.as_ref().clone())

@@ -111,6 +111,11 @@ pub struct Request {
     /// user's Ctrl-C). Reporting never changes the layout: with or without a
     /// callback the bytes are the same. `None`: no reports.
     pub progress: Option<ProgressSink>,
+    /// Compute the constraints, and so the realised flags, even for the
+    /// `plain` method, which never uses them (issue 34: `eval` and `bench
+    /// --realized` count what a plain treemap realises). Other methods always
+    /// compute them. Not a layout setting: the layout is the same either way.
+    pub realized: bool,
 }
 
 /// The settings of a request that shape the picture: everything but the
@@ -151,6 +156,10 @@ pub(crate) struct Plan {
     pub(crate) kind: Option<SimilarityKind>,
     /// The method, from the request or chosen by the similarity.
     pub(crate) method: Method,
+    /// Whether the run needs the constraints: a similarity-driven method, or
+    /// a realised count asked for ([`Request::realized`]). `plain` alone
+    /// computes none.
+    pub(crate) constraints: bool,
 }
 
 /// Checks the parameters and resolves the similarity and the method of a
@@ -171,7 +180,12 @@ pub(crate) fn plan(dataset: &Dataset, request: &Request) -> Result<Plan, LayoutE
             method: method.name(),
         });
     }
-    Ok(Plan { kind, method })
+    let constraints = kind.is_some() && (method != Method::Plain || request.realized);
+    Ok(Plan {
+        kind,
+        method,
+        constraints,
+    })
 }
 
 /// Runs the layout step.
@@ -181,7 +195,11 @@ pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutE
         None => Prepared::Plain(Arc::new(dataset.clone())),
         Some(kind) => {
             let prepared = prepare(dataset);
-            let constraints = build_constraints(&prepared, kind);
+            let constraints = if plan.constraints {
+                build_constraints(&prepared, kind)
+            } else {
+                Vec::new()
+            };
             Prepared::Similar(Arc::new(prepared), constraints)
         }
     };
@@ -194,7 +212,8 @@ pub(crate) enum Prepared {
     /// A plan without a similarity: the dataset as it is.
     Plain(Arc<Dataset>),
     /// A plan with a similarity: the prepared dataset ([`prepare`]) and its
-    /// constraints ([`build_constraints`] with the plan's similarity), which
+    /// constraints ([`build_constraints`] with the plan's similarity; none
+    /// when the plan needs none, [`Plan::constraints`]), which
     /// the caller may have kept from an earlier run on the same similarity
     /// inputs (the build's stage graph does).
     Similar(Arc<Dataset>, Vec<Constraint>),

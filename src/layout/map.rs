@@ -18,6 +18,14 @@ use crate::geom::{ConvexPolygon, Point};
 use crate::power::{power_diagram, PowerDiagram, Site};
 use crate::rng::Rng;
 
+/// Keeping every cell non-empty.
+mod repair;
+/// The Newton weight step and the weight-only settle.
+mod newton;
+
+/// Smallest share of the Newton step taken while the error oscillates.
+const MIN_DAMPING: f64 = 1.0 / 16.0;
+
 /// Stopping rules of one diagram.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MapSettings {
@@ -65,7 +73,43 @@ pub struct MapSimulation {
     /// out of the ratio, so a converged diagram is within the ratio of its
     /// real weights.
     slack: f64,
+    /// How the Lloyd ticks are doing (see [`STALL_TICKS`]).
+    progress: Progress,
 }
+
+/// Where [`MapSimulation::tick`] stands: Lloyd ticks while they bring the
+/// error down, then weight-only steps.
+#[derive(Clone, Copy, Debug)]
+struct Progress {
+    /// The error when the Lloyd ticks last made progress.
+    error: f64,
+    /// Lloyd ticks since then.
+    stalled: usize,
+    /// Set once they stalled: the remaining ticks move only weights.
+    settling: bool,
+}
+
+impl Progress {
+    const START: Progress = Progress {
+        error: f64::INFINITY,
+        stalled: 0,
+        settling: false,
+    };
+}
+
+/// Lloyd ticks past `min_iterations` that may pass without the error falling
+/// to [`STALL_PROGRESS`] of what it was before [`MapSimulation::tick`] gives
+/// up moving sites and settles the weights alone. A Lloyd move shifts every
+/// bisector, which a cell of 1:10⁵ of its neighbour's area cannot absorb:
+/// with half the weights zero (floored) and a heavy tail, the Lloyd ticks
+/// held the error near 1.6 for 50 ticks and ran to the cap (issue 34).
+/// Weight-only Newton steps with a line search (the semi-discrete optimal
+/// transport solve, Kitagawa, Mérigot and Thibert 2019) converge from any
+/// fixed, distinct sites; the Lloyd ticks before give the cells their shape.
+const STALL_TICKS: usize = 4;
+
+/// See [`STALL_TICKS`]: halving the error counts as progress.
+const STALL_PROGRESS: f64 = 0.5;
 
 /// A saved state of a [`MapSimulation`]: its sites and counters, not its
 /// diagram, which the sites determine ([`MapSimulation::restore`] recomputes
@@ -79,62 +123,10 @@ pub struct Checkpoint {
     ended: bool,
     rng: Rng,
     damping: f64,
+    progress: Progress,
 }
 
-/// Repair rounds per diagram evaluation. One round fixes every empty cell seen;
-/// more than a handful means pathological input, where the next tick goes on.
-const REPAIR_ROUNDS: usize = 4;
 
-/// Rounds of the quick repair (a dominated site's weight raised just below its
-/// dominator's) before empty cells get [`MapSimulation::restart_site`]. The
-/// quick fix is local but can cascade through chains of tiny cells beside huge
-/// ones (weights 1:85,000 in the Debian packages of `tests/data/real`).
-const QUICK_REPAIR_ROUNDS: usize = 2;
-
-/// Rounds of [`MapSimulation::restart_empty`].
-const RESTART_ROUNDS: usize = 3;
-
-/// Random points tried by [`MapSimulation::restart_site`] after the site's own
-/// position and its dominator's centroid.
-const RESTART_TRIES: usize = 8;
-
-/// A weight gap (upper minus lower bound, a squared length) wide enough to
-/// stop [`MapSimulation::restart_site`]'s search, as a share of the clip's area.
-const RESTART_MIN_GAP: f64 = 1e-9;
-
-/// A dominated site's weight is raised to leave this share of the squared site
-/// distance as margin, so the repaired site lies strictly inside its cell
-/// (d3-voronoi-map's `handleOverweighted` uses the full distance plus epsilon).
-const REPAIR_MARGIN: f64 = 0.9;
-
-/// [`MapSimulation::prevent_domination`] keeps `w_j − w_i` below this share of
-/// `d²`, so the bisector stays at least `(1 − margin)·d/2` from the site. A
-/// small cell next to a big one needs its bisector close to its site (a 1:10⁴
-/// area ratio needs about d/300), so the margin is thin; a wider one pinned
-/// small corner cells above their target area.
-const PREVENT_MARGIN: f64 = 0.999;
-
-/// Passes of [`MapSimulation::prevent_domination`]; raising one weight can make
-/// that site dominate another, which the next pass catches.
-const PREVENT_PASSES: usize = 3;
-
-/// Newton steps are shortened so no bisector moves by more than this share of
-/// its site distance: the linearisation is good for moderate moves, and a site
-/// is never overtaken by a neighbour's bisector in one step.
-const MAX_BISECTOR_SHIFT: f64 = 1.0;
-
-/// Halvings tried by the line search of [`MapSimulation::settle_weights`].
-const LINE_SEARCH_HALVINGS: usize = 12;
-
-/// Smallest share of the Newton step taken while the error oscillates.
-const MIN_DAMPING: f64 = 1.0 / 16.0;
-
-/// Conjugate-gradient stop: residual below this share of the right-hand side.
-/// The step is re-linearised next tick anyway, so a rough solve is enough.
-const CG_TOLERANCE: f64 = 1e-3;
-
-/// Conjugate-gradient iteration cap (a 2-D Laplacian of n cells needs about √n).
-const CG_MAX_ITER: usize = 200;
 
 impl MapSimulation {
     /// A simulation of `positions.len()` sites in `clip` with target areas
@@ -170,17 +162,41 @@ impl MapSimulation {
             rng,
             damping: 1.0,
             slack: 0.0,
+            progress: Progress::START,
         };
         sim.repair();
         sim.error = sim.area_error();
         sim
     }
 
-    /// One step: Lloyd move, diagram, Newton weight step, diagram.
+    /// One step: Lloyd move, diagram, Newton weight step, diagram; once the
+    /// Lloyd ticks stall ([`STALL_TICKS`]), a weight-only Newton step with a
+    /// line search instead.
     pub fn tick(&mut self) {
         if self.ended {
             return;
         }
+        if self.progress.settling {
+            if !self.settle_step() {
+                // No weight step helps at these sites: move them once.
+                self.move_to_centroids();
+                self.recompute();
+                self.error = self.area_error();
+            }
+            self.iteration += 1;
+        } else {
+            self.lloyd_newton_tick();
+        }
+        let converged =
+            self.error <= self.area_target() && self.iteration >= self.settings.min_iterations;
+        if converged || self.iteration >= self.settings.max_iterations {
+            self.ended = true;
+        }
+    }
+
+    /// [`Self::tick`]'s Lloyd tick, with its flicker damping and the watch
+    /// for a stall.
+    fn lloyd_newton_tick(&mut self) {
         self.move_to_centroids();
         self.recompute();
         self.newton_weights();
@@ -198,10 +214,16 @@ impl MapSimulation {
         } else {
             (self.damping * 2.0).min(1.0)
         };
-        let converged =
-            self.error <= self.area_target() && self.iteration >= self.settings.min_iterations;
-        if converged || self.iteration >= self.settings.max_iterations {
-            self.ended = true;
+        if self.iteration < self.settings.min_iterations || self.error <= self.area_target() {
+            return;
+        }
+        let p = &mut self.progress;
+        if self.error <= STALL_PROGRESS * p.error {
+            p.error = self.error;
+            p.stalled = 0;
+        } else {
+            p.stalled += 1;
+            p.settling = p.stalled >= STALL_TICKS;
         }
     }
 
@@ -295,29 +317,6 @@ impl MapSimulation {
             .count()
     }
 
-    /// Gives every site with an empty cell a new start (`restart_site`)
-    /// and recomputes the diagram, a few rounds at most; returns how many
-    /// sites were restarted. For the end of an optimisation, where a cell left
-    /// empty would make the layout fail.
-    pub fn restart_empty(&mut self) -> usize {
-        let mut restarted = 0;
-        for _ in 0..RESTART_ROUNDS {
-            let empty: Vec<usize> = (0..self.sites.len())
-                .filter(|&i| self.diagram.cells[i].polygon.is_none())
-                .collect();
-            if empty.is_empty() {
-                break;
-            }
-            for &i in &empty {
-                self.restart_site(i);
-            }
-            restarted += empty.len();
-            self.diagram = power_diagram(&self.sites, &self.clip);
-        }
-        self.error = self.area_error();
-        restarted
-    }
-
     /// One step of the paper prototype's schedule (method-reference §5.9), for
     /// the `prototype` switch: the caller's positions, then either the weights
     /// reset to `reset_to` (before the growth phase) or d3-voronoi-map's
@@ -348,41 +347,6 @@ impl MapSimulation {
         self.error = self.area_error();
     }
 
-    /// One step that moves only weights (sites stay put): the final settling
-    /// of a layout whose site arrangement carries meaning, such as realised
-    /// neighbourhoods. Returns the new area error.
-    pub fn settle_weights(&mut self) -> f64 {
-        // No `prevent_domination` here: with sites fixed, the weights that give
-        // the target areas may leave a site outside its own cell, and forcing it
-        // back in stalls the solve. Instead of the step cap, whose worst pair
-        // can stall fixed sites, the full Newton step is tried and halved until
-        // the area error drops (backtracking line search).
-        self.iteration += 1;
-        let Some((x, _)) = self.newton_direction() else {
-            return self.error;
-        };
-        let base: Vec<f64> = self.sites.iter().map(|s| s.weight).collect();
-        let mut alpha = 1.0;
-        for _ in 0..LINE_SEARCH_HALVINGS {
-            for ((site, w), dx) in self.sites.iter_mut().zip(&base).zip(&x) {
-                site.weight = w + alpha * dx;
-            }
-            let diagram = power_diagram(&self.sites, &self.clip);
-            let empty = diagram.cells.iter().any(|c| c.polygon.is_none());
-            let error = area_error_of(&diagram, &self.targets, self.clip_area);
-            if !empty && error < self.error {
-                self.diagram = diagram;
-                self.error = error;
-                return error;
-            }
-            alpha *= 0.5;
-        }
-        // No step helped: keep the previous weights and diagram.
-        for (site, w) in self.sites.iter_mut().zip(&base) {
-            site.weight = *w;
-        }
-        self.error
-    }
 
     /// Exchanges the sites (position and weight) of each pair of cells, and so
     /// their cells: node `a` takes over `b`'s place and vice versa (the swaps
@@ -422,6 +386,7 @@ impl MapSimulation {
             ended: self.ended,
             rng: self.rng.clone(),
             damping: self.damping,
+            progress: self.progress,
         }
     }
 
@@ -436,6 +401,7 @@ impl MapSimulation {
         self.ended = saved.ended;
         self.rng = saved.rng.clone();
         self.damping = saved.damping;
+        self.progress = saved.progress;
         self.diagram = power_diagram(&self.sites, &self.clip);
     }
 
@@ -509,40 +475,6 @@ impl MapSimulation {
         self.repair();
     }
 
-    /// Before a new diagram: raise the weight of any site that a neighbour or
-    /// its dominator in the previous diagram would swallow at the current
-    /// positions. A cheap local version of d3-voronoi-map's all-pairs
-    /// `handleOverweighted` (O(n²)); what it misses, [`Self::repair`] catches.
-    fn prevent_domination(&mut self) {
-        for _ in 0..PREVENT_PASSES {
-            let mut changed = false;
-            for i in 0..self.sites.len() {
-                let cell = &self.diagram.cells[i];
-                let others = cell
-                    .neighbors
-                    .iter()
-                    .map(|nb| nb.site)
-                    .chain(cell.dominated_by);
-                for j in others {
-                    let d2 = self.sites[i]
-                        .position
-                        .distance_squared(self.sites[j].position);
-                    let floor = self.sites[j].weight - PREVENT_MARGIN * d2;
-                    if self.sites[i].weight < floor {
-                        self.sites[i].weight = floor;
-                        changed = true;
-                    }
-                }
-            }
-            if !changed {
-                return;
-            }
-        }
-    }
-
-    fn area_error(&self) -> f64 {
-        area_error_of(&self.diagram, &self.targets, self.clip_area)
-    }
 
     /// Lloyd step. A site whose cell is empty cannot move to a centroid; one that
     /// is dominated is repaired through its weight, and any other (a site on top
@@ -557,266 +489,8 @@ impl MapSimulation {
         }
     }
 
-    /// Gives every site a non-empty cell, recomputing the diagram while any cell
-    /// is empty: a dominated site's weight is raised to just below the level at
-    /// which its dominator swallows it; an empty cell that is not dominated
-    /// (coincident sites) gets a fresh random position. Sites that are dominated
-    /// but still have a cell are left to [`Self::prevent_domination`] before the
-    /// next diagram: fixing them here cascades (a raised site dominates the
-    /// next), costing a full diagram per round.
-    fn repair(&mut self) {
-        for round in 0..REPAIR_ROUNDS {
-            let mut changed = false;
-            for i in 0..self.sites.len() {
-                let cell = &self.diagram.cells[i];
-                if cell.polygon.is_some() {
-                    continue;
-                }
-                if round >= QUICK_REPAIR_ROUNDS {
-                    // The quick fix cascades (a raised site swallows the
-                    // next); give what is still empty a start that provably
-                    // has a cell.
-                    self.restart_site(i);
-                    changed = true;
-                    continue;
-                }
-                let dominator = cell.dominated_by.map(|j| {
-                    let d2 = self.sites[i]
-                        .position
-                        .distance_squared(self.sites[j].position);
-                    (j, d2)
-                });
-                match dominator {
-                    // A dominator on the very same spot (coincident sites) cannot
-                    // be escaped through weights.
-                    Some((j, d2)) if d2 > 0.0 => {
-                        self.sites[i].weight = self.sites[j].weight - REPAIR_MARGIN * d2;
-                    }
-                    _ => {
-                        self.sites[i].position =
-                            self.clip.sample(self.rng.next_f64(), self.rng.next_f64());
-                    }
-                }
-                changed = true;
-            }
-            if !changed {
-                return;
-            }
-            self.diagram = power_diagram(&self.sites, &self.clip);
-        }
-    }
-
-    /// Gives site `i` a weight, and if need be a position, at which it owns a
-    /// cell without swallowing any other site. At a point `p`, site `i` holds
-    /// `p` against every other site `k` when `w_i > max_k (w_k − |p − p_k|²)`
-    /// (the lower bound `lo`) and takes no other site's own point when `w_i <
-    /// min_k (w_k + |p − p_k|²)` (the upper bound `hi`). The site stays where
-    /// it is when the bounds leave room there; else it moves to the first of
-    /// its dominator's centroid and a few seeded random points where they do
-    /// (the widest gap if none is wide). O(n) per site, and only for sites
-    /// whose cell the quick repair could not keep.
-    fn restart_site(&mut self, i: usize) {
-        let bounds = |sites: &[Site], p: Point| -> (f64, f64) {
-            let mut lo = f64::NEG_INFINITY;
-            let mut hi = f64::INFINITY;
-            for (k, s) in sites.iter().enumerate() {
-                if k == i || !(s.weight.is_finite() && s.position.is_finite()) {
-                    continue;
-                }
-                let d2 = p.distance_squared(s.position);
-                lo = lo.max(s.weight - d2);
-                hi = hi.min(s.weight + d2);
-            }
-            (lo, hi)
-        };
-        let wide = RESTART_MIN_GAP * self.clip_area;
-        let mut candidates = Vec::with_capacity(2);
-        let here = self.sites[i].position;
-        if here.is_finite() && self.clip.contains(here) {
-            candidates.push(here);
-        }
-        if let Some(j) = self.diagram.cells[i].dominated_by {
-            if self.diagram.cells[j].polygon.is_some() {
-                candidates.push(self.diagram.cells[j].centroid);
-            }
-        }
-        let mut best: Option<(f64, Point, f64)> = None;
-        for k in 0..candidates.len() + RESTART_TRIES {
-            let p = match candidates.get(k) {
-                Some(p) => *p,
-                None => self.clip.sample(self.rng.next_f64(), self.rng.next_f64()),
-            };
-            let (lo, hi) = bounds(&self.sites, p);
-            // Infinite when there is no other site: any weight will do.
-            let gap = hi - lo;
-            if best.is_none_or(|b| gap > b.0) {
-                best = Some((gap, p, lo));
-            }
-            if gap > wide {
-                break;
-            }
-        }
-        let Some((gap, p, lo)) = best else {
-            return;
-        };
-        // Above the lower bound by what a free disc of the target area needs
-        // (|x − p|² < w_i − lo), and never past half the gap.
-        let weight = if gap.is_infinite() {
-            0.0
-        } else {
-            lo + (self.targets[i] / std::f64::consts::PI).min(0.5 * gap.max(0.0))
-        };
-        self.sites[i] = Site {
-            position: p,
-            weight,
-        };
-    }
-
-    /// Newton step on the power weights: solve `L Δw = A* − A` where `L` is the
-    /// Laplacian with edge conductances `l_ij / (2 d_ij)`.
-    fn newton_weights(&mut self) {
-        if let Some((x, alpha)) = self.newton_direction() {
-            for (site, dx) in self.sites.iter_mut().zip(&x) {
-                site.weight += alpha * dx;
-            }
-        }
-    }
-
-    /// The Newton step on the weights and the capped step length (see
-    /// `MAX_BISECTOR_SHIFT` and the flicker damping); `None` when there is
-    /// nothing to solve.
-    fn newton_direction(&self) -> Option<(Vec<f64>, f64)> {
-        let n = self.sites.len();
-        if n < 2 {
-            return None;
-        }
-        // Conductances in compressed rows.
-        let mut start = Vec::with_capacity(n + 1);
-        let mut cols = Vec::new();
-        let mut vals = Vec::new();
-        let mut diag = vec![0.0; n];
-        for (i, cell) in self.diagram.cells.iter().enumerate() {
-            start.push(cols.len());
-            for nb in &cell.neighbors {
-                let d = self.sites[i]
-                    .position
-                    .distance(self.sites[nb.site].position);
-                let l = nb.edge[0].distance(nb.edge[1]);
-                if d > 0.0 && l > 0.0 {
-                    let c = l / (2.0 * d);
-                    cols.push(nb.site);
-                    vals.push(c);
-                    diag[i] += c;
-                }
-            }
-        }
-        start.push(cols.len());
-        let active: Vec<bool> = diag.iter().map(|d| *d > 0.0).collect();
-        let mut b: Vec<f64> = (0..n)
-            .map(|i| {
-                if active[i] {
-                    self.targets[i] - self.diagram.cells[i].area
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        // The Laplacian is singular (adding a constant to every weight changes
-        // nothing); a consistent right-hand side sums to zero.
-        let count = active.iter().filter(|a| **a).count();
-        if count < 2 {
-            return None;
-        }
-        let mean = b.iter().sum::<f64>() / count as f64;
-        for (bi, a) in b.iter_mut().zip(&active) {
-            if *a {
-                *bi -= mean;
-            }
-        }
-        let apply = |x: &[f64], out: &mut [f64]| {
-            for i in 0..n {
-                let mut s = diag[i] * x[i];
-                for k in start[i]..start[i + 1] {
-                    s -= vals[k] * x[cols[k]];
-                }
-                out[i] = s;
-            }
-        };
-        let x = conjugate_gradient(&b, &diag, apply);
-        // Shorten the step so no bisector moves too far (see MAX_BISECTOR_SHIFT).
-        let mut alpha: f64 = self.damping;
-        for i in 0..n {
-            for &j in &cols[start[i]..start[i + 1]] {
-                let dw = (x[i] - x[j]).abs();
-                if dw > 0.0 {
-                    let d2 = self.sites[i]
-                        .position
-                        .distance_squared(self.sites[j].position);
-                    alpha = alpha.min(2.0 * MAX_BISECTOR_SHIFT * d2 / dw);
-                }
-            }
-        }
-        Some((x, alpha))
-    }
 }
 
-/// Σ|A − A*| / A(clip) of a diagram.
-fn area_error_of(diagram: &PowerDiagram, targets: &[f64], clip_area: f64) -> f64 {
-    let sum: f64 = diagram
-        .cells
-        .iter()
-        .zip(targets)
-        .map(|(c, t)| (c.area - t).abs())
-        .sum();
-    sum / clip_area
-}
-
-/// Jacobi-preconditioned conjugate gradients for `L x = b` with `L` symmetric
-/// positive semi-definite and `b` in its range. Rows with a zero diagonal are
-/// left at 0.
-fn conjugate_gradient(b: &[f64], diag: &[f64], apply: impl Fn(&[f64], &mut [f64])) -> Vec<f64> {
-    let n = b.len();
-    let inv: Vec<f64> = diag
-        .iter()
-        .map(|d| if *d > 0.0 { 1.0 / d } else { 0.0 })
-        .collect();
-    let dot = |a: &[f64], c: &[f64]| a.iter().zip(c).map(|(x, y)| x * y).sum::<f64>();
-    let mut x = vec![0.0; n];
-    let mut r = b.to_vec();
-    let b_norm = dot(b, b).sqrt();
-    if b_norm == 0.0 {
-        return x;
-    }
-    let mut z: Vec<f64> = r.iter().zip(&inv).map(|(r, m)| r * m).collect();
-    let mut p = z.clone();
-    let mut rz = dot(&r, &z);
-    let mut ap = vec![0.0; n];
-    for _ in 0..CG_MAX_ITER {
-        apply(&p, &mut ap);
-        let pap = dot(&p, &ap);
-        if pap.is_nan() || pap <= 0.0 {
-            break;
-        }
-        let a = rz / pap;
-        for i in 0..n {
-            x[i] += a * p[i];
-            r[i] -= a * ap[i];
-        }
-        if dot(&r, &r).sqrt() <= CG_TOLERANCE * b_norm {
-            break;
-        }
-        for i in 0..n {
-            z[i] = r[i] * inv[i];
-        }
-        let rz_new = dot(&r, &z);
-        let beta = rz_new / rz;
-        rz = rz_new;
-        for i in 0..n {
-            p[i] = z[i] + beta * p[i];
-        }
-    }
-    x
-}
 
 #[cfg(test)]
 mod tests {
@@ -827,24 +501,6 @@ mod tests {
             convergence_ratio: 1e-4,
             max_iterations: 100,
             min_iterations: 3,
-        }
-    }
-
-    #[test]
-    fn conjugate_gradient_solves_a_path_laplacian() {
-        // Path 0 - 1 - 2 with unit conductances; b sums to zero.
-        let diag = [1.0, 2.0, 1.0];
-        let apply = |x: &[f64], out: &mut [f64]| {
-            out[0] = x[0] - x[1];
-            out[1] = 2.0 * x[1] - x[0] - x[2];
-            out[2] = x[2] - x[1];
-        };
-        let b = [1.0, 0.0, -1.0];
-        let x = conjugate_gradient(&b, &diag, apply);
-        let mut lx = [0.0; 3];
-        apply(&x, &mut lx);
-        for (l, b) in lx.iter().zip(b) {
-            assert!((l - b).abs() < 1e-9, "{lx:?}");
         }
     }
 
