@@ -414,9 +414,14 @@ pub struct DatasetConfig {
     #[serde(skip)]
     pub base: PathBuf,
     /// The config's `state_dir:` (resolved): where this dataset's stored
-    /// layout lives instead of beside its first output. Not a dataset key.
+    /// layout lives instead of beside its outputs. Not a dataset key.
     #[serde(skip)]
     pub state_dir: Option<PathBuf>,
+    /// The name of the config file it was read from, without its extension
+    /// (`site` for `site.yaml`; `None` for a config not read from a file):
+    /// part of its state files' names (`crate::state::key`). Not a dataset key.
+    #[serde(skip)]
+    pub config_stem: Option<String>,
 }
 
 /// A dataset's `page:` section: its own columns in the HTML page (issue 24
@@ -879,10 +884,16 @@ impl Config {
             message: strip_path(&e.to_string(), path),
         })?;
         let base = path.parent().unwrap_or(Path::new("."));
-        Config::from_str(&text, base).map_err(|e| ConfigFileError {
+        let mut config = Config::from_str(&text, base).map_err(|e| ConfigFileError {
             path: path.to_path_buf(),
             message: e.to_string(),
-        })
+        })?;
+        // As the user names it (a link's name, not its target's).
+        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
+        for d in &mut config.datasets {
+            d.config_stem.clone_from(&stem);
+        }
+        Ok(config)
     }
 
     /// The layout parameters of the `layout` section.
@@ -984,6 +995,7 @@ impl DatasetConfig {
             max_adapter_mb: Limits::default().max_file_mb,
             base: PathBuf::new(),
             state_dir: None,
+            config_stem: None,
         }
     }
 }
@@ -1068,6 +1080,7 @@ mod tests {
             max_adapter_mb: 0,
             base: PathBuf::new(),
             state_dir: None,
+            config_stem: None,
         };
         assert_eq!(c.style(&d), Style::default());
         assert_eq!(c.params(), Params::default());

@@ -135,7 +135,7 @@ struct Facets<'a> {
     render: Render<'a>,
     /// Where its state lives: render again (the commit writes the state to
     /// its new place).
-    state: &'a Option<PathBuf>,
+    state: (&'a Option<PathBuf>, &'a Option<String>),
 }
 
 /// [`Facets::read`].
@@ -187,12 +187,13 @@ fn facets<'a>(config: &'a Config, d: &'a DatasetConfig) -> Facets<'a> {
         max_adapter_mb,
         base,
         state_dir,
+        config_stem,
     } = d;
     Facets {
         read: (format, files, fields, command, timeout, *max_adapter_mb, base),
         layout: (layout, similarity),
         render: (render, title, page, outputs, *history),
-        state: state_dir,
+        state: (state_dir, config_stem),
     }
 }
 

@@ -34,6 +34,7 @@ mod serve;
 mod sets;
 mod similarity_paths;
 mod single_dataset;
+mod state_place;
 mod tabs;
 mod warm_start;
 mod watch;
