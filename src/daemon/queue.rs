@@ -100,6 +100,11 @@ impl Queue {
         self.waiting.insert(name.to_string(), next);
     }
 
+    /// Whether no rebuild waits (retries not due yet aside).
+    pub fn is_empty(&self) -> bool {
+        self.waiting.is_empty()
+    }
+
     /// Drops everything of `name` (it left the config).
     pub fn forget(&mut self, name: &str) {
         self.waiting.remove(name);

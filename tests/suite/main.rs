@@ -38,3 +38,4 @@ mod state_place;
 mod tabs;
 mod warm_start;
 mod watch;
+mod watch_stale;

@@ -94,7 +94,11 @@ fn reordering_the_outputs_keeps_the_state() {
     assert_eq!(code, Some(0), "{text}");
     let text = build(&config);
     assert!(text.contains("countries: up to date"), "{text}");
-    assert_eq!(read(&dir.join("out/countries.svg")), svg, "the picture was redrawn");
+    assert_eq!(
+        read(&dir.join("out/countries.svg")),
+        svg,
+        "the picture was redrawn"
+    );
 }
 
 /// Issue 30 item 9: two configs in one folder whose datasets share a name
@@ -120,7 +124,11 @@ fn two_configs_sharing_an_output_folder_keep_their_own_state() {
     let svg = read(&dir.join("out/a.svg"));
     build(&b);
     let (code, text) = run(&["build", "--check"], &a);
-    assert_eq!(code, Some(0), "b.yaml's build made a.yaml's outputs stale: {text}");
+    assert_eq!(
+        code,
+        Some(0),
+        "b.yaml's build made a.yaml's outputs stale: {text}"
+    );
     let text = build(&a);
     assert!(text.contains("countries: up to date"), "{text}");
     assert_eq!(read(&dir.join("out/a.svg")), svg);
