@@ -33,7 +33,7 @@ pub struct Config {
     /// every dataset; each dataset's readers get them as `fields.limits`.
     pub limits: Limits,
     /// Where the stored layouts live (`state_dir:`, resolved), or `None` for
-    /// the default, a `.nptreemap/` folder beside each dataset's first output.
+    /// the default, a `.nptreemap/` folder beside each dataset's outputs (`crate::state::dir`).
     pub state_dir: Option<PathBuf>,
     /// How many past layouts of a `watch --serve` session a served page keeps
     /// to step back through (`history:`); 0 keeps none.

@@ -23,7 +23,6 @@ use crate::layout::{LayoutError, ProgressSink, Request};
 use crate::measure::stability::{stability, Stability};
 use crate::pipeline::{self, BuildError, Rendered, Written};
 use crate::render::Style;
-use crate::state::manifest;
 use crate::workspace;
 
 use super::change::Reason;
@@ -249,7 +248,7 @@ fn job_key(job: &Job, files: &[pipeline::InputFile]) -> Fingerprint {
     } = job;
     Fingerprinter::new("job")
         .fingerprint(graph::keys::inputs(dataset, files))
-        .fingerprint(manifest::settings_key(&request.settings()))
+        .debug(&request.settings())
         .debug(style)
         .debug(dataset)
         .u64(*history as u64)

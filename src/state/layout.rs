@@ -9,7 +9,7 @@
 
 use std::sync::Arc;
 
-use super::{manifest, StateFile};
+use super::{manifest, StateKind};
 use crate::config::DatasetConfig;
 use crate::fingerprint::Fingerprint;
 use crate::layout::{Computed, Previous};
@@ -45,7 +45,7 @@ pub fn read(d: &DatasetConfig) -> StoredLayout {
         )),
         ..StoredLayout::default()
     };
-    let found = match super::read(d, StateFile::Layout) {
+    let found = match super::read(d, StateKind::Layout) {
         Ok(Some(found)) => found,
         Ok(None) => return StoredLayout::default(),
         Err(e) => return unusable(e.path(), e.to_string()),

@@ -18,7 +18,7 @@ use crate::fingerprint::{Fingerprint, Fingerprinter};
 use crate::layout::LayoutSettings;
 use crate::store;
 
-use super::StateFile;
+use super::StateKind;
 
 /// The value of the manifest's `format` field.
 pub const FORMAT: &str = "nptreemap-state/1";
@@ -101,7 +101,7 @@ pub fn settings_key(settings: &LayoutSettings) -> Fingerprint {
 
 /// Reads a dataset's manifest; empty when there is none or it cannot be used.
 pub fn read(d: &DatasetConfig) -> Manifest {
-    let found = match super::read(d, StateFile::Manifest) {
+    let found = match super::read(d, StateKind::Manifest) {
         Ok(Some(found)) => found,
         Ok(None) => return Manifest::default(),
         Err(e) => {

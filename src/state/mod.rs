@@ -1,6 +1,10 @@
 //! The state folder: what a build keeps between runs, where, and in which
-//! files. Per dataset, in `<first output's folder>/.nptreemap/` (or the
-//! config's `state_dir:`):
+//! files. Per dataset, in `.nptreemap/` beside its outputs, in the output
+//! folder whose path sorts first ([`dir`]; or the config's `state_dir:`),
+//! each file named after the config and the dataset ([`key`]; the dataset
+//! alone for `nptreemap.yaml`). What an older version left (plain names,
+//! beside the first output) is read while these are missing
+//! ([`older_paths`]).
 //!
 //! - `<name>.layout.json`, the stored layout ([`layout`]): the last layout
 //!   in full precision with the fingerprint of the layout settings it was
@@ -61,9 +65,9 @@ fn output_folder(path: &Path) -> &Path {
     path.parent().unwrap_or(Path::new("."))
 }
 
-/// A file of a dataset's state.
+/// A kind of file of a dataset's state.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum StateFile {
+pub enum StateKind {
     /// The stored layout ([`layout`]).
     Layout,
     /// The manifest ([`manifest`]).
@@ -72,13 +76,13 @@ pub enum StateFile {
     Constraints,
 }
 
-impl StateFile {
+impl StateKind {
     /// The end of its name, after the dataset's key.
     fn suffix(self) -> &'static str {
         match self {
-            StateFile::Layout => "layout.json",
-            StateFile::Manifest => "manifest.json",
-            StateFile::Constraints => "constraints.bin",
+            StateKind::Layout => "layout.json",
+            StateKind::Manifest => "manifest.json",
+            StateKind::Constraints => "constraints.bin",
         }
     }
 
@@ -86,30 +90,30 @@ impl StateFile {
     fn in_dir(self, dir: &Path, key: &str) -> PathBuf {
         let name = format!("{key}.{}", self.suffix());
         match self {
-            StateFile::Constraints => dir.join(CACHE).join(name),
+            StateKind::Constraints => dir.join(CACHE).join(name),
             _ => dir.join(name),
         }
     }
 }
 
 /// Where this version keeps a state file of `d`.
-pub fn path(d: &DatasetConfig, file: StateFile) -> Option<PathBuf> {
+pub fn path(d: &DatasetConfig, file: StateKind) -> Option<PathBuf> {
     Some(file.in_dir(&dir(d)?, &key(d)))
 }
 
 /// The stored layout's path (see [`layout`]).
 pub fn layout_path(d: &DatasetConfig) -> Option<PathBuf> {
-    path(d, StateFile::Layout)
+    path(d, StateKind::Layout)
 }
 
 /// The manifest's path (see [`manifest`]).
 pub fn manifest_path(d: &DatasetConfig) -> Option<PathBuf> {
-    path(d, StateFile::Manifest)
+    path(d, StateKind::Manifest)
 }
 
 /// The constraint cache's path (see [`constraints`]).
 pub fn constraints_path(d: &DatasetConfig) -> Option<PathBuf> {
-    path(d, StateFile::Constraints)
+    path(d, StateKind::Constraints)
 }
 
 /// Where an older version may have left a state file of `d`, most likely
@@ -119,7 +123,7 @@ pub fn constraints_path(d: &DatasetConfig) -> Option<PathBuf> {
 /// first output), under either name. Read only while the file is missing
 /// where this version keeps it; the next commit writes it there. The
 /// constraint cache, local only, is not looked for.
-pub fn older_paths(d: &DatasetConfig, file: StateFile) -> Vec<PathBuf> {
+pub fn older_paths(d: &DatasetConfig, file: StateKind) -> Vec<PathBuf> {
     let Some(here) = dir(d) else {
         return Vec::new();
     };
@@ -165,7 +169,7 @@ pub struct Found {
 /// keeps it, else, while that is missing, the first of [`older_paths`] that
 /// is there. `Ok(None)` when there is none; the error when one is there but
 /// cannot be read.
-pub fn read(d: &DatasetConfig, file: StateFile) -> Result<Option<Found>, FileError> {
+pub fn read(d: &DatasetConfig, file: StateKind) -> Result<Option<Found>, FileError> {
     let Some(primary) = path(d, file) else {
         return Ok(None);
     };
@@ -296,7 +300,7 @@ mod tests {
         assert_eq!(dir(&d), dir(&reversed));
         // Where an older version kept it (beside the first output) is looked at.
         assert_eq!(
-            older_paths(&d, StateFile::Layout),
+            older_paths(&d, StateKind::Layout),
             [PathBuf::from("/w/out/.nptreemap/c.layout.json")]
         );
     }
@@ -313,7 +317,7 @@ mod tests {
         );
         assert_eq!(key(&dataset(TWO_FOLDERS, Some("nptreemap"))), "c");
         assert_eq!(
-            older_paths(&d, StateFile::Manifest),
+            older_paths(&d, StateKind::Manifest),
             [
                 "/w/json/.nptreemap/c.manifest.json",
                 "/w/out/.nptreemap/site.c.manifest.json",
