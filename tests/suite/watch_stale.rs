@@ -152,6 +152,30 @@ fn page_and_history_edits_reach_the_page() {
     assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
 }
 
+/// Issue 30 item 7, for `build --check`: the manifest records each
+/// output's render key, which covers the page settings, so a `page:` edit
+/// makes the page stale (and only it) until it is built.
+#[test]
+fn build_check_sees_page_edits() {
+    let dir = support::temp_dir("check_page_edits");
+    std::fs::create_dir_all(dir.join("data")).expect("data");
+    std::fs::write(dir.join("data/nodes.csv"), nodes_csv(&initial_leaves())).expect("nodes");
+    std::fs::write(dir.join("data/pairs.csv"), pairs_csv()).expect("pairs");
+    let config = dir.join("nptreemap.yaml");
+    std::fs::write(&config, grid_config("", "link: name")).expect("config");
+    let (code, out) = run(&["build"], &config);
+    assert_eq!(code, Some(0), "{out}");
+    std::fs::write(&config, grid_config("", "link: name, link_target: same-tab")).expect("config");
+    let (code, out) = run(&["build", "--check"], &config);
+    assert_eq!(code, Some(1), "{out}");
+    let stale: Vec<&str> = out.lines().filter(|l| l.starts_with("stale ")).collect();
+    assert_eq!(stale, [format!("stale {}", dir.join("out/grid.html").display())], "{out}");
+    let (code, out) = run(&["build"], &config);
+    assert_eq!(code, Some(0), "{out}");
+    let (code, out) = run(&["build", "--check"], &config);
+    assert_eq!(code, Some(0), "{out}");
+}
+
 /// A seeded SplitMix64: the sequence of edits is a function of the seed.
 struct Rng(u64);
 
