@@ -165,11 +165,19 @@ fn build_check_sees_page_edits() {
     std::fs::write(&config, grid_config("", "link: name")).expect("config");
     let (code, out) = run(&["build"], &config);
     assert_eq!(code, Some(0), "{out}");
-    std::fs::write(&config, grid_config("", "link: name, link_target: same-tab")).expect("config");
+    std::fs::write(
+        &config,
+        grid_config("", "link: name, link_target: same-tab"),
+    )
+    .expect("config");
     let (code, out) = run(&["build", "--check"], &config);
     assert_eq!(code, Some(1), "{out}");
     let stale: Vec<&str> = out.lines().filter(|l| l.starts_with("stale ")).collect();
-    assert_eq!(stale, [format!("stale {}", dir.join("out/grid.html").display())], "{out}");
+    assert_eq!(
+        stale,
+        [format!("stale {}", dir.join("out/grid.html").display())],
+        "{out}"
+    );
     let (code, out) = run(&["build"], &config);
     assert_eq!(code, Some(0), "{out}");
     let (code, out) = run(&["build", "--check"], &config);
