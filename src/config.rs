@@ -33,7 +33,7 @@ pub struct Config {
     /// every dataset; each dataset's readers get them as `fields.limits`.
     pub limits: Limits,
     /// Where the stored layouts live (`state_dir:`, resolved), or `None` for
-    /// the default, a `.nptreemap/` folder beside each dataset's first output.
+    /// the default, a `.nptreemap/` folder beside each dataset's outputs (`crate::state::dir`).
     pub state_dir: Option<PathBuf>,
     /// How many past layouts of a `watch --serve` session a served page keeps
     /// to step back through (`history:`); 0 keeps none.
@@ -414,9 +414,14 @@ pub struct DatasetConfig {
     #[serde(skip)]
     pub base: PathBuf,
     /// The config's `state_dir:` (resolved): where this dataset's stored
-    /// layout lives instead of beside its first output. Not a dataset key.
+    /// layout lives instead of beside its outputs. Not a dataset key.
     #[serde(skip)]
     pub state_dir: Option<PathBuf>,
+    /// The name of the config file it was read from, without its extension
+    /// (`site` for `site.yaml`; `None` for a config not read from a file):
+    /// part of its state files' names (`crate::state::key`). Not a dataset key.
+    #[serde(skip)]
+    pub config_stem: Option<String>,
 }
 
 /// A dataset's `page:` section: its own columns in the HTML page (issue 24
@@ -879,10 +884,16 @@ impl Config {
             message: strip_path(&e.to_string(), path),
         })?;
         let base = path.parent().unwrap_or(Path::new("."));
-        Config::from_str(&text, base).map_err(|e| ConfigFileError {
+        let mut config = Config::from_str(&text, base).map_err(|e| ConfigFileError {
             path: path.to_path_buf(),
             message: e.to_string(),
-        })
+        })?;
+        // As the user names it (a link's name, not its target's).
+        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
+        for d in &mut config.datasets {
+            d.config_stem.clone_from(&stem);
+        }
+        Ok(config)
     }
 
     /// The layout parameters of the `layout` section.
@@ -986,6 +997,7 @@ impl DatasetConfig {
             max_adapter_mb: Limits::default().max_file_mb,
             base: PathBuf::new(),
             state_dir: None,
+            config_stem: None,
         }
     }
 }
@@ -1070,6 +1082,7 @@ mod tests {
             max_adapter_mb: 0,
             base: PathBuf::new(),
             state_dir: None,
+            config_stem: None,
         };
         assert_eq!(c.style(&d), Style::default());
         assert_eq!(c.params(), Params::default());

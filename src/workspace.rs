@@ -60,6 +60,19 @@ pub enum FileError {
     },
 }
 
+impl FileError {
+    /// The file it is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            FileError::Read { path, .. }
+            | FileError::NotRegular { path, .. }
+            | FileError::TooLarge { path, .. }
+            | FileError::Parse { path, .. }
+            | FileError::Text { path, .. } => path,
+        }
+    }
+}
+
 /// What a file type is when it is not a regular file, in words; `None` for a
 /// regular file.
 pub fn special_kind(file_type: std::fs::FileType) -> Option<&'static str> {

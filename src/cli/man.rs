@@ -101,9 +101,12 @@ fn files(roff: &mut Roff) {
     entry(
         roff,
         italic("OUTPUT_FOLDER/.nptreemap/DATASET.layout.json"),
-        "The last layout of each dataset, beside its first output (or in the folder the \
-         config's state_dir names), with the fingerprint of its layout settings: the warm \
-         start of the next build or watch. Deleting it costs only a cold start.",
+        "The last layout of each dataset, beside its outputs (in the output folder whose \
+         path sorts first, or in the folder the config's state_dir names), with the \
+         fingerprint of its layout settings: the warm start of the next build or watch. For \
+         a config not named nptreemap.yaml the name starts with the config's (CONFIG.DATASET), \
+         so two configs writing into one folder keep their own. Deleting it costs only a \
+         cold start.",
     );
     entry(
         roff,

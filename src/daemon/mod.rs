@@ -151,6 +151,11 @@ struct Daemon<'a> {
     /// The input warnings last reported per dataset: a warning is printed
     /// again only when it was gone in between (issue 21 item 4).
     warned: BTreeMap<String, BTreeSet<String>>,
+    /// Batches with relevant paths so far, numbered in the debug log.
+    batches: u64,
+    /// Whether the loop was idle (nothing queued, no rebuild running) when
+    /// it last looked.
+    idle: bool,
 }
 
 /// How long the inputs must stay unchanged after a parse failure before it
@@ -239,6 +244,8 @@ pub fn run(
         last_batch: Instant::now(),
         troubled: BTreeMap::new(),
         warned: BTreeMap::new(),
+        batches: 0,
+        idle: false,
     };
     daemon.sync_watches(&mut watcher);
     daemon.say(Status::Watching {
@@ -286,7 +293,8 @@ impl Daemon<'_> {
             if !paths.is_empty() {
                 self.last_event = Instant::now();
                 self.last_batch = self.last_event;
-                tracing::debug!(?paths, "batch");
+                self.batches += 1;
+                tracing::debug!(batch = self.batches, ?paths, "batch");
             }
             let mut work = ChangeSet::default();
             if reload || paths.contains(&self.config_path) {
@@ -308,7 +316,21 @@ impl Daemon<'_> {
             self.collect();
             self.dispatch();
             self.report_settled();
+            self.note_idle(!paths.is_empty());
         }
+    }
+
+    /// Logs (at debug level) when every change handed to the loop so far
+    /// has been handled: nothing queued and no rebuild running, after a
+    /// batch or once the last rebuild is done. With the batch numbers of the
+    /// `batch` lines, this tells a script (and the tests) that the outputs
+    /// now follow from every edit up to that batch.
+    fn note_idle(&mut self, batch: bool) {
+        let idle = self.queue.is_empty() && !self.workers.values().any(|w| w.busy);
+        if idle && (batch || !self.idle) {
+            tracing::debug!(after_batch = self.batches, "idle");
+        }
+        self.idle = idle;
     }
 
     fn dataset(&self, name: &str) -> Option<&DatasetConfig> {

@@ -42,7 +42,6 @@ pub fn backoff(attempt: u32) -> Duration {
 /// one that runs only if the inputs' bytes changed (an edit, a reload); two
 /// edits name the files of both.
 pub fn merge(first: Reason, then: Reason) -> Reason {
-    let data_only = |r: &Reason| matches!(r, Reason::Data(_) | Reason::Reload);
     match (first, then) {
         (Reason::Data(mut a), Reason::Data(b)) => {
             for f in b {
@@ -55,6 +54,12 @@ pub fn merge(first: Reason, then: Reason) -> Reason {
         (a, b) if data_only(&a) && !data_only(&b) => b,
         (a, _) => a,
     }
+}
+
+/// Whether a rebuild for `reason` runs only if the inputs' bytes changed (an
+/// edit, a reload); every other reason makes it run whatever they are.
+pub fn data_only(reason: &Reason) -> bool {
+    matches!(reason, Reason::Data(_) | Reason::Reload)
 }
 
 /// Work waiting per dataset, and the retries of failed writes.
@@ -70,11 +75,15 @@ pub struct Queue {
 }
 
 impl Queue {
-    /// Adds a full rebuild of `name`, coalesced with what already waits.
+    /// Adds a full rebuild of `name`, coalesced with what already waits. A
+    /// waiting render is never dropped (issue 30 item 6): the rebuild renders
+    /// too, but it must then run even if the inputs turn out unchanged, so it
+    /// takes the render's reason unless its own already makes it run.
     pub fn build(&mut self, name: &str, reason: Reason) {
         let next = match self.waiting.remove(name) {
             Some(Next::Build(before)) => Next::Build(merge(before, reason)),
-            // A full rebuild renders too.
+            Some(Next::Render) if data_only(&reason) => Next::Build(Reason::Render),
+            // A full rebuild writes every output, so it serves as the retry.
             Some(Next::Render | Next::Retry) | None => Next::Build(reason),
         };
         self.waiting.insert(name.to_string(), next);
@@ -89,6 +98,11 @@ impl Queue {
             Some(Next::Render | Next::Retry) | None => Next::Render,
         };
         self.waiting.insert(name.to_string(), next);
+    }
+
+    /// Whether no rebuild waits (retries not due yet aside).
+    pub fn is_empty(&self) -> bool {
+        self.waiting.is_empty()
     }
 
     /// Drops everything of `name` (it left the config).
@@ -176,8 +190,8 @@ mod tests {
         assert_eq!(q.take("b", now), Some(Next::Build(Reason::Start)));
         assert_eq!(q.take("c", now), Some(Next::Render));
         q.render("c");
-        q.build("c", Reason::Reload);
-        assert_eq!(q.take("c", now), Some(Next::Build(Reason::Reload)));
+        q.build("c", Reason::Start);
+        assert_eq!(q.take("c", now), Some(Next::Build(Reason::Start)));
         // A render change after an edit: the rebuild runs even if the edit
         // changed no byte.
         q.build("c", data(&["x.csv"]));
@@ -191,6 +205,30 @@ mod tests {
         q.build("d", Reason::Layout);
         q.forget("d");
         assert!(q.ready(now).is_empty());
+    }
+
+    /// Issue 30 item 6: a render change waiting when an edit arrives (a
+    /// `render:` edit during a rebuild, then an input saved with the same
+    /// bytes) is not replaced by a rebuild that runs only if the bytes
+    /// changed: the coalesced rebuild must run, under the render's reason.
+    #[test]
+    fn a_waiting_render_survives_an_edit() {
+        let now = Instant::now();
+        let mut q = Queue::default();
+        q.render("a");
+        q.build("a", data(&["nodes.csv"]));
+        assert_eq!(q.take("a", now), Some(Next::Build(Reason::Render)));
+        q.render("a");
+        q.build("a", Reason::Reload);
+        assert_eq!(q.take("a", now), Some(Next::Build(Reason::Render)));
+        // A rebuild that must run anyway keeps its own reason.
+        q.render("a");
+        q.build("a", Reason::Layout);
+        assert_eq!(q.take("a", now), Some(Next::Build(Reason::Layout)));
+        // A retry due is served by any rebuild (it writes every output).
+        q.failed("a", now);
+        q.build("a", data(&["nodes.csv"]));
+        assert_eq!(q.take("a", now), Some(Next::Build(data(&["nodes.csv"]))));
     }
 
     /// Issue 21 item 9: failed writes are retried after 1, 2, 4, ... s, never

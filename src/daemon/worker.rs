@@ -17,7 +17,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::config::DatasetConfig;
-use crate::fingerprint::Fingerprint;
+use crate::fingerprint::{Fingerprint, Fingerprinter};
 use crate::graph::{self, DatasetGraph, GraphOptions, LayoutStep, Stage, StageReport};
 use crate::layout::{LayoutError, ProgressSink, Request};
 use crate::measure::stability::{stability, Stability};
@@ -26,7 +26,7 @@ use crate::render::Style;
 use crate::workspace;
 
 use super::change::Reason;
-use super::queue::Next;
+use super::queue::{data_only, Next};
 use super::status::{escape, LayoutKind};
 use super::watcher::Message;
 use super::FirstBuildProgress;
@@ -204,8 +204,8 @@ struct State {
     /// good layout among them: the source of render-only rebuilds and of the
     /// next warm start) and the state a commit could not write.
     graph: DatasetGraph,
-    /// Fingerprint of the input bytes last built (or last failed on), so an
-    /// event that changed nothing (a touch, a save without edits) costs nothing.
+    /// The [`job_key`] last built (or last failed on), so an event that
+    /// changed nothing (a touch, a save without edits) costs nothing.
     fingerprint: Option<Fingerprint>,
     /// Whether a build has succeeded: there are good outputs, and a failed
     /// build's inputs, seen again unchanged, need no second attempt.
@@ -226,6 +226,33 @@ impl Default for State {
             unwritten: None,
         }
     }
+}
+
+/// Everything a rebuild of `job` from `files` depends on: the input bytes
+/// and how they are read, the layout settings, the style, the whole dataset
+/// config (outputs, page, where its state lives) and the page's history. A
+/// rebuild for an edit is skipped only when this is unchanged (issue 30 item
+/// 6: it covered the input bytes only, so a config change coalesced with an
+/// edit that changed no byte was lost). Every field of [`Job`] is named, so
+/// a new one does not compile until it is placed in the key or left out here.
+fn job_key(job: &Job, files: &[pipeline::InputFile]) -> Fingerprint {
+    let Job {
+        // When and why it runs, not what it makes.
+        since: _,
+        next: _,
+        force: _,
+        dataset,
+        request,
+        style,
+        history,
+    } = job;
+    Fingerprinter::new("job")
+        .fingerprint(graph::keys::inputs(dataset, files))
+        .debug(&request.settings())
+        .debug(style)
+        .debug(dataset)
+        .u64(*history as u64)
+        .finish()
 }
 
 /// What happens to a failed dataset's outputs, truthfully: kept when there
@@ -270,9 +297,8 @@ impl State {
         };
         let mut stages = StageReport::default();
         stages.record(name, Stage::Read, true, ms_since(started), "");
-        let fingerprint = graph::keys::inputs(d, &files);
-        let data_only = matches!(reason, Reason::Data(_) | Reason::Reload);
-        if data_only
+        let fingerprint = job_key(job, &files);
+        if data_only(&reason)
             && self.fingerprint == Some(fingerprint)
             && self.good
             && !job.force
@@ -542,6 +568,46 @@ mod tests {
         std::fs::write(dir.join("nptreemap.yaml"), text).expect("config");
         let config = Config::from_path(&dir.join("nptreemap.yaml")).expect("config");
         (dir, config)
+    }
+
+    /// Issue 30 item 6: "nothing changed" covers every input of every stage,
+    /// not only the input bytes: an edit that rewrote a file with the same
+    /// bytes, handed over with a config whose title (or output list) changed
+    /// meanwhile, draws the new title (it was skipped, and the title stayed
+    /// old for good); with the same config as well it is skipped.
+    #[test]
+    fn unchanged_bytes_under_a_changed_config_are_not_skipped() {
+        let (dir, config) = countries("skip");
+        let (shared, _outcomes, _woken) = shared();
+        let mut state = State::default();
+        let edit = || Next::Build(Reason::Data(vec!["countries.csv".to_string()]));
+        let d = config.datasets[0].clone();
+        let first = state.run("countries", &job_of(&config, &d, Next::Build(Reason::Start)), &shared);
+        assert!(matches!(first, Outcome::Built(_)));
+        let same = state.run("countries", &job_of(&config, &d, edit()), &shared);
+        assert!(matches!(same, Outcome::Unchanged), "nothing changed: skipped");
+
+        let text = std::fs::read_to_string(dir.join("nptreemap.yaml")).expect("config");
+        let titled = Config::from_str(
+            &format!("render: {{title: A new title}}\n{text}"),
+            &dir,
+        )
+        .expect("config");
+        let d = titled.datasets[0].clone();
+        let Outcome::Built(built) = state.run("countries", &job_of(&titled, &d, edit()), &shared)
+        else {
+            panic!("the title change was skipped");
+        };
+        let svg = dir.join("out/countries.svg");
+        assert!(built.written.written.contains(&svg), "{:?}", built.written);
+        assert!(std::fs::read_to_string(&svg).expect("svg").contains("A new title"));
+
+        let mut moved = titled.clone();
+        moved.datasets[0].outputs.reverse();
+        let d = moved.datasets[0].clone();
+        let outcome = state.run("countries", &job_of(&moved, &d, edit()), &shared);
+        assert!(matches!(outcome, Outcome::Built(_)), "an output change is not skipped");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// Issue 22 item 1: the daemon's worker hands its dataset's changes to

@@ -210,6 +210,11 @@ pub struct DatasetGraph {
     /// State a commit could not write (a full disk, a read-only folder),
     /// kept for [`DatasetGraph::store_again`].
     unstored: Option<Pending>,
+    /// Where the last commit stored the layout: a rebuild that takes the
+    /// layout over from memory writes it again when the state folder has
+    /// moved since (a `state_dir:` edit, another set of outputs), so that the
+    /// new folder holds the layout its manifest vouches for.
+    stored_at: Option<PathBuf>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -341,6 +346,9 @@ impl DatasetGraph {
             {
                 for stage in [Stage::Prepare, Stage::Constraints, Stage::Layout] {
                     stages.record(name, stage, false, 0.0, "in memory");
+                }
+                if self.stored_at != state::layout_path(d) {
+                    pending.layout = Some((state::layout::text(&last.computed), last.state));
                 }
                 (Arc::clone(&last.computed), last.state, LayoutStep::Reused, 0.0)
             }
@@ -795,6 +803,7 @@ impl DatasetGraph {
             }
             self.manifest = Some(m);
         }
+        self.stored_at = state::layout_path(d);
         Ok(())
     }
 }

@@ -98,7 +98,9 @@ pub fn choose(
     match stored.settings {
         Some(made_with) if made_with == settings => Chosen {
             previous: Some(previous),
-            stored: Some(bytes),
+            // Left by an older version elsewhere: not where it is kept now,
+            // so the commit writes it there.
+            stored: (!stored.older).then_some(bytes),
             ..Chosen::default()
         },
         Some(_) => cold_because("the layout settings changed since the stored layout"),

@@ -9,11 +9,11 @@
 
 use std::sync::Arc;
 
-use super::manifest;
+use super::{manifest, StateKind};
 use crate::config::DatasetConfig;
 use crate::fingerprint::Fingerprint;
 use crate::layout::{Computed, Previous};
-use crate::{layout_json, store, workspace};
+use crate::{layout_json, store};
 
 /// A dataset's stored layout, as [`read`] found it.
 #[derive(Debug, Default)]
@@ -29,35 +29,36 @@ pub struct StoredLayout {
     /// full disk, edited by hand): the layout starts cold, so the picture
     /// jumps; the user should hear of it. One line, naming the file.
     pub warning: Option<String>,
+    /// Read from where an older version left it ([`super::older_paths`]):
+    /// not yet where this version keeps it.
+    pub older: bool,
 }
 
 /// The layout stored for a dataset, if there is one. One that cannot be
 /// read is not an error (the next build replaces it): it comes back as a
 /// warning and the layout starts cold.
 pub fn read(d: &DatasetConfig) -> StoredLayout {
-    let Some(path) = super::layout_path(d) else {
-        return StoredLayout::default();
-    };
-    let unusable = |why: String| StoredLayout {
+    let unusable = |path: &std::path::Path, why: String| StoredLayout {
         warning: Some(format!(
             "{}: the stored layout cannot be used ({why}); laid out cold, so the picture may move",
             path.display()
         )),
         ..StoredLayout::default()
     };
-    let text = match workspace::read_state(&path, &d.fields.limits) {
-        Ok(Some(text)) => text,
+    let found = match super::read(d, StateKind::Layout) {
+        Ok(Some(found)) => found,
         Ok(None) => return StoredLayout::default(),
-        Err(e) => return unusable(e.to_string()),
+        Err(e) => return unusable(e.path(), e.to_string()),
     };
-    match layout_json::read(&text) {
+    match layout_json::read(&found.text) {
         Ok(previous) => StoredLayout {
             previous: Some(Arc::new(previous)),
-            fingerprint: Some(Fingerprint::of_bytes(text.as_bytes())),
-            settings: settings_of(&text),
+            fingerprint: Some(Fingerprint::of_bytes(found.text.as_bytes())),
+            settings: settings_of(&found.text),
             warning: None,
+            older: found.older,
         },
-        Err(e) => unusable(e.to_string()),
+        Err(e) => unusable(&found.path, e.to_string()),
     }
 }
 

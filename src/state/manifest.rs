@@ -16,7 +16,9 @@ use serde::{Deserialize, Serialize};
 use crate::config::DatasetConfig;
 use crate::fingerprint::{Fingerprint, Fingerprinter};
 use crate::layout::LayoutSettings;
-use crate::{store, workspace};
+use crate::store;
+
+use super::StateKind;
 
 /// The value of the manifest's `format` field.
 pub const FORMAT: &str = "nptreemap-state/1";
@@ -99,21 +101,18 @@ pub fn settings_key(settings: &LayoutSettings) -> Fingerprint {
 
 /// Reads a dataset's manifest; empty when there is none or it cannot be used.
 pub fn read(d: &DatasetConfig) -> Manifest {
-    let Some(path) = super::manifest_path(d) else {
-        return Manifest::default();
-    };
-    let text = match workspace::read_state(&path, &d.fields.limits) {
-        Ok(Some(text)) => text,
+    let found = match super::read(d, StateKind::Manifest) {
+        Ok(Some(found)) => found,
         Ok(None) => return Manifest::default(),
         Err(e) => {
             tracing::info!(error = %e, "manifest not readable; rebuilding it");
             return Manifest::default();
         }
     };
-    match serde_json::from_str::<Manifest>(&text) {
+    match serde_json::from_str::<Manifest>(&found.text) {
         Ok(m) if m.format == FORMAT => m,
         Ok(_) | Err(_) => {
-            tracing::info!(path = %path.display(), "manifest of another format; rebuilding it");
+            tracing::info!(path = %found.path.display(), "manifest of another format; rebuilding it");
             Manifest::default()
         }
     }

@@ -21,7 +21,7 @@ const GROUPS: [&str; 4] = ["north", "east", "south", "west"];
 const PER_GROUP: usize = 20;
 
 /// Rows `id,name,weight,group`, weights from `weight(i)`.
-fn nodes_csv(leaves: &[(String, f64)]) -> String {
+pub(crate) fn nodes_csv(leaves: &[(String, f64)]) -> String {
     let mut s = String::from("id,name,weight,group\n");
     for (k, (id, w)) in leaves.iter().enumerate() {
         s.push_str(&format!(
@@ -32,14 +32,14 @@ fn nodes_csv(leaves: &[(String, f64)]) -> String {
     s
 }
 
-fn initial_leaves() -> Vec<(String, f64)> {
+pub(crate) fn initial_leaves() -> Vec<(String, f64)> {
     (0..GROUPS.len() * PER_GROUP)
         .map(|i| (format!("n{i:03}"), 10.0 + (i * 37 % 50) as f64))
         .collect()
 }
 
 /// A ring of similar pairs inside each group plus a few across groups.
-fn pairs_csv() -> String {
+pub(crate) fn pairs_csv() -> String {
     let mut s = String::from("a,b\n");
     for g in 0..GROUPS.len() {
         for k in 0..PER_GROUP {
@@ -73,33 +73,93 @@ const CONFIG: &str = "datasets:
 pub(crate) struct Daemon {
     pub(crate) child: Child,
     lines: Receiver<String>,
-    seen: Vec<String>,
+    pub(crate) seen: Vec<String>,
+    /// Its debug log (stderr), when started with [`Daemon::start_logged`].
+    log: Option<Receiver<String>>,
+    /// The log lines read so far.
+    pub(crate) logged: Vec<String>,
+}
+
+/// Sends each line `from` gives to a channel, from a thread of its own.
+fn lines_of(from: impl std::io::Read + Send + 'static) -> Receiver<String> {
+    let (tx, lines) = channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(from).lines() {
+            let Ok(line) = line else { break };
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    lines
 }
 
 impl Daemon {
     pub(crate) fn start(config: &Path) -> Self {
+        let log = std::fs::File::create(config.with_extension("log")).expect("log");
+        Self::spawn(config, Stdio::from(log))
+    }
+
+    /// Starts the daemon with its debug log read by the test, for
+    /// [`Daemon::settle`].
+    pub(crate) fn start_logged(config: &Path) -> Self {
+        let mut daemon = Self::spawn(config, Stdio::piped());
+        let stderr = daemon.child.stderr.take().expect("piped stderr");
+        daemon.log = Some(lines_of(stderr));
+        daemon
+    }
+
+    fn spawn(config: &Path, stderr: Stdio) -> Self {
         let mut child = support::bin()
             .arg("watch")
             .arg(config)
             .env("RUST_LOG", "nptreemap=debug")
             .stdout(Stdio::piped())
-            .stderr(std::fs::File::create(config.with_extension("log")).expect("log"))
+            .stderr(stderr)
             .spawn()
             .expect("start nptreemap watch");
         let stdout = child.stdout.take().expect("piped stdout");
-        let (tx, lines) = channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stdout).lines() {
-                let Ok(line) = line else { break };
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
-        });
         Self {
             child,
-            lines,
+            lines: lines_of(stdout),
             seen: Vec::new(),
+            log: None,
+            logged: Vec::new(),
+        }
+    }
+
+    /// Waits for the next debug log line containing every one of `parts`.
+    pub(crate) fn expect_log(&mut self, parts: &[&str]) -> String {
+        let deadline = Instant::now() + WAIT;
+        let log = self.log.as_ref().expect("started with start_logged");
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match log.recv_timeout(left) {
+                Ok(line) => {
+                    self.logged.push(line.clone());
+                    if parts.iter().all(|p| line.contains(p)) {
+                        return line;
+                    }
+                }
+                Err(RecvTimeoutError::Timeout) | Err(RecvTimeoutError::Disconnected) => panic!(
+                    "no log line with {parts:?}; status lines:\n{}\nlog:\n{}",
+                    self.seen.join("\n"),
+                    self.logged.join("\n")
+                ),
+            }
+        }
+    }
+
+    /// Waits until the daemon has read the batch of events holding `path`
+    /// (written once since the last wait on it), then until it is idle:
+    /// every change up to that batch handled, its outputs and state written.
+    /// Event-driven, on the daemon's debug log (`batch`, `idle`); the status
+    /// lines that arrived meanwhile are in [`Daemon::seen`].
+    pub(crate) fn settle(&mut self, path: &Path) {
+        self.expect_log(&["batch", &format!("{:?}", path.display().to_string())]);
+        self.expect_log(&["idle"]);
+        while let Ok(line) = self.lines.try_recv() {
+            self.seen.push(unstamped(&line));
         }
     }
 
@@ -143,7 +203,7 @@ const WAIT: Duration = support::WAIT;
 
 /// A status line without its time of day (`HH:MM:SS `, issue 22 item 4),
 /// which every line must start with.
-fn unstamped(line: &str) -> String {
+pub(crate) fn unstamped(line: &str) -> String {
     let b = line.as_bytes();
     let stamped = b.len() > 9
         && [0, 1, 3, 4, 6, 7].iter().all(|&i| b[i].is_ascii_digit())
@@ -282,7 +342,7 @@ fn setup(name: &str) -> (PathBuf, PathBuf, PathBuf) {
 
 /// Sends SIG`name` to the daemon. Through python3 (which the suite needs for
 /// the checker anyway) rather than `kill`, which minimal images may lack.
-fn signal(child: &Child, name: &str) {
+pub(crate) fn signal(child: &Child, name: &str) {
     let status = std::process::Command::new("python3")
         .args([
             "-c",
@@ -635,14 +695,14 @@ fn the_systemd_unit_matches_the_daemon() {
 /// minutes have passed) before it prints what it read: a `format: exec`
 /// dataset as slow as the test wants. It says it started (and read) by
 /// making the file `started-NAME`.
-fn gated_adapter(name: &str) -> String {
+pub(crate) fn gated_adapter(name: &str) -> String {
     format!(
         "[sh, -c, 'data=$(cat \"$1\"); touch started-{name}; i=0; while [ ! -e gate ] && [ $i -lt 6000 ]; do sleep 0.1; i=$((i+1)); done; printf \"%s\\n\" \"$data\"', adapter]"
     )
 }
 
 /// Waits (with the suite's generous bound) until `path` exists.
-fn wait_for_file(path: &Path) {
+pub(crate) fn wait_for_file(path: &Path) {
     let deadline = Instant::now() + WAIT;
     while !path.exists() {
         assert!(
@@ -710,7 +770,7 @@ fn sigterm_during_long_rebuilds_ends_the_daemon() {
 }
 
 /// A small hierarchy (hierarchy JSON) for the adapter tests.
-const TREE: &str = r#"{"id": "root", "children": [
+pub(crate) const TREE: &str = r#"{"id": "root", "children": [
   {"id": "a", "children": [{"id": "a1", "value": 3}, {"id": "a2", "value": 5}]},
   {"id": "b", "children": [{"id": "b1", "value": 2}, {"id": "b2", "value": 7}]}
 ]}
@@ -718,10 +778,10 @@ const TREE: &str = r#"{"id": "root", "children": [
 
 /// Opens a gate (see [`gated_adapter`]) when dropped, so that no adapter of
 /// a test outlives it by more than a moment, whatever the test's outcome.
-struct Gate(PathBuf);
+pub(crate) struct Gate(pub(crate) PathBuf);
 
 impl Gate {
-    fn open(&self) {
+    pub(crate) fn open(&self) {
         std::fs::write(&self.0, "").expect("open the gate");
     }
 }
