@@ -888,6 +888,17 @@ impl Config {
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
+        // A config file names what to build: one without datasets is a
+        // mistake (or a file caught mid-save by `watch`, which then keeps
+        // the previous config), never a build of nothing that succeeds.
+        if config.datasets.is_empty() {
+            return Err(ConfigFileError {
+                path: path.to_path_buf(),
+                message: "no datasets: list what to build under `datasets:` \
+                          (`nptreemap init TABLE.csv` writes a config from your tables)"
+                    .to_string(),
+            });
+        }
         // As the user names it (a link's name, not its target's).
         let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
         for d in &mut config.datasets {

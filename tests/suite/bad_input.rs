@@ -224,6 +224,24 @@ fn unknown_yaml_key() {
     );
 }
 
+/// A config that names nothing to build (an empty file, as a save in place
+/// leaves it for a moment, or `datasets: []`) was a build of nothing that
+/// exited 0; in `watch` it made every dataset leave and come back.
+#[test]
+fn a_config_without_datasets() {
+    for (tag, config) in [
+        ("empty", ""),
+        ("none", "datasets: []\n"),
+        ("layout", "layout: {seed: 3}\n"),
+    ] {
+        case(
+            &format!("no_datasets_{tag}"),
+            &[("nptreemap.yaml", text(config))],
+            &["nptreemap.yaml", "no datasets"],
+        );
+    }
+}
+
 #[test]
 fn invalid_yaml_syntax() {
     case(
