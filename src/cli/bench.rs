@@ -54,7 +54,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         anyhow::bail!("no layout was made");
     };
     let report = &computed.report;
-    let q = measure::quality(&computed.dataset, &computed.layout);
+    let q = measure::drawn_quality(&computed);
     let mut sorted = times.clone();
     sorted.sort_by(f64::total_cmp);
     let mut line = serde_json::json!({
