@@ -11,7 +11,7 @@ use super::config_file::ConfigArg;
 use super::progress::LayoutBar;
 use crate::config::Config;
 use crate::graph::{DatasetBuild, DatasetGraph, GraphOptions, Job, LayoutStep};
-use crate::layout::zero::{self, ZeroItems};
+use crate::layout::zero;
 use crate::pipeline::{self, BuildError};
 
 /// Arguments of `nptreemap build`.
@@ -188,14 +188,11 @@ pub(crate) fn check(args: &CheckArgs) -> anyhow::Result<()> {
         if let Some(line) = crate::state::layout::read(d).warning {
             super::warn(line);
         }
-        let zero = ZeroItems {
-            mode,
-            items: zero::zero_items(&dataset),
-            ..ZeroItems::default()
-        };
-        let zero = zero.summary().map_or_else(String::new, |s| {
-            format!("; {s} (layout.zero_weights: {})", mode.name())
-        });
+        let zero = zero::counted(&dataset, mode)
+            .summary()
+            .map_or_else(String::new, |s| {
+                format!("; {s} (layout.zero_weights: {})", mode.name())
+            });
         super::status(format_args!(
             "ok {}: {} nodes, {} leaves, {} outputs{zero}",
             d.name,

@@ -83,6 +83,9 @@ pub struct ZeroItems {
     /// Leaves of weight 0 (the root aside): hidden with `hide`, drawn at the
     /// floor with `floor`.
     pub items: usize,
+    /// Whether every item weighs 0 (the root's value is 0): `hide` then
+    /// draws the root alone, `floor` draws them all at equal sizes.
+    pub all: bool,
     /// With `hide`, every node left out, in breadth-first order (parents
     /// before their children); empty with `floor`.
     pub hidden: Vec<HiddenNode>,
@@ -98,11 +101,13 @@ impl ZeroItems {
         if self.items == 0 {
             return None;
         }
-        let what = match self.mode {
-            ZeroWeights::Hide => "not drawn",
-            ZeroWeights::Floor => "drawn at a minimum size",
-        };
-        Some(format!("{} of weight 0 {what}", items(self.items)))
+        let n = items(self.items);
+        Some(match (self.mode, self.all) {
+            (ZeroWeights::Hide, false) => format!("{n} of weight 0 not drawn"),
+            (ZeroWeights::Floor, false) => format!("{n} of weight 0 drawn at a minimum size"),
+            (ZeroWeights::Hide, true) => format!("all {n} weigh 0: none drawn"),
+            (ZeroWeights::Floor, true) => format!("all {n} weigh 0: drawn at equal sizes"),
+        })
     }
 
     /// What of the drawn node `id` is hidden, if anything.
@@ -116,14 +121,21 @@ pub fn items(n: usize) -> String {
     format!("{n} item{}", if n == 1 { "" } else { "s" })
 }
 
-/// Leaves of weight 0 other than the root: what [`apply`] hides or the
-/// floor draws. O(n), no allocation (`check` counts them without a layout).
-pub fn zero_items(dataset: &Dataset) -> usize {
-    dataset
+/// What `mode` does to the items of weight 0 of `dataset` (the leaves of
+/// weight 0 other than the root), counted, without the list of what it
+/// hides: O(n), no copy (`check` says it without a layout).
+pub fn counted(dataset: &Dataset, mode: ZeroWeights) -> ZeroItems {
+    let items = dataset
         .nodes()
         .iter()
         .filter(|n| n.parent.is_some() && n.children.is_empty() && n.value == 0.0)
-        .count()
+        .count();
+    ZeroItems {
+        mode,
+        items,
+        all: items > 0 && dataset.node(dataset.root()).value == 0.0,
+        ..ZeroItems::default()
+    }
 }
 
 /// The dataset to prepare and lay out under `mode`, and what became of its
@@ -131,21 +143,15 @@ pub fn zero_items(dataset: &Dataset) -> usize {
 /// as it is, shared, not copied. A dataset of nothing but empty items keeps
 /// its root alone: one cell, which the legend says holds them all.
 pub fn apply(dataset: &Arc<Dataset>, mode: ZeroWeights) -> (Arc<Dataset>, Arc<ZeroItems>) {
-    let items = zero_items(dataset);
-    if items == 0 || mode == ZeroWeights::Floor {
-        let record = ZeroItems {
-            mode,
-            items,
-            ..ZeroItems::default()
-        };
+    let record = counted(dataset, mode);
+    if record.items == 0 || mode == ZeroWeights::Floor {
         return (Arc::clone(dataset), Arc::new(record));
     }
     let (visible, hidden, under) = hide(dataset);
     let record = ZeroItems {
-        mode,
-        items,
         hidden,
         under,
+        ..record
     };
     (Arc::new(visible), Arc::new(record))
 }
@@ -318,9 +324,19 @@ mod tests {
     fn all_empty_keeps_the_root_alone_and_names_are_bounded() {
         let mut specs = vec![NodeSpec::new("r")];
         specs.extend((0..12).map(|k| NodeSpec::new(format!("f{k}")).parent("r").weight(0.0)));
-        let (visible, record) = apply(&tree(specs), ZeroWeights::Hide);
+        let all = tree(specs);
+        let (visible, record) = apply(&all, ZeroWeights::Hide);
         assert_eq!(visible.len(), 1);
         assert_eq!(record.items, 12);
+        assert_eq!(
+            record.summary().as_deref(),
+            Some("all 12 items weigh 0: none drawn")
+        );
+        let (_, floored) = apply(&all, ZeroWeights::Floor);
+        assert_eq!(
+            floored.summary().as_deref(),
+            Some("all 12 items weigh 0: drawn at equal sizes")
+        );
         let r = record.under("r").expect("the root holds them");
         assert_eq!(
             (r.items, r.names.len(), r.more),
