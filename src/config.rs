@@ -1177,6 +1177,9 @@ mod tests {
         )
         .expect("valid");
         assert_eq!(c.params().outline, Outline::Regular(32));
+        assert_eq!(c.params().zero_weights, ZeroWeights::Hide, "the default");
+        let floor = parse("layout: {zero_weights: floor}\n").expect("valid");
+        assert_eq!(floor.params().zero_weights, ZeroWeights::Floor);
         assert_eq!(c.layout.method, Some(Method::MatchSwap));
         let d = &c.datasets[0];
         assert_eq!(d.similarity, Some(SimilarityKind::NeighborList));
@@ -1202,6 +1205,10 @@ mod tests {
             (
                 "layout: {method: neighbour}\n",
                 "; did you mean `neighbor`?",
+            ),
+            (
+                "layout:\n  zero_weights: hid\n",
+                "line 2, column 17: layout.zero_weights: unknown variant `hid`, expected `hide` or `floor`; did you mean `hide`?",
             ),
         ] {
             let err = parse(text).expect_err(text).to_string();

@@ -39,3 +39,4 @@ mod tabs;
 mod threads;
 mod warm_start;
 mod watch;
+mod zero_weights;
