@@ -69,6 +69,8 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         "iterations": report.iterations,
         "diagrams": report.diagrams,
         "unconverged": report.unconverged,
+        "zero_weights": computed.zero.mode.name(),
+        "zero_items": computed.zero.items,
         "method": computed.method.name(),
         "constraints": computed.constraints.len(),
         "realized": computed.realized.iter().filter(|r| **r).count(),
