@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Deserializer};
 
-use crate::layout::{Canvas, Method, NeighborParams, Outline, Params, Request};
+use crate::layout::{Canvas, Method, NeighborParams, Outline, Params, Request, ZeroWeights};
 use crate::neighborhood::SimilarityKind;
 use crate::render::overlay::OverlayStyle;
 use crate::render::{
@@ -64,6 +64,9 @@ pub struct LayoutConfig {
     pub min_iterations: usize,
     /// Lightest sibling share laid out. Default: 0.001.
     pub min_weight_ratio: f64,
+    /// Items of weight 0: `hide` (no cell) or `floor` (a cell at the floor of
+    /// `min_weight_ratio`). Default: hide.
+    pub zero_weights: ZeroWeights,
     /// Run the paper prototype's optimiser. Default: false.
     pub prototype: bool,
     /// Snapshots per level kept for the HTML page's optimisation slider
@@ -84,6 +87,7 @@ impl Default for LayoutConfig {
             max_iterations: p.max_iterations,
             min_iterations: p.min_iterations,
             min_weight_ratio: p.min_weight_ratio,
+            zero_weights: p.zero_weights,
             prototype: false,
             frames: NeighborParams::default().frames,
         }
@@ -921,6 +925,7 @@ impl Config {
             max_iterations: l.max_iterations,
             min_iterations: l.min_iterations,
             min_weight_ratio: l.min_weight_ratio,
+            zero_weights: l.zero_weights,
         }
     }
 
@@ -1196,6 +1201,9 @@ mod tests {
         )
         .expect("valid");
         assert_eq!(c.params().outline, Outline::Regular(32));
+        assert_eq!(c.params().zero_weights, ZeroWeights::Hide, "the default");
+        let floor = parse("layout: {zero_weights: floor}\n").expect("valid");
+        assert_eq!(floor.params().zero_weights, ZeroWeights::Floor);
         assert_eq!(c.layout.method, Some(Method::MatchSwap));
         let d = &c.datasets[0];
         assert_eq!(d.similarity, Some(SimilarityKind::NeighborList));
@@ -1221,6 +1229,10 @@ mod tests {
             (
                 "layout: {method: neighbour}\n",
                 "; did you mean `neighbor`?",
+            ),
+            (
+                "layout:\n  zero_weights: hid\n",
+                "line 2, column 17: layout.zero_weights: unknown variant `hid`, expected `hide` or `floor`; did you mean `hide`?",
             ),
         ] {
             let err = parse(text).expect_err(text).to_string();

@@ -54,7 +54,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         anyhow::bail!("no layout was made");
     };
     let report = &computed.report;
-    let q = measure::quality(&computed.dataset, &computed.layout);
+    let q = measure::drawn_quality(&computed);
     let mut sorted = times.clone();
     sorted.sort_by(f64::total_cmp);
     let mut line = serde_json::json!({
@@ -69,6 +69,8 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         "iterations": report.iterations,
         "diagrams": report.diagrams,
         "unconverged": report.unconverged,
+        "zero_weights": computed.zero.mode.name(),
+        "zero_items": computed.zero.items,
         "method": computed.method.name(),
         "constraints": computed.constraints.len(),
         "realized": computed.realized.iter().filter(|r| **r).count(),

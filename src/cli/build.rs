@@ -11,6 +11,7 @@ use super::config_file::ConfigArg;
 use super::progress::LayoutBar;
 use crate::config::Config;
 use crate::graph::{DatasetBuild, DatasetGraph, GraphOptions, Job, LayoutStep};
+use crate::layout::zero;
 use crate::pipeline::{self, BuildError};
 
 /// Arguments of `nptreemap build`.
@@ -133,7 +134,13 @@ fn say_layout(b: &DatasetBuild) {
             100.0 * b.realized as f64 / b.constraints as f64
         )
     };
-    super::status(format_args!("{}: {how}; {realized}", b.name));
+    // Items of weight 0, hidden or floored (issue 34), when there are any.
+    let zero = b
+        .computed
+        .as_ref()
+        .and_then(|c| c.zero.summary())
+        .map_or_else(String::new, |s| format!("; {s}"));
+    super::status(format_args!("{}: {how}; {realized}{zero}", b.name));
     if let Some(report) = b.computed.as_ref().map(|c| &c.report) {
         if report.unconverged > 0 {
             tracing::warn!(
@@ -171,6 +178,7 @@ pub(crate) fn check(args: &CheckArgs) -> anyhow::Result<()> {
     let config = Config::from_path(&path).map_err(BuildError::from)?;
     let (reads, writes) = pipeline::files_of(&path, &config.datasets);
     pipeline::check_outputs(&reads, &writes)?;
+    let mode = config.params().zero_weights;
     for d in &config.datasets {
         let files = pipeline::read_inputs(d)?;
         let dataset = pipeline::parse_inputs(d, &files)?;
@@ -180,8 +188,13 @@ pub(crate) fn check(args: &CheckArgs) -> anyhow::Result<()> {
         if let Some(line) = crate::state::layout::read(d).warning {
             super::warn(line);
         }
+        let zero = zero::counted(&dataset, mode)
+            .summary()
+            .map_or_else(String::new, |s| {
+                format!("; {s} (layout.zero_weights: {})", mode.name())
+            });
         super::status(format_args!(
-            "ok {}: {} nodes, {} leaves, {} outputs",
+            "ok {}: {} nodes, {} leaves, {} outputs{zero}",
             d.name,
             dataset.len(),
             dataset.leaves().count(),

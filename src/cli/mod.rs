@@ -27,7 +27,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use crate::config::{Config, DatasetConfig};
-use crate::layout::{Method, Outline, Previous, Request};
+use crate::layout::{Method, Outline, Previous, Request, ZeroWeights};
 use crate::neighborhood::SimilarityKind;
 use crate::pipeline::{self, BuildError, Fault, Named};
 use crate::render::Style;
@@ -77,6 +77,10 @@ pub(crate) struct LayoutOptions {
     /// Iteration cap per diagram [default: 200].
     #[arg(long)]
     pub(crate) max_iterations: Option<usize>,
+    /// Items of weight 0: hide (no cell) or floor (a cell at the floor of
+    /// min_weight_ratio) [default: hide, or the config's].
+    #[arg(long, value_enum, value_name = "HOW")]
+    pub(crate) zero_weights: Option<ZeroWeights>,
     /// Similarity between nodes (default: what the data declares).
     #[arg(long, value_enum)]
     pub(crate) similarity: Option<SimilarityKind>,
@@ -168,6 +172,9 @@ impl LayoutOptions {
         }
         if let Some(m) = self.max_iterations {
             p.max_iterations = m;
+        }
+        if let Some(z) = self.zero_weights {
+            p.zero_weights = z;
         }
         if method.is_some() {
             request.method = method;

@@ -7,6 +7,7 @@ use nptreemap_formats::{Dataset, Features};
 
 use crate::config::{DatasetConfig, OutputConfig, OutputKind};
 use crate::fingerprint::{Fingerprint, Fingerprinter};
+use crate::layout::ZeroWeights;
 use crate::neighborhood::SimilarityKind;
 use crate::pipeline::InputFile;
 use crate::render::Style;
@@ -21,6 +22,16 @@ pub fn inputs(d: &DatasetConfig, files: &[InputFile]) -> Fingerprint {
         f.str(&file.role).bytes(&file.bytes);
     }
     f.finish()
+}
+
+/// What is drawn of the parsed inputs: the inputs' key and whether items of
+/// weight 0 are hidden (`layout.zero_weights`), which decides the nodes
+/// that are prepared. The key of the prepared dataset in a build.
+pub fn drawn(inputs: Fingerprint, zero_weights: ZeroWeights) -> Fingerprint {
+    Fingerprinter::new("drawn")
+        .fingerprint(inputs)
+        .str(zero_weights.name())
+        .finish()
 }
 
 /// Prepare and constraints: what the constraints of a dataset depend on,

@@ -54,7 +54,7 @@ use nptreemap_formats::Dataset;
 use crate::config::{DatasetConfig, OutputConfig, OutputKind};
 use crate::fingerprint::{Fingerprint, Fingerprinter};
 use crate::layout::compute::{lay_out_planned, plan, Prepared};
-use crate::layout::{Computed, LayoutError, Previous, Request, Start};
+use crate::layout::{zero, Computed, LayoutError, Previous, Request, Start};
 use crate::neighborhood::{build_constraints, prepare, Constraint, SimilarityKind};
 use crate::pipeline::{self, BuildError, InputFile, Rendered, Written};
 use crate::render::{html_page_with_history, Style};
@@ -332,6 +332,10 @@ impl DatasetGraph {
             dataset: d.name.clone(),
             source,
         };
+        // Items of weight 0 hidden or kept (issue 34): everything below
+        // works on what is drawn.
+        let mode = job.request.params.zero_weights;
+        let (dataset, zero) = zero::apply(&dataset, mode);
         let planned = plan(&dataset, &job.request).map_err(layout_error)?;
 
         // Layout: the last one in memory when it was made from these inputs
@@ -357,8 +361,9 @@ impl DatasetGraph {
                     None => Prepared::Plain(Arc::clone(&dataset)),
                     Some(kind) => {
                         let kind = (kind, planned.constraints);
+                        let source = keys::drawn(inputs, mode);
                         let (prepared, constraints, fresh) =
-                            self.similar(Some(d), inputs, &dataset, kind, name, &mut stages);
+                            self.similar(Some(d), source, &dataset, kind, name, &mut stages);
                         if let Some(key) = fresh {
                             pending.constraints =
                                 Some((key, Arc::clone(&prepared), Arc::clone(&constraints)));
@@ -379,7 +384,8 @@ impl DatasetGraph {
                 request.previous = chosen.previous;
                 started_from = request.previous.clone();
                 let t = Instant::now();
-                let computed = lay_out_planned(input, planned, &request).map_err(layout_error)?;
+                let computed =
+                    lay_out_planned(input, planned, &request, zero).map_err(layout_error)?;
                 let layout_ms = ms_since(t);
                 let report = &computed.report;
                 let step = match (&computed.start, chosen.cold_because) {
@@ -668,14 +674,15 @@ impl DatasetGraph {
         dataset: &Dataset,
         request: &Request,
     ) -> Result<(), BuildError> {
-        let planned = plan(dataset, request).map_err(|source| BuildError::Layout {
+        let (dataset, _) = zero::apply(&Arc::new(dataset.clone()), request.params.zero_weights);
+        let planned = plan(&dataset, request).map_err(|source| BuildError::Layout {
             dataset: d.name.clone(),
             source,
         })?;
         if let Some(kind) = planned.kind {
-            let source = keys::dataset(dataset);
+            let source = keys::dataset(&dataset);
             let kind = (kind, planned.constraints);
-            self.similar(None, source, dataset, kind, &d.name, &mut StageReport::default());
+            self.similar(None, source, &dataset, kind, &d.name, &mut StageReport::default());
         }
         Ok(())
     }
@@ -694,19 +701,20 @@ impl DatasetGraph {
             dataset: d.name.clone(),
             source,
         };
-        let planned = plan(dataset, request).map_err(layout_error)?;
+        let (dataset, zero) = zero::apply(&Arc::new(dataset.clone()), request.params.zero_weights);
+        let planned = plan(&dataset, request).map_err(layout_error)?;
         let input = match planned.kind {
-            None => Prepared::Plain(Arc::new(dataset.clone())),
+            None => Prepared::Plain(dataset),
             Some(kind) => {
-                let source = keys::dataset(dataset);
+                let source = keys::dataset(&dataset);
                 let kind = (kind, planned.constraints);
                 let (prepared, constraints, _) =
-                    self.similar(None, source, dataset, kind, &d.name, stages);
+                    self.similar(None, source, &dataset, kind, &d.name, stages);
                 Prepared::Similar(prepared, constraints.as_ref().clone())
             }
         };
         let t = Instant::now();
-        let computed = lay_out_planned(input, planned, request).map_err(layout_error)?;
+        let computed = lay_out_planned(input, planned, request, zero).map_err(layout_error)?;
         let note = match &computed.start {
             Start::Warm { .. } => "warm",
             _ => "cold",

@@ -3,7 +3,8 @@
 //! dataset is first prepared (virtual nodes, aggregation; paper §4) and the
 //! constraints built (method-reference §3); without one, only `plain` runs.
 //! Given a previous layout that fits, the layout starts warm instead
-//! (`layout::warm`, issue 6), whatever the method.
+//! (`layout::warm`, issue 6), whatever the method. Before all of it, items of
+//! weight 0 are hidden or kept for the floor (`layout::zero`, issue 34).
 
 use std::sync::{Arc, OnceLock};
 
@@ -12,6 +13,7 @@ use super::neighbor::{layout_similar_with, projection_of, NeighborParams};
 use super::previous::{Previous, WarmRefusal};
 use super::progress::{Monitor, ProgressSink};
 use super::warm::layout_warm_with;
+use super::zero::{self, ZeroItems, ZeroWeights};
 use super::{treemap, Layout, LayoutError, Params, Report};
 use crate::geom::LevelAdjacency;
 use crate::neighborhood::similarity::similarity;
@@ -40,6 +42,10 @@ pub struct Computed {
     pub start: Start,
     /// The settings it was laid out with ([`Request::settings`]).
     pub settings: LayoutSettings,
+    /// What became of the input's items of weight 0 (hidden before the
+    /// layout, or drawn at the floor): for the legend, the tooltips, the
+    /// layout JSON and the status lines.
+    pub zero: Arc<ZeroItems>,
     /// Each depth level's adjacency in `layout` (index = depth), computed at
     /// most once: by [`compute`] when there are constraints to flag, else on
     /// first use ([`Computed::adjacency`]).
@@ -68,6 +74,15 @@ impl Computed {
             .map(|(c, _)| (ds.node(c.a).id.clone(), ds.node(c.b).id.clone()))
             .collect();
         Previous::from_layout(ds, &self.layout).with_realized(realized)
+    }
+
+    /// Every node's weight as the picture promises it, when that is not its
+    /// value: with `zero_weights: floor`, an item of weight 0 is drawn at
+    /// the floor ([`treemap::drawn_weights`]); `None` when every node is
+    /// drawn at its value (nothing floored, or hidden instead).
+    pub fn drawn_weights(&self) -> Option<Vec<f64>> {
+        (self.zero.mode == ZeroWeights::Floor && self.zero.items > 0)
+            .then(|| treemap::drawn_weights(&self.dataset, &self.settings.params))
     }
 }
 
@@ -188,13 +203,16 @@ pub(crate) fn plan(dataset: &Dataset, request: &Request) -> Result<Plan, LayoutE
     })
 }
 
-/// Runs the layout step.
+/// Runs the layout step: items of weight 0 hidden or kept
+/// (`request.params.zero_weights`), then the plan's preparation,
+/// constraints and layout.
 pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutError> {
-    let plan = plan(dataset, request)?;
+    let (dataset, zero) = zero::apply(&Arc::new(dataset.clone()), request.params.zero_weights);
+    let plan = plan(&dataset, request)?;
     let input = match plan.kind {
-        None => Prepared::Plain(Arc::new(dataset.clone())),
+        None => Prepared::Plain(dataset),
         Some(kind) => {
-            let prepared = prepare(dataset);
+            let prepared = prepare(&dataset);
             let constraints = if plan.constraints {
                 build_constraints(&prepared, kind)
             } else {
@@ -203,7 +221,7 @@ pub fn compute(dataset: &Dataset, request: &Request) -> Result<Computed, LayoutE
             Prepared::Similar(Arc::new(prepared), constraints)
         }
     };
-    lay_out_planned(input, plan, request)
+    lay_out_planned(input, plan, request, zero)
 }
 
 /// What the layout of a planned run starts from.
@@ -219,18 +237,21 @@ pub(crate) enum Prepared {
     Similar(Arc<Dataset>, Vec<Constraint>),
 }
 
-/// The layout of a planned run (see [`plan`]) from its [`Prepared`] input.
+/// The layout of a planned run (see [`plan`]) from its [`Prepared`] input,
+/// made from a dataset whose items of weight 0 became `zero`
+/// ([`zero::apply`]).
 pub(crate) fn lay_out_planned(
     input: Prepared,
     plan: Plan,
     request: &Request,
+    zero: Arc<ZeroItems>,
 ) -> Result<Computed, LayoutError> {
     let monitor = Monitor::new(request.progress.as_ref());
     let method = plan.method;
     let (kind, prepared, constraints) = match (plan.kind, input) {
         (Some(kind), Prepared::Similar(prepared, constraints)) => (kind, prepared, constraints),
         (_, Prepared::Plain(dataset) | Prepared::Similar(dataset, _)) => {
-            return lay_out_plain(dataset, method, request, &monitor)
+            return lay_out_plain(dataset, method, request, &monitor, zero)
         }
     };
     // Survival is judged on the prepared dataset: virtual nodes have ids
@@ -275,6 +296,7 @@ pub(crate) fn lay_out_planned(
         method,
         start,
         settings: request.settings(),
+        zero,
         adjacency: OnceLock::from(adjacency),
     })
 }
@@ -286,6 +308,7 @@ fn lay_out_plain(
     method: Method,
     request: &Request,
     monitor: &Monitor<'_>,
+    zero: Arc<ZeroItems>,
 ) -> Result<Computed, LayoutError> {
     let start = warm_start_for(&dataset, request);
     let (layout, report) = match &request.previous {
@@ -303,6 +326,7 @@ fn lay_out_plain(
         method,
         start,
         settings: request.settings(),
+        zero,
         adjacency: OnceLock::new(),
     })
 }

@@ -19,6 +19,8 @@ pub mod params;
 pub mod previous;
 /// Progress reports and the stop they can ask for.
 pub mod progress;
+/// Items of weight 0: hidden before the layout, or drawn at the floor.
+pub mod zero;
 
 // The stages of the optimiser: crate-private (see `internal!` in lib.rs); what
 // the API needs of them is re-exported below.
@@ -52,6 +54,7 @@ pub use params::{Canvas, Outline, Params};
 pub use previous::{Previous, PreviousNode, WarmRefusal};
 pub use progress::{Progress, ProgressFn, ProgressSink};
 pub use treemap::layout;
+pub use zero::{ZeroItems, ZeroWeights};
 
 /// The finished geometry of one node.
 #[derive(Clone, Debug, PartialEq)]

@@ -2,6 +2,7 @@
 //! defaults in one place. Names follow d3-voronoi-map where the concept is the same
 //! (`convergence_ratio`, `max_iterations`, `min_weight_ratio`).
 
+use super::zero::ZeroWeights;
 use super::LayoutError;
 use crate::geom::{ConvexPolygon, Point};
 
@@ -126,6 +127,10 @@ pub struct Params {
     /// (d3-voronoi-map's `minWeightRatio`; d3 uses 0.01, we keep areas exact
     /// down to 1:1000). Default: 0.001.
     pub min_weight_ratio: f64,
+    /// What becomes of items of weight 0: no cell, or a cell at the floor of
+    /// `min_weight_ratio` ([`ZeroWeights`], applied before the layout by
+    /// [`zero::apply`](super::zero::apply)). Default: hide.
+    pub zero_weights: ZeroWeights,
 }
 
 impl Default for Params {
@@ -138,6 +143,7 @@ impl Default for Params {
             max_iterations: 200,
             min_iterations: 8,
             min_weight_ratio: 0.001,
+            zero_weights: ZeroWeights::Hide,
         }
     }
 }

@@ -30,7 +30,9 @@ pub(super) struct Division {
 /// Zero-weight rule: a child's target area uses `max(value, min_weight_ratio ×
 /// heaviest sibling's value)`, so zero-weight children get a small visible cell;
 /// when every child of a node weighs zero they share its cell equally. A node
-/// with one child hands it its own cell unchanged.
+/// with one child hands it its own cell unchanged. (With `zero_weights: hide`,
+/// the default of [`compute`](super::compute()), no child of weight 0 is left
+/// by the time the layout runs: [`zero::apply`](super::zero::apply).)
 pub fn layout(dataset: &Dataset, params: &Params) -> Result<(Layout, Report), LayoutError> {
     layout_with(dataset, params, &Monitor::silent())
 }
@@ -215,19 +217,8 @@ pub(super) fn floored_targets(
     let ratio = min_weight_ratio.max(MIN_FLOOR);
     let floor = max * ratio;
     let relative: Vec<f64> = values.iter().map(|v| v / max).collect();
-    let mut slack = floor_error(&relative, ratio);
-    let eff: Vec<f64> = if slack > budget {
-        // The largest floor within budget (the error grows with the floor).
-        let (mut lo, mut hi) = (MIN_FLOOR.min(ratio), ratio);
-        for _ in 0..FLOOR_BISECTIONS {
-            let mid = 0.5 * (lo + hi);
-            if floor_error(&relative, mid) <= budget {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        slack = floor_error(&relative, lo);
+    let (lo, slack, lowered) = floor_within(&relative, ratio, budget);
+    let eff: Vec<f64> = if lowered {
         relative.iter().map(|v| v.max(lo)).collect()
     } else if floor >= f64::MIN_POSITIVE {
         values.iter().map(|v| v.max(floor)).collect()
@@ -254,6 +245,60 @@ pub(super) fn floored_targets(
         })
         .collect();
     (targets, slack)
+}
+
+/// The floor, as a share of the heaviest of the `relative` weights (the
+/// heaviest is 1): `ratio` when its error is within `budget`, else the
+/// largest floor that is (the error grows with the floor); its error; and
+/// whether it was lowered.
+fn floor_within(relative: &[f64], ratio: f64, budget: f64) -> (f64, f64, bool) {
+    let slack = floor_error(relative, ratio);
+    if slack <= budget {
+        return (ratio, slack, false);
+    }
+    let (mut lo, mut hi) = (MIN_FLOOR.min(ratio), ratio);
+    for _ in 0..FLOOR_BISECTIONS {
+        let mid = 0.5 * (lo + hi);
+        if floor_error(relative, mid) <= budget {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (lo, floor_error(relative, lo), true)
+}
+
+/// Every node's weight as the picture draws it, for `zero_weights: floor`
+/// (issue 34: area errors are measured against what the picture promises):
+/// its value, except that a child of weight 0 beside heavier siblings weighs
+/// the floor its diagram used ([`floored_targets`], in the siblings' units),
+/// and children that all weigh 0 share their parent's drawn weight equally,
+/// as they share its cell. Parents come before children in a dataset, so
+/// one pass suffices.
+pub(crate) fn drawn_weights(dataset: &Dataset, params: &Params) -> Vec<f64> {
+    let budget = FLOOR_BUDGET_SHARE * params.convergence_ratio;
+    let ratio = params.min_weight_ratio.max(MIN_FLOOR);
+    let mut drawn: Vec<f64> = dataset.nodes().iter().map(|n| n.value).collect();
+    for (parent, node) in dataset.nodes().iter().enumerate() {
+        let kids = &node.children;
+        let values: Vec<f64> = kids.iter().map(|&c| dataset.node(c).value).collect();
+        let max = values.iter().copied().fold(0.0, f64::max);
+        if !values.contains(&0.0) {
+            continue;
+        }
+        let floor = if max <= 0.0 {
+            drawn[parent] / kids.len() as f64
+        } else {
+            let relative: Vec<f64> = values.iter().map(|v| v / max).collect();
+            max * floor_within(&relative, ratio, budget).0
+        };
+        for (&c, v) in kids.iter().zip(&values) {
+            if *v == 0.0 {
+                drawn[c] = floor;
+            }
+        }
+    }
+    drawn
 }
 
 /// Σ |share of `max(w, floor)` − share of `w`| over `weights` (relative to

@@ -14,11 +14,12 @@
 //! the two nodes' ancestors; the reader gives the pairs back.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 use nptreemap_formats::Dataset;
 use serde::Serialize;
 
-use crate::layout::Computed;
+use crate::layout::{Computed, ZeroItems};
 use crate::measure;
 
 /// One neighbourhood constraint as written to the `constraints` array.
@@ -53,6 +54,15 @@ pub struct JsonExtras {
     /// reproduce the cells bit for bit so that a rebuild of unchanged data
     /// gives unchanged bytes. Default: false.
     pub exact: bool,
+    /// What became of the items of weight 0 (issue 34): written, when there
+    /// were any, as `zero_weights` (the setting and the count) and `hidden`
+    /// (the nodes left out, without cells). Default: none.
+    pub zero: Arc<ZeroItems>,
+    /// Per node, the weight it is drawn at when that is not its value
+    /// (`zero_weights: floor`, [`Computed::drawn_weights`]): written as the
+    /// node's `drawn_weight`, the weight its metrics are measured against.
+    /// Default: `None`.
+    pub drawn_weights: Option<Vec<f64>>,
 }
 
 impl JsonExtras {
@@ -60,7 +70,7 @@ impl JsonExtras {
     /// coordinates rounded (`exact: false`).
     pub fn of(computed: &Computed) -> JsonExtras {
         let ds = &computed.dataset;
-        let q = measure::quality(ds, &computed.layout);
+        let q = measure::drawn_quality(computed);
         let links: Vec<Link> = computed
             .constraints
             .iter()
@@ -96,6 +106,8 @@ impl JsonExtras {
                 ("aspect_ratio_mean".to_string(), q.aspect_ratio_mean),
             ],
             exact: false,
+            zero: Arc::clone(&computed.zero),
+            drawn_weights: computed.drawn_weights(),
         }
     }
 }

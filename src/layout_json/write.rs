@@ -49,29 +49,35 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
     };
     out.push_str(&format!("  \"canvas\": {},\n", to_json(&canvas)));
 
-    let nodes =
-        dataset
-            .nodes()
-            .iter()
-            .zip(&layout.cells)
-            .zip(&spelled)
-            .map(|((node, cell), spelled)| {
-                let only_child = node
-                    .parent
-                    .is_some_and(|p| dataset.node(p).children.len() == 1);
-                NodeOut {
-                    id: &node.id,
-                    label: &node.label,
-                    parent: node.parent.map(|p| dataset.node(p).id.as_str()),
-                    depth: node.depth,
-                    weight: Num(node.value),
-                    is_virtual: node.is_virtual,
-                    site: point(spelled.site),
-                    power_weight: (!only_child)
-                        .then(|| Num(precision::round(cell.power_weight, spelled.places))),
-                    polygon: polygon(spelled),
-                }
-            });
+    let nodes = dataset
+        .nodes()
+        .iter()
+        .zip(&layout.cells)
+        .zip(&spelled)
+        .enumerate()
+        .map(|(index, ((node, cell), spelled))| {
+            let only_child = node
+                .parent
+                .is_some_and(|p| dataset.node(p).children.len() == 1);
+            NodeOut {
+                id: &node.id,
+                label: &node.label,
+                parent: node.parent.map(|p| dataset.node(p).id.as_str()),
+                depth: node.depth,
+                weight: Num(node.value),
+                drawn_weight: extra
+                    .drawn_weights
+                    .as_ref()
+                    .and_then(|d| d.get(index))
+                    .filter(|w| **w != node.value)
+                    .map(|w| Num(*w)),
+                is_virtual: node.is_virtual,
+                site: point(spelled.site),
+                power_weight: (!only_child)
+                    .then(|| Num(precision::round(cell.power_weight, spelled.places))),
+                polygon: polygon(spelled),
+            }
+        });
     push_array(&mut out, "nodes", nodes);
     out.push(',');
     out.push('\n');
@@ -85,6 +91,29 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
         also_above: (c.also_above > 0).then_some(c.also_above),
     });
     push_array(&mut out, "constraints", constraints);
+
+    // Items of weight 0 (issue 34), only when there are any: the setting and
+    // their count, and with `hide` the nodes left out (no cell: the
+    // checker's rules are about cells).
+    let zero = &extra.zero;
+    if zero.items > 0 {
+        let summary = ZeroOut {
+            mode: zero.mode.name(),
+            items: zero.items,
+        };
+        out.push_str(&format!(",\n  \"zero_weights\": {}", to_json(&summary)));
+    }
+    if !zero.hidden.is_empty() {
+        out.push_str(",\n");
+        let hidden = zero.hidden.iter().map(|h| HiddenOut {
+            id: &h.id,
+            label: &h.label,
+            parent: &h.parent,
+            depth: h.depth,
+            weight: Num(0.0),
+        });
+        push_array(&mut out, "hidden", hidden);
+    }
 
     if !extra.metrics.is_empty() {
         out.push_str(",\n  \"metrics\": {");
@@ -148,6 +177,11 @@ struct NodeOut<'a> {
     parent: Option<&'a str>,
     depth: usize,
     weight: Num,
+    /// Not in the spec's list: with `zero_weights: floor`, the weight an
+    /// item of weight 0 is drawn at (the floor), against which the
+    /// document's own area errors are measured (issue 34).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    drawn_weight: Option<Num>,
     #[serde(rename = "virtual")]
     is_virtual: bool,
     site: [Num; 2],
@@ -157,6 +191,24 @@ struct NodeOut<'a> {
     #[serde(skip_serializing_if = "Option::is_none")]
     power_weight: Option<Num>,
     polygon: Vec<[Num; 2]>,
+}
+
+/// The `zero_weights` object: the setting and how many items it applied to.
+#[derive(Serialize)]
+struct ZeroOut {
+    mode: &'static str,
+    items: usize,
+}
+
+/// One entry of `hidden`: a node left out for its weight of 0, as the
+/// nodes are written but without geometry.
+#[derive(Serialize)]
+struct HiddenOut<'a> {
+    id: &'a str,
+    label: &'a str,
+    parent: &'a str,
+    depth: usize,
+    weight: Num,
 }
 
 /// One entry of `constraints`; a borrowed copy of [`super::ConstraintOut`]
@@ -290,7 +342,7 @@ mod tests {
                 also_above: 0,
             }],
             metrics: vec![("zeta".into(), 1.5), ("alpha".into(), f64::from(2u8))],
-            exact: false,
+            ..JsonExtras::default()
         };
         let text = layout_json(&dataset, &layout, &extra);
         let v: Value = serde_json::from_str(&text).unwrap();

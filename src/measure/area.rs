@@ -20,23 +20,31 @@ pub struct AreaErrors {
 /// or its children have no weight (nothing to compare with, as the checker
 /// skips them). Children without a cell in `layout` add nothing.
 pub fn diagram_error(dataset: &Dataset, layout: &Layout, parent: usize) -> Option<f64> {
+    diagram_error_by(dataset, layout, parent, |i| dataset.node(i).value)
+}
+
+/// [`diagram_error`] against `weight(node)` instead of the nodes' values
+/// (the weights a picture promises: `Computed::drawn_weights`).
+pub fn diagram_error_by(
+    dataset: &Dataset,
+    layout: &Layout,
+    parent: usize,
+    weight: impl Fn(usize) -> f64,
+) -> Option<f64> {
     let nodes = dataset.nodes();
     let cells = &layout.cells;
     let kids = &nodes.get(parent)?.children;
-    let total: f64 = kids
-        .iter()
-        .filter_map(|&c| nodes.get(c))
-        .map(|n| n.value)
-        .sum();
+    let kids = || kids.iter().copied().filter(|&c| c < nodes.len());
+    let total: f64 = kids().map(&weight).sum();
     let area = cells.get(parent)?.polygon.area();
     if !(total > 0.0 && area > 0.0) {
         return None;
     }
     let mut err = 0.0;
-    for &c in kids {
-        if let (Some(node), Some(cell)) = (nodes.get(c), cells.get(c)) {
-            // |A* − A| / A(parent) with A* = value / total × A(parent).
-            err += (node.value / total - cell.polygon.area() / area).abs();
+    for c in kids() {
+        if let Some(cell) = cells.get(c) {
+            // |A* − A| / A(parent) with A* = weight / total × A(parent).
+            err += (weight(c) / total - cell.polygon.area() / area).abs();
         }
     }
     Some(err)
@@ -48,11 +56,21 @@ pub fn diagram_errors(
     layout: &Layout,
     parents: impl IntoIterator<Item = usize>,
 ) -> AreaErrors {
+    diagram_errors_by(dataset, layout, parents, |i| dataset.node(i).value)
+}
+
+/// [`diagram_errors`] against `weight(node)` ([`diagram_error_by`]).
+pub fn diagram_errors_by(
+    dataset: &Dataset,
+    layout: &Layout,
+    parents: impl IntoIterator<Item = usize>,
+    weight: impl Fn(usize) -> f64,
+) -> AreaErrors {
     let mut out = AreaErrors::default();
     let mut sum = 0.0;
     for err in parents
         .into_iter()
-        .filter_map(|p| diagram_error(dataset, layout, p))
+        .filter_map(|p| diagram_error_by(dataset, layout, p, &weight))
     {
         sum += err;
         out.max = out.max.max(err);

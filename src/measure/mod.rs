@@ -13,7 +13,7 @@ pub mod stability;
 /// The paper's Table 2 row for one layout.
 pub mod table2;
 
-use crate::layout::Layout;
+use crate::layout::{Computed, Layout};
 use nptreemap_formats::Dataset;
 
 pub use stability::{stability, Stability};
@@ -32,8 +32,25 @@ pub struct Quality {
 
 /// Computes [`Quality`] for `layout` (cells indexed like `dataset`'s nodes).
 pub fn quality(dataset: &Dataset, layout: &Layout) -> Quality {
+    quality_by(dataset, layout, |i| dataset.node(i).value)
+}
+
+/// [`Quality`] of a finished computation against what its picture promises
+/// (issue 34): the nodes' values, except that with `zero_weights: floor` an
+/// item of weight 0 counts at the weight it is drawn at
+/// ([`Computed::drawn_weights`], which the layout JSON states per node as
+/// `drawn_weight`). Hidden items have no cell and are not in the dataset.
+pub fn drawn_quality(computed: &Computed) -> Quality {
+    let ds = &computed.dataset;
+    match computed.drawn_weights() {
+        Some(drawn) => quality_by(ds, &computed.layout, |i| drawn[i]),
+        None => quality(ds, &computed.layout),
+    }
+}
+
+fn quality_by(dataset: &Dataset, layout: &Layout, weight: impl Fn(usize) -> f64) -> Quality {
     let parents = (0..dataset.len()).filter(|&i| !dataset.node(i).children.is_empty());
-    let errors = area::diagram_errors(dataset, layout, parents);
+    let errors = area::diagram_errors_by(dataset, layout, parents, weight);
     Quality {
         area_error_diagram_mean: errors.mean,
         area_error_diagram_max: errors.max,

@@ -4,7 +4,7 @@
 //! means adjacent in the deepest level's adjacency, which the caller computed
 //! once (`Computed::adjacency`).
 
-use super::area::diagram_errors;
+use super::area::{diagram_errors, diagram_errors_by};
 use super::shape::{leaf_aspect_mean, proto_aspect_mean};
 use crate::geom::adjacency::{hop_distances, LevelAdjacency};
 use crate::layout::{Computed, Layout};
@@ -56,7 +56,27 @@ pub fn table2(computed: &Computed) -> EvalMetrics {
         .map(|c| (c.a, c.b))
         .collect();
     let adjacency = &computed.adjacency()[deepest];
-    eval_metrics(dataset, &computed.layout, adjacency, &leaf_pairs)
+    let mut m = eval_metrics(dataset, &computed.layout, adjacency, &leaf_pairs);
+    // Against what the picture promises (issue 34): with `zero_weights:
+    // floor`, items of weight 0 at the weight they are drawn at.
+    if let Some(drawn) = computed.drawn_weights() {
+        let parents = leaf_parents(dataset);
+        m.area_error = diagram_errors_by(dataset, &computed.layout, parents, |i| drawn[i]).mean;
+    }
+    m
+}
+
+/// The leaf level's diagrams: the distinct parents of the deepest nodes, in
+/// node order.
+fn leaf_parents(dataset: &Dataset) -> Vec<usize> {
+    let nodes = dataset.nodes();
+    let mut parents: Vec<usize> = (0..nodes.len())
+        .filter(|&i| nodes[i].depth == dataset.max_depth())
+        .filter_map(|i| nodes[i].parent)
+        .collect();
+    parents.sort_unstable();
+    parents.dedup();
+    parents
 }
 
 /// Computes [`EvalMetrics`]. `leaf_pairs` are the constraint pairs (node
@@ -85,13 +105,7 @@ pub fn eval_metrics(
         n => Some((hops[n / 2 - 1] + hops[n / 2]) as f64 / 2.0),
     };
 
-    // Leaf-level diagrams: the distinct parents of the deepest nodes, in node order.
-    let mut parents: Vec<usize> = (0..nodes.len())
-        .filter(|&i| nodes[i].depth == max_depth)
-        .filter_map(|i| nodes[i].parent)
-        .collect();
-    parents.sort_unstable();
-    parents.dedup();
+    let parents = leaf_parents(dataset);
 
     EvalMetrics {
         levels: max_depth + 1,

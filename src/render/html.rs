@@ -8,6 +8,7 @@
 //! build the SVG, do I/O, or reference anything over the network.
 //! Output is deterministic: identical input gives identical bytes.
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use serde::Serialize;
@@ -17,6 +18,7 @@ use super::legend::LegendItem;
 use super::palette::TABLEAU10;
 use super::picture::{colors, compose, fills, legend_items, Style};
 use super::svg::{escape, leaf_labels, path_data};
+use crate::layout::zero::HiddenUnder;
 use crate::layout::{Computed, Layout};
 
 #[path = "page/view.rs"]
@@ -115,6 +117,21 @@ pub struct HtmlNode {
     /// The node's link (`page.link`), when it has one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub link: Option<HtmlLink>,
+    /// What of its children is not drawn for weighing 0 (issue 34), for
+    /// the tooltips of its cells.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub empty: Option<HtmlEmpty>,
+}
+
+/// Items of weight 0 a node holds that have no cell.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct HtmlEmpty {
+    /// How many (leaves, through hidden groups too).
+    pub items: usize,
+    /// The labels of its first hidden children.
+    pub names: Vec<String>,
+    /// Its hidden children not named.
+    pub more: usize,
 }
 
 /// A node's link: the value as given, and whether the page may follow it.
@@ -445,6 +462,12 @@ pub fn html_page_with_history(
             partners[a].push((b, link.realized));
         }
     }
+    let hidden: HashMap<&str, &HiddenUnder> = computed
+        .zero
+        .under
+        .iter()
+        .map(|u| (u.parent.as_str(), u))
+        .collect();
     let count = dataset.len().min(layout.cells.len());
     let nodes = (0..count)
         .map(|i| {
@@ -474,6 +497,11 @@ pub fn html_page_with_history(
                         ok: followable(href),
                     })
                 }),
+                empty: hidden.get(node.id.as_str()).map(|u| HtmlEmpty {
+                    items: u.items,
+                    names: u.names.clone(),
+                    more: u.more,
+                }),
             }
         })
         .collect();
@@ -500,7 +528,15 @@ pub fn html_page_with_history(
         let (colors, applied) = fills(dataset, &adjacent, style);
         let tabs = svg_text.contains("class=\"np-tab\"");
         let markers = svg_text.contains("class=\"np-unlinked\"");
-        legend_items(dataset, &colors, applied.as_ref(), tabs, markers, style)
+        let note = computed.zero.summary();
+        legend_items(
+            dataset,
+            &colors,
+            applied.as_ref(),
+            (tabs, markers),
+            note.as_deref(),
+            style,
+        )
     } else {
         Vec::new()
     };

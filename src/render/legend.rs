@@ -26,6 +26,9 @@ pub enum LegendItem {
     Unlinked,
     /// How many entries did not fit.
     More(usize),
+    /// A sentence about the picture as a whole, without a glyph (what it
+    /// leaves out: "12 items of weight 0 not drawn").
+    Note(String),
     /// Colours by a field's value: the field's name, the lowest and highest
     /// values as the picture writes numbers, the colours between them.
     Scale {
@@ -70,6 +73,7 @@ impl LegendItem {
             LegendItem::Tab => "similar and adjacent (tab on the shared edge)".to_string(),
             LegendItem::Unlinked => "similar cells that are not adjacent (count)".to_string(),
             LegendItem::More(n) => format!("and {n} more group{}", if *n == 1 { "" } else { "s" }),
+            LegendItem::Note(text) => text.clone(),
             LegendItem::Scale {
                 field, low, high, ..
             } => format!("{field}: {low} to {high}"),
@@ -110,7 +114,7 @@ pub fn legend(
             return font * (width_em(&format!("{field}: {low}")) + BAR_EM + 0.8)
                 + font * width_em(high);
         }
-        let glyph = if matches!(item, LegendItem::More(_)) {
+        let glyph = if matches!(item, LegendItem::More(_) | LegendItem::Note(_)) {
             0.0
         } else {
             swatch + 0.4 * font
@@ -270,10 +274,10 @@ fn push_entry(
             num(0.45 * swatch),
             num(0.12 * swatch)
         )),
-        LegendItem::More(_) | LegendItem::Scale { .. } => {}
+        LegendItem::More(_) | LegendItem::Note(_) | LegendItem::Scale { .. } => {}
     }
     out.push_str("</g>\n");
-    let tx = if matches!(item, LegendItem::More(_)) {
+    let tx = if matches!(item, LegendItem::More(_) | LegendItem::Note(_)) {
         x
     } else {
         x + swatch + 0.4 * font

@@ -32,7 +32,7 @@ pub(crate) mod test_support;
 
 pub use color_by::{ColorBy, ColorScale};
 pub use html::{
-    html, html_page, html_page_with_history, HtmlData, HtmlFrame, HtmlLayout, HtmlNode,
+    html, html_page, html_page_with_history, HtmlData, HtmlEmpty, HtmlFrame, HtmlLayout, HtmlNode,
 };
 pub use labels::LabelStyle;
 pub use palette::{PaletteKind, Rgb};

@@ -241,12 +241,13 @@ pub(crate) fn fills(
 /// deepest level, framed as `style` says. Identical input gives identical bytes.
 pub fn picture(computed: &Computed, style: &Style) -> String {
     let pairs = computed.adjacency().get(1).map_or(&[][..], |a| a.pairs());
-    compose(
+    compose_noted(
         &computed.dataset,
         &computed.layout,
         &deepest_links(computed),
         pairs,
         style,
+        computed.zero.summary().as_deref(),
     )
 }
 
@@ -261,6 +262,19 @@ pub fn compose(
     links: &[Link],
     adjacent: &[(usize, usize)],
     style: &Style,
+) -> String {
+    compose_noted(dataset, layout, links, adjacent, style, None)
+}
+
+/// [`compose`] with a `note` first in the legend: what the picture leaves
+/// out or does not draw to scale (issue 34: "12 items of weight 0 not drawn").
+pub(crate) fn compose_noted(
+    dataset: &Dataset,
+    layout: &Layout,
+    links: &[Link],
+    adjacent: &[(usize, usize)],
+    style: &Style,
+    note: Option<&str>,
 ) -> String {
     let (cw, ch) = (layout.canvas.width, layout.canvas.height);
     let u = unit(layout);
@@ -319,8 +333,8 @@ pub fn compose(
             dataset,
             &colors,
             applied.as_ref(),
-            !tabs.is_empty(),
-            !markers.is_empty(),
+            (!tabs.is_empty(), !markers.is_empty()),
+            note,
             style,
         )
     } else {
@@ -498,7 +512,8 @@ fn name_fill(
     }
 }
 
-/// What the legend lists: a key for each glyph the picture draws, then the
+/// What the legend lists: the `note` (first, so that no cut drops it), a
+/// key for each glyph the picture draws (`tabs`, `markers`), then the
 /// top-level groups (when they have children of their own; otherwise every
 /// cell is labelled already) in the style's order. Two groups with the same
 /// name are told apart by their ids.
@@ -506,11 +521,14 @@ pub(crate) fn legend_items(
     dataset: &Dataset,
     colors: &[Option<Rgb>],
     applied: Option<&Applied>,
-    tabs: bool,
-    markers: bool,
+    (tabs, markers): (bool, bool),
+    note: Option<&str>,
     style: &Style,
 ) -> Vec<LegendItem> {
     let mut items = Vec::new();
+    if let Some(note) = note {
+        items.push(LegendItem::Note(note.to_string()));
+    }
     if tabs {
         items.push(LegendItem::Tab);
     }

@@ -16,6 +16,7 @@ pub(crate) mod cdp;
 mod explore;
 mod fields;
 mod reach;
+mod zero;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;

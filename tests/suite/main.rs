@@ -41,3 +41,4 @@ mod threads;
 mod warm_start;
 mod watch;
 mod watch_stale;
+mod zero_weights;

@@ -41,8 +41,10 @@ Figures reported:
   constraints_lowest / realized_lowest / realized_lowest_pct at the deepest
   level, constraints_by_depth {depth: {constraints, realized}};
   area_error_share_mean / _max: |cell area / parent area - weight / sibling
-  weight sum| over nodes below the root (with --min-weight-ratio R, each
-  weight first raised to R times its heaviest sibling's, as the layout does);
+  weight sum| over nodes below the root (a node's `drawn_weight` when it has
+  one, as nptreemap writes for items of weight 0 drawn at a floor; with
+  --min-weight-ratio R, each weight first raised to R times its heaviest
+  sibling's, as the layout does);
   area_error_diagram_mean / _max: per parent, the sum of those errors over its
   children (d3-voronoi-map's convergence ratio), mean and max over parents;
   aspect_ratio_mean: mean bounding-box aspect ratio (long / short side) of leaves;
@@ -251,7 +253,10 @@ def read_polygon(raw):
 
 
 def weight_of(node):
-    w = node.get("weight")
+    # The weight the node is drawn at: `drawn_weight` when the producer says
+    # it drew the node at another size than its weight (nptreemap's
+    # `zero_weights: floor` gives an item of weight 0 the floor), else `weight`.
+    w = node.get("drawn_weight", node.get("weight"))
     return float(w) if finite_number(w) else 0.0
 
 

@@ -170,6 +170,13 @@ function fillTip(i) {
       (apart ? ", " + apart + " not adjacent" : ", all adjacent"));
   }
   (data.nodes[i].fields || EMPTY).forEach(function (f) { line("np-tip-line", f[0] + ": " + f[1]); });
+  // Items of weight 0 beside the cell (or under it) that have no cell.
+  [parents[i], i].forEach(function (k) {
+    var e = k >= 0 && data.nodes[k].empty;
+    if (!e) { return; }
+    line("np-tip-line np-tip-empty", labels[k] + " also holds " + e.items + " item" + (e.items === 1 ? "" : "s") +
+      " of weight 0, not drawn: " + e.names.join(", ") + (e.more ? " and " + e.more + " more" : ""));
+  });
   tip.hidden = false;
 }
 
