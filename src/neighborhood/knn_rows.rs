@@ -3,21 +3,18 @@
 //! Stages A and C read ([`stage_view`]), bit for bit as the all-pairs scan
 //! gives it, or the all-pairs row where the search cannot settle it.
 //!
-//! What a row's stages read (method-reference §3.2–3.5): the thresholds, from
-//! the row's lowest and highest score; the top bin's first 6 entries; and, only
-//! when the top bin holds fewer than 4, the first 4 entries of each following
-//! bin up to the first empty one. So a row needs its best entries in exact
-//! order, its highest score, and its lowest score only as far as it moves a
-//! threshold across one of those entries. The search gives:
+//! A row needs its best entries in exact order, its highest score, and its
+//! lowest score only as far as it moves a threshold across one of those
+//! entries (`row_best`). The search gives:
 //! - `best`: every entry whose exact similarity is at least a bound `floor`,
 //!   sorted as the bins' heads are (similarity descending, level order), at
-//!   least [`WANTED`] of them: the caps are visited best bound first, members
+//!   least `row_best::WANTED` of them: the caps are visited best bound first, members
 //!   in reach of the current `floor` only, until no cap can hold a better one;
 //! - the lowest score, between a lower bound (the caps' bounds) and an upper
 //!   one (the lowest entry seen, the farthest cap being always visited).
 //! The row is settled when every lowest score in that range gives the same
 //! view from `best`, each bin of which `best` holds in full or to its first
-//! [`BIN_HEAD`] entries. Otherwise (a small top bin over a crowded second bin,
+//! `bins::BIN_HEAD` entries. Otherwise (a small top bin over a crowded second bin,
 //! or a lowest score that moves a threshold across a best entry) the row is
 //! binned over all pairs through the filter.
 //!
@@ -28,15 +25,13 @@
 
 use rayon::prelude::*;
 
-use super::bins::{bin_table, stage_view, Bin, Bins, Candidate, BIN_HEAD, STAGE_VIEW_FULL_TOP};
+use super::bins::{stage_view, Bins};
 use super::cap_index::{CapIndex, LANES};
-use super::filtered_rows::{Filter, RowState};
+use super::filtered_rows::{Filter, Scratch};
 use super::kernels::{dot_tile, KERNEL_ROWS};
+use super::row_best::{view_from_best, RowBest};
 use super::similarity::{pair_similarity, score, NodeFeatures, SimilarityKind};
 
-/// Entries the search finds per row: the top bin's first [`BIN_HEAD`] and
-/// room for a second bin's head behind a small top bin.
-const WANTED: usize = BIN_HEAD + STAGE_VIEW_FULL_TOP;
 /// Levels smaller than this are scanned over all pairs: the caps and the
 /// sample cost about a tenth of the filter's scan where the search is then
 /// refused (64-d noise, 10,000 rows), and the scan of a smaller level takes
@@ -113,7 +108,7 @@ fn search_level(
     tracing::debug!(n, open = open.len(), "nearest-neighbour rows: left to the scan");
     let scanned: Vec<(usize, Bins)> = open
         .par_chunks(KERNEL_ROWS)
-        .map_init(Vec::new, |state: &mut Vec<RowState>, group| {
+        .map_init(Scratch::default, |state: &mut Scratch, group| {
             let (filtered, exact_rows): (Vec<usize>, Vec<usize>) =
                 group.iter().partition(|&&i| !filter.is_exact(i));
             let mut rows: Vec<(usize, Bins)> = filtered
@@ -163,58 +158,6 @@ struct Search<'a> {
     exact: &'a [usize],
 }
 
-/// One row's search state.
-struct RowSearch {
-    /// Entries that may be among the [`WANTED`] best: (f32 similarity, level
-    /// position).
-    kept: Vec<(f64, usize)>,
-    /// A lower bound on the [`WANTED`]-th best exact similarity.
-    floor: f64,
-    /// Kept entries at which `kept` is pruned next.
-    prune_at: usize,
-    /// An upper bound on the row's lowest similarity.
-    lowest: f64,
-}
-
-impl RowSearch {
-    fn new() -> Self {
-        RowSearch {
-            kept: Vec::new(),
-            floor: f64::NEG_INFINITY,
-            prune_at: 2 * WANTED,
-            lowest: f64::INFINITY,
-        }
-    }
-
-    /// Takes entry `j` with similarity `s`, within `eps` of the exact one.
-    #[inline]
-    fn take(&mut self, s: f64, j: usize, eps: f64) {
-        self.lowest = self.lowest.min(s + eps);
-        if s + eps < self.floor {
-            return;
-        }
-        self.kept.push((s, j));
-        if self.kept.len() >= self.prune_at {
-            self.prune(eps);
-        }
-    }
-
-    /// Raises `floor` to the [`WANTED`]-th best kept value less `eps` (that
-    /// many entries are at least that good) and drops what is below it.
-    fn prune(&mut self, eps: f64) {
-        if self.kept.len() < WANTED {
-            return;
-        }
-        let (_, &mut (nth, _), _) = self
-            .kept
-            .select_nth_unstable_by(WANTED - 1, |a, b| b.0.total_cmp(&a.0));
-        self.floor = self.floor.max(nth - eps);
-        let floor = self.floor;
-        self.kept.retain(|&(s, _)| s + eps >= floor);
-        self.prune_at = (2 * self.kept.len()).max(2 * WANTED);
-    }
-}
-
 impl Search<'_> {
     /// The settled rows of a tile (up to [`KERNEL_ROWS`] level positions) with
     /// their views, and the vectors the tile visited per row (centres and
@@ -259,7 +202,7 @@ impl Search<'_> {
         };
         order.sort_by(|&a, &b| best_upper(b).total_cmp(&best_upper(a)).then(a.cmp(&b)));
 
-        let mut state: Vec<RowSearch> = tile.iter().map(|_| RowSearch::new()).collect();
+        let mut state: Vec<RowBest> = tile.iter().map(|_| RowBest::new()).collect();
         for (&i, row) in tile.iter().zip(state.iter_mut()) {
             for &j in self.exact {
                 let s = pair_similarity(
@@ -272,7 +215,7 @@ impl Search<'_> {
             }
         }
         // The cosine (of directions) an entry must reach to matter to a row.
-        let threshold = |row: &RowSearch| 2.0 * (row.floor - eps) - 1.0 - slack;
+        let threshold = |row: &RowBest| 2.0 * (row.floor - eps) - 1.0 - slack;
         let mut visited = caps * tile.len();
         let mut seen = vec![false; caps];
         let farthest_first = farthest[..tile.len()].to_vec();
@@ -342,22 +285,10 @@ impl Search<'_> {
 
     /// The view of row `i` from its search, when every lowest score in range
     /// gives the same one.
-    fn settle(&self, i: usize, row: RowSearch, below: f64) -> Option<Bins> {
+    fn settle(&self, i: usize, row: RowBest, below: f64) -> Option<Bins> {
         let floor = row.floor;
-        let mut best: Vec<(f64, usize)> = row
-            .kept
-            .iter()
-            .filter(|&&(s, _)| s + self.filter.eps() >= floor)
-            .map(|&(_, j)| {
-                let s = pair_similarity(self.kind, &self.features[i], &self.features[j], self.level[j]);
-                (s, j)
-            })
-            .filter(|&(s, _)| s >= floor)
-            .collect();
-        best.sort_by(|a, b| {
-            b.0.partial_cmp(&a.0)
-                .unwrap_or(std::cmp::Ordering::Equal)
-                .then(a.1.cmp(&b.1))
+        let best = row.exact_best(self.filter.eps(), |j| {
+            pair_similarity(self.kind, &self.features[i], &self.features[j], self.level[j])
         });
         let hi = score(best.first()?.0);
         let lowest_best = best.iter().map(|&(s, _)| score(s)).min()?;
@@ -373,53 +304,6 @@ impl Search<'_> {
         }
         view
     }
-}
-
-/// The stage view of a row whose lowest score is `lo` and highest `hi`, from
-/// `best`: every entry of similarity at least `floor`, in head order. `None`
-/// when the view needs an entry or a count beyond `best`.
-fn view_from_best(
-    best: &[(f64, usize)],
-    floor: f64,
-    lo: u8,
-    hi: u8,
-    level: &[usize],
-) -> Option<Bins> {
-    if hi == 0 {
-        return Some(Bins::default());
-    }
-    let bin_of = bin_table(lo, hi);
-    let count = usize::from(bin_of[usize::from(lo)]) + 1;
-    // Entries not in `best` are below `floor`, so score at most score(floor):
-    // bins above that score's bin are complete in `best`.
-    let complete_below = if floor == f64::NEG_INFINITY {
-        count
-    } else {
-        usize::from(bin_of[usize::from(score(floor))])
-    };
-    let mut bins = vec![Bin::default(); count];
-    for &(s, j) in best {
-        let sc = score(s);
-        let bin = &mut bins[usize::from(bin_of[usize::from(sc)])];
-        bin.len += 1;
-        if bin.head.len() < BIN_HEAD {
-            bin.head.push(Candidate {
-                similarity: s,
-                node: level[j],
-                score: sc,
-            });
-        }
-    }
-    let known = |b: usize, bins: &[Bin]| b < complete_below || bins[b].len >= BIN_HEAD;
-    // The top bin's size decides how far the stages read: certain when `best`
-    // holds enough of it, or all of it.
-    if bins[0].len < STAGE_VIEW_FULL_TOP && complete_below == 0 {
-        return None;
-    }
-    let view = stage_view(&Bins { bins: bins.clone() });
-    (0..view.bins.len())
-        .all(|b| known(b, &bins))
-        .then_some(view)
 }
 
 #[cfg(test)]

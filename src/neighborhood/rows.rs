@@ -9,7 +9,7 @@
 use rayon::prelude::*;
 
 use super::bins::{bin_row, bin_sparse, Bins};
-use super::filtered_rows::{Filter, RowState};
+use super::filtered_rows::{Filter, Scratch};
 use super::kernels::{dot_tile, kernel, KERNEL_ROWS};
 use super::knn_rows::knn_level_bins;
 use super::similarity::{cosine_from_parts, norm_of, pair_similarity, NodeFeatures, SimilarityKind};
@@ -81,7 +81,7 @@ pub(super) fn level_rows_bins(
     let tiles: Vec<Vec<Bins>> = rows
         .par_chunks(TILE_ROWS)
         .map_init(
-            || (vec![Vec::new(); TILE_ROWS], Vec::new(), Vec::new()),
+            || (vec![Vec::new(); TILE_ROWS], Vec::new(), Scratch::default()),
             |(rows, scores, filter_state), span| {
                 if let Some(filter) = &filter {
                     return filtered_tile(
@@ -266,7 +266,7 @@ fn filtered_tile(
     features: &[NodeFeatures<'_>],
     level: &[usize],
     span: &[usize],
-    (row, scores, state): (&mut Vec<f64>, &mut Vec<u8>, &mut Vec<RowState>),
+    (row, scores, state): (&mut Vec<f64>, &mut Vec<u8>, &mut Scratch),
 ) -> Vec<Bins> {
     let filtered: Vec<usize> = span.iter().copied().filter(|&i| !filter.is_exact(i)).collect();
     let mut fast = filter
