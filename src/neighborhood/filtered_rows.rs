@@ -724,6 +724,37 @@ mod tests {
         }
     }
 
+    /// A row whose view needs more than its 12 best entries: one duplicate
+    /// (score 100) alone in the top bin, over four crowded bins that Stage C
+    /// reads. Its view comes from the second scan, and equals the exact
+    /// scan's, as every other row's does.
+    #[test]
+    fn a_small_top_bin_over_crowded_bins_is_scanned_again() {
+        let mut vectors = vec![vec![1.0, 0.0], vec![1.0, 0.0]];
+        for k in 0..300 {
+            // Similarities spread over [0, 0.78): scores 0 to 77.
+            let c = 2.0 * (0.78 * f64::from(k) / 300.0) - 1.0;
+            vectors.push(vec![c, (1.0 - c * c).sqrt()]);
+        }
+        let p = level_of(&vectors);
+        let level: Vec<usize> = (1..p.len()).collect();
+        let kind = SimilarityKind::Cosine;
+        let features: Vec<NodeFeatures<'_>> =
+            level.iter().map(|&n| NodeFeatures::new(kind, &p, n)).collect();
+        let filter = Filter::new(kind, &features).expect("a filter for this level");
+        let rows: Vec<usize> = (0..level.len()).collect();
+        let views = filter.bin_rows(kind, &features, &level, &rows, &mut Scratch::default());
+        for (&i, view) in rows.iter().zip(&views) {
+            assert_eq!(view, &stage_view(&exact_bins(kind, &features, &level, i)), "row {i}");
+        }
+        let needed: usize = views[0].bins.iter().map(|b| b.head.len()).sum();
+        assert!(
+            needed > super::super::row_best::WANTED && views[0].bins.len() == 5,
+            "row 0 reads {needed} entries in {} bins",
+            views[0].bins.len()
+        );
+    }
+
     /// Only cosine and Pearson levels of equal-length vectors get a filter, and
     /// not one where most nodes would need the exact path.
     #[test]

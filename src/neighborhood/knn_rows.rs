@@ -55,19 +55,37 @@ pub(super) fn knn_level_bins(
     if level.len() < MIN_LEVEL {
         return None;
     }
-    search_level(kind, filter, features, level, MAX_VISITED_SHARE).map(|(bins, _)| bins)
+    let searched = search_level(kind, filter, features, level, MAX_VISITED_SHARE)?;
+    tracing::debug!(
+        n = level.len(),
+        share = searched.share,
+        open = searched.open,
+        "nearest-neighbour rows: visited share of the sample, rows left to the scan"
+    );
+    Some(searched.bins)
+}
+
+/// A level's rows through the search.
+struct Searched {
+    /// Every row's stage view.
+    bins: Vec<Bins>,
+    /// Rows the search left to the scan.
+    open: usize,
+    /// Vectors the sample's rows visited (centres and members), per row, as a
+    /// share of the level.
+    share: f64,
 }
 
 /// [`knn_level_bins`] at any size, used when a sample of rows visits at most
 /// `max_share` of the level; also gives how many rows the search left to the
-/// scan.
+/// scan and the share the sample visited.
 fn search_level(
     kind: SimilarityKind,
     filter: &Filter,
     features: &[NodeFeatures<'_>],
     level: &[usize],
     max_share: f64,
-) -> Option<(Vec<Bins>, usize)> {
+) -> Option<Searched> {
     let n = level.len();
     let (points, exact): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| !filter.is_exact(i));
     let index = CapIndex::build(filter, &points);
@@ -105,7 +123,6 @@ fn search_level(
     }
     // Rows the search left open, and the exact nodes' rows, over all pairs.
     let open: Vec<usize> = (0..n).filter(|&i| out[i].is_none()).collect();
-    tracing::debug!(n, open = open.len(), "nearest-neighbour rows: left to the scan");
     let scanned: Vec<(usize, Bins)> = open
         .par_chunks(KERNEL_ROWS)
         .map_init(Scratch::default, |state: &mut Scratch, group| {
@@ -125,7 +142,11 @@ fn search_level(
         out[row] = Some(stage_view(&bins));
     }
     let bins = out.into_iter().map(Option::unwrap_or_default).collect();
-    Some((bins, open.len()))
+    Some(Searched {
+        bins,
+        open: open.len(),
+        share,
+    })
 }
 
 /// The bins of an exact node's row from its exact similarities.
@@ -308,7 +329,7 @@ impl Search<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::rows::exact_bins;
+    use super::super::rows::{exact_bins, level_bins};
     use super::super::stages::{self, ListEntry};
     use super::*;
     use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
@@ -398,10 +419,18 @@ mod tests {
             .collect()
     }
 
-    /// Every level through the search and through the all-pairs scan: the
-    /// same view of every row, bit for bit, and the same lists. Returns the
-    /// rows the search settled itself and all rows.
-    fn compare(p: &Dataset, kind: SimilarityKind) -> (usize, usize) {
+    /// What [`compare`] found: rows the search settled itself, all rows, and
+    /// the largest share of a level a sampled row visited.
+    struct Compared {
+        settled: usize,
+        rows: usize,
+        share: f64,
+    }
+
+    /// Every level through the search, through the filter's scan (`rows`,
+    /// below the search's size) and through the exact all-pairs scan: the
+    /// same view of every row, bit for bit, and the same lists.
+    fn compare(p: &Dataset, kind: SimilarityKind) -> Compared {
         let nodes = p.nodes();
         let mut levels: Vec<Vec<usize>> = vec![Vec::new(); p.max_depth() + 1];
         for (index, node) in nodes.iter().enumerate() {
@@ -409,31 +438,36 @@ mod tests {
         }
         let mut full = vec![Bins::default(); nodes.len()];
         let mut searched = vec![Bins::default(); nodes.len()];
-        let (mut settled, mut rows) = (0, 0);
+        let mut found = Compared {
+            settled: 0,
+            rows: 0,
+            share: 0.0,
+        };
         for level in levels.iter().skip(1) {
             let features: Vec<NodeFeatures<'_>> =
                 level.iter().map(|&n| NodeFeatures::new(kind, p, n)).collect();
             let filter = Filter::new(kind, &features).expect("a filter for this level");
-            let (bins, open) =
+            let result =
                 search_level(kind, &filter, &features, level, f64::INFINITY).expect("the search runs");
-            settled += level.len() - open;
-            rows += level.len();
+            found.settled += level.len() - result.open;
+            found.rows += level.len();
+            found.share = found.share.max(result.share);
+            assert!(level.len() < MIN_LEVEL, "the scan below is the filter's");
+            let scanned = level_bins(p, kind, level, true);
             for (i, &node) in level.iter().enumerate() {
                 full[node] = exact_bins(kind, &features, level, i);
-                searched[node] = bins[i].clone();
-                assert_eq!(
-                    bits(&searched[node]),
-                    bits(&stage_view(&full[node])),
-                    "{kind:?}: row {i} of a level of {}",
-                    level.len()
-                );
+                searched[node] = result.bins[i].clone();
+                let want = bits(&stage_view(&full[node]));
+                let size = level.len();
+                assert_eq!(bits(&searched[node]), want, "{kind:?}: row {i} of {size}, search");
+                assert_eq!(bits(&scanned[i]), want, "{kind:?}: row {i} of {size}, filter");
             }
         }
         assert_eq!(lists(p, &searched), lists(p, &full), "{kind:?}: the lists");
         // The views alone give the lists the full bins give.
         let views: Vec<Bins> = full.iter().map(stage_view).collect();
         assert_eq!(lists(p, &views), lists(p, &full), "{kind:?}: the views' lists");
-        (settled, rows)
+        found
     }
 
     /// Clustered vectors in three levels, with duplicates, scaled copies and
@@ -444,7 +478,7 @@ mod tests {
         for kind in [SimilarityKind::Cosine, SimilarityKind::Pearson] {
             for (d, seed) in [(12, 1), (40, 2)] {
                 let p = tree(10, 8, 25, d, 4.0, seed);
-                let (settled, rows) = compare(&p, kind);
+                let Compared { settled, rows, .. } = compare(&p, kind);
                 assert!(
                     settled * 10 >= rows * 9,
                     "{kind:?} d={d}: only {settled} of {rows} rows settled by the search"
@@ -481,7 +515,80 @@ mod tests {
             );
         }
         let p = super::super::prepare::prepare(&builder.build().expect("valid"));
-        let (settled, rows) = compare(&p, SimilarityKind::Cosine);
+        let Compared { settled, rows, .. } = compare(&p, SimilarityKind::Cosine);
         assert!(settled * 2 >= rows, "{settled} of {rows}");
+    }
+
+    /// `n` flat leaves around `clusters` random unit centres in `d` dimensions,
+    /// each its centre plus noise of `spread` per dimension (roughly Gaussian),
+    /// as `benches/gen_clustered.py` makes them.
+    fn clustered(n: usize, d: usize, clusters: usize, spread: f64, seed: u64) -> Dataset {
+        let mut rng = crate::rng::Rng::new(seed);
+        // Irwin–Hall: the sum of 12 uniforms, less 6.
+        let mut gauss = move || (0..12).map(|_| rng.next_f64()).sum::<f64>() - 6.0;
+        let centres: Vec<Vec<f64>> = (0..clusters)
+            .map(|_| {
+                let c: Vec<f64> = (0..d).map(|_| gauss()).collect();
+                let norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
+                c.iter().map(|x| x / norm).collect()
+            })
+            .collect();
+        let mut builder = DatasetBuilder::new();
+        builder.add(NodeSpec::new("r"));
+        for i in 0..n {
+            // Clusters interleaved in level order, not one after another.
+            let c = &centres[(i * 7919) % clusters];
+            let v: Vec<f64> = c.iter().map(|x| x + spread * gauss()).collect();
+            builder.add(
+                NodeSpec::new(format!("l{i}"))
+                    .parent("r")
+                    .weight(1.0)
+                    .features(v),
+            );
+        }
+        super::super::prepare::prepare(&builder.build().expect("valid"))
+    }
+
+    /// Embedding-like levels (issue 34 item 4): digits-like, 64-d around 10
+    /// centres, and sentence-like, 384-d around 40, noise 0.05 per
+    /// dimension. The search's views and the filter's equal the all-pairs
+    /// scan's; in 64 dimensions the search settles nearly every row visiting
+    /// well under half the level, while in 384, where the noise is as long as
+    /// the centre, its bounds prune little (the filter's scan is what runs
+    /// there).
+    #[test]
+    fn embeddings_at_64_and_384_dimensions_equal_the_all_pairs_scan() {
+        let digits = clustered(1200, 64, 10, 0.05, 5);
+        let found = compare(&digits, SimilarityKind::Cosine);
+        assert!(found.settled * 10 >= found.rows * 9, "{} of {}", found.settled, found.rows);
+        assert!(found.share < 0.5, "64-d: a row visits {} of the level", found.share);
+        let sentences = clustered(800, 384, 40, 0.05, 6);
+        compare(&sentences, SimilarityKind::Cosine);
+    }
+
+    /// The search and the filter give the same views whatever the thread
+    /// count: every row is its own, the caps are built row by row.
+    #[test]
+    fn views_do_not_depend_on_the_thread_count() {
+        let p = clustered(900, 64, 10, 0.05, 7);
+        let level: Vec<usize> = (1..p.len()).collect();
+        let kind = SimilarityKind::Cosine;
+        let features: Vec<NodeFeatures<'_>> =
+            level.iter().map(|&n| NodeFeatures::new(kind, &p, n)).collect();
+        let filter = Filter::new(kind, &features).expect("a filter for this level");
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a pool");
+            pool.install(|| {
+                let searched = search_level(kind, &filter, &features, &level, f64::INFINITY)
+                    .expect("the search runs");
+                let scanned = level_bins(&p, kind, &level, true);
+                (searched.bins.iter().map(bits).collect::<Vec<_>>(), scanned.iter().map(bits).collect::<Vec<_>>())
+            })
+        };
+        assert_eq!(run(1), run(2));
+        assert_eq!(run(1), run(3));
     }
 }

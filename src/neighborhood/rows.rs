@@ -8,7 +8,7 @@
 
 use rayon::prelude::*;
 
-use super::bins::{bin_row, bin_sparse, Bins};
+use super::bins::{bin_row, bin_sparse, stage_view, Bins};
 use super::filtered_rows::{Filter, Scratch};
 use super::kernels::{dot_tile, kernel, KERNEL_ROWS};
 use super::knn_rows::knn_level_bins;
@@ -258,8 +258,9 @@ pub(super) fn exact_bins(
     bin_row(kind, level, i, &row, &mut Vec::new())
 }
 
-/// The bins of the rows `span` of a level through the f32 [`Filter`]; its exact
-/// nodes get the full exact row (`row` and `scores` are scratch space).
+/// The stage views of the rows `span` of a level through the f32 [`Filter`];
+/// its exact nodes' from their full exact row (`row` and `scores` are scratch
+/// space).
 fn filtered_tile(
     kind: SimilarityKind,
     filter: &Filter,
@@ -276,7 +277,7 @@ fn filtered_tile(
         .map(|&i| {
         if filter.is_exact(i) {
             similarity_row(kind, features, None, level, i, row);
-            bin_row(kind, level, i, row, scores)
+            stage_view(&bin_row(kind, level, i, row, scores))
         } else {
             fast.next()
                 .expect("invariant: one bin set per filtered row")
