@@ -39,8 +39,11 @@ use super::similarity::{pair_similarity, score, NodeFeatures, SimilarityKind};
 pub(super) const MIN_LEVEL: usize = 8_000;
 /// The search is used when a sample of rows visits at most this share of the
 /// level per row (centres and members); above it the filter's scan, which
-/// needs no bounds, is faster.
-const MAX_VISITED_SHARE: f64 = 0.35;
+/// needs no bounds and whose pairs cost 2–6 times less at 8 and 64
+/// dimensions, is faster: at 0.146 (64-d clustered) the search wins by 1.1×,
+/// at 0.25 (8-d, 20,000 rows) it loses by 1.4× (BENCHMARKS.md, issue 34 item
+/// 4).
+const MAX_VISITED_SHARE: f64 = 0.2;
 /// One query tile in this many makes the sample.
 const SAMPLE_EVERY: usize = 64;
 
