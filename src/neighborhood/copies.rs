@@ -399,8 +399,11 @@ mod tests {
             if let Some(new) = derive(p, kind, &levels, sparse, false) {
                 derived_any = true;
                 assert_eq!(bits(&new), bits(&old), "{what}, {kind:?}, sparse {sparse}");
-                // Below the nearest-neighbour size the old rows are full bins.
-                assert_eq!(new, old, "{what}, {kind:?}, sparse {sparse}: full bins");
+                // The sparse measures' rows are full bins (the dense ones'
+                // are stage views, `row_best`).
+                if !matches!(kind, SimilarityKind::Cosine | SimilarityKind::Pearson) {
+                    assert_eq!(new, old, "{what}, {kind:?}, sparse {sparse}: full bins");
+                }
             }
         }
         assert_eq!(

@@ -1,25 +1,30 @@
-//! The bins of dense cosine and Pearson rows through a single-precision filter:
-//! every pair's similarity is first computed in f32 from unit vectors, and the
-//! exact f64 similarity ([`pair_similarity`]) is computed only where the f32 value
-//! could change a decision (a score near an integer step, a candidate that might
-//! enter a bin's head). The bins come out bit for bit as the all-pairs f64 scan
-//! gives them (`bin_row` of `bins`); the unit test checks it.
+//! The stage views (`bins::stage_view`, all that Stages A and C read) of dense
+//! cosine and Pearson rows through a single-precision filter: every pair's
+//! similarity is first computed in f32 from unit vectors, and the exact f64
+//! similarity ([`pair_similarity`]) is computed only where the f32 value could
+//! change a decision (a score near an integer step, a candidate that might be
+//! among the row's best). The views come out bit for bit as the all-pairs f64
+//! scan's bins give them (`bin_row` of `bins`); the unit test checks it.
 //!
 //! Why: the all-pairs scan is the one `O(n²·d)` step of the method. On a
 //! 100,000-leaf level it took 44.8 s of the whole method's 75 s, most of it not in
 //! the dot products but in storing each f64 row (0.8 MB per row) and reading it
 //! back to bin it. Here a row is binned as it is computed: AVX2 turns each block
 //! of 16 f32 dot products into scores and a mask of the pairs that need a closer
-//! look, the rest are only counted in the row's histogram of scores, and per score
-//! only the few candidates that may still be among its best are kept; their exact
-//! similarities are computed at the end, for the top scores of each bin alone.
-//! The kernel (`kernels`, shared with the exact rows) does twice the pairs
-//! per instruction in f32 (BENCHMARKS.md,
-//! "Constraints through an f32 filter"). Written by hand: no crate does filtered
-//! exact binning.
+//! look; the rest only move the row's lowest and highest score, and only the
+//! few candidates that may still be among the row's 12 best are kept
+//! (`row_best`); their exact similarities are computed at the end. The rare row
+//! whose view needs more (a top bin of fewer than 4 over crowded following
+//! bins: 13 of 20,063 rows on h20000) is scanned again keeping the best entries
+//! of every score, as the filter did for every row before (issue 34: a
+//! histogram and per-score candidates cost 3× the kernel itself; BENCHMARKS.md,
+//! "Issue 34 item 4"). The kernel (`kernels`, shared with the exact rows) does
+//! twice the pairs per instruction in f32 (BENCHMARKS.md, "Constraints through
+//! an f32 filter"). Written by hand: no crate does filtered exact binning.
 
-use super::bins::{bin_table, Bin, Bins, Candidate, BIN_HEAD};
+use super::bins::{bin_table, stage_view, Bin, Bins, Candidate, BIN_HEAD};
 use super::kernels::{dot_tile, KERNEL_ROWS};
+use super::row_best::{view_from_best, RowBest};
 use super::similarity::{pair_similarity, score, NodeFeatures, SimilarityKind};
 
 /// Lanes per column block: two AVX registers of f32.
@@ -115,32 +120,66 @@ impl Filter {
         self.exact[i]
     }
 
-    /// The bins of rows `rows` (none of them [`Filter::is_exact`]), as `bin_row`
-    /// gives them from the exact similarity rows.
+    /// The stage views (`bins::stage_view`) of rows `rows` (none of them
+    /// [`Filter::is_exact`]), as the all-pairs f64 scan's bins give them: one
+    /// pass keeps each row's extreme scores and best entries (`row_best`);
+    /// the rows whose view needs more than those (a small top bin over
+    /// crowded following bins) are scanned again for the best entries of
+    /// every score.
     pub(super) fn bin_rows(
         &self,
         kind: SimilarityKind,
         features: &[NodeFeatures<'_>],
         level: &[usize],
         rows: &[usize],
-        state: &mut Vec<RowState>,
+        scratch: &mut Scratch,
     ) -> Vec<Bins> {
         let n = level.len();
-        state.resize_with(rows.len(), RowState::default);
-        for s in state.iter_mut() {
-            s.reset(self.eps);
-        }
         let exact =
             |i: usize, j: usize| pair_similarity(kind, &features[i], &features[j], level[j]);
-        // Scores are steps of 1/100 of the similarity: a value farther than this
-        // from a step has the same score in f32 as in f64.
-        let margin = 100.0 * self.eps;
+        let mut views = std::mem::take(&mut scratch.views);
+        views.clear();
+        views.resize_with(rows.len(), ViewState::new);
+        self.scan(rows, &mut views, |row, i, j, dot| self.pair_view(row, i, j, dot, &exact));
+        let mut out: Vec<Option<Bins>> = rows
+            .iter()
+            .zip(&mut views)
+            .map(|(&i, row)| row.view(n, level, self.eps, |j| exact(i, j)))
+            .collect();
+        scratch.views = views;
+        let open: Vec<usize> = (0..rows.len()).filter(|&r| out[r].is_none()).collect();
+        if !open.is_empty() {
+            let again: Vec<usize> = open.iter().map(|&r| rows[r]).collect();
+            let full = self.full_bins(n, level, &again, &mut scratch.full, &exact);
+            for (r, bins) in open.into_iter().zip(full) {
+                out[r] = Some(stage_view(&bins));
+            }
+        }
+        out.into_iter()
+            .map(|v| v.expect("invariant: every row has its view"))
+            .collect()
+    }
+
+    /// Every pair `(i, j)` of `rows` × the level through the f32 kernel, in
+    /// blocks of [`LANES`] columns: `visit(state of i, i, j, f32 dot)` for
+    /// each pair other than `(i, i)`, except that a clean block (16 columns,
+    /// none exact, not `i`) is handed whole to `block(state, dots)`, which
+    /// returns the mask of the lanes still to visit (all of them where AVX2
+    /// is missing).
+    fn scan<S: Classify>(
+        &self,
+        rows: &[usize],
+        states: &mut [S],
+        mut visit: impl FnMut(&mut S, usize, usize, f32),
+    ) {
+        let n = self.exact.len();
+        let margin = MARGIN_STEPS * self.eps;
         let simd = avx2();
         for block in 0..n.div_ceil(LANES) {
             let columns = &self.blocks[block * self.d * LANES..(block + 1) * self.d * LANES];
             let first = block * LANES;
             let last = (first + LANES).min(n);
-            for (group, states) in rows.chunks(KERNEL_ROWS).zip(state.chunks_mut(KERNEL_ROWS)) {
+            for (group, states) in rows.chunks(KERNEL_ROWS).zip(states.chunks_mut(KERNEL_ROWS)) {
                 let vectors: [&[f32]; KERNEL_ROWS] = std::array::from_fn(|r| {
                     let i = group[r.min(group.len() - 1)];
                     &self.rows[i * self.d..(i + 1) * self.d]
@@ -151,63 +190,195 @@ impl Filter {
                         && !self.exact_in_block[block]
                         && !(first..last).contains(&i);
                     if clean && simd {
-                        #[cfg(target_arch = "x86_64")]
-                        {
-                            let mut scores = [0i32; LANES];
-                            // SAFETY: `simd` is true only when the CPU has AVX2.
-                            let mut attention = unsafe {
-                                classify_avx2(dots, &row.floor32, margin as f32, &mut scores)
-                            };
-                            for &sc in &scores {
-                                row.counts[sc as usize] += 1;
-                            }
-                            while attention != 0 {
-                                let lane = attention.trailing_zeros() as usize;
-                                attention &= attention - 1;
-                                row.counts[scores[lane] as usize] -= 1;
-                                self.pair(row, i, first + lane, dots[lane], margin, &exact);
-                            }
+                        let mut attention = row.classify(dots, margin);
+                        while attention != 0 {
+                            let lane = attention.trailing_zeros() as usize;
+                            attention &= attention - 1;
+                            visit(row, i, first + lane, dots[lane]);
                         }
                         continue;
                     }
                     for (j, &dot) in (first..last).zip(dots) {
                         if j != i {
-                            self.pair(row, i, j, dot, margin, &exact);
+                            visit(row, i, j, dot);
                         }
                     }
                 }
             }
         }
-        state[..rows.len()]
+    }
+
+    /// The full bins of `rows` from the best entries of every score (the
+    /// fallback of [`Filter::bin_rows`]).
+    fn full_bins(
+        &self,
+        n: usize,
+        level: &[usize],
+        rows: &[usize],
+        state: &mut Vec<RowState>,
+        exact: &impl Fn(usize, usize) -> f64,
+    ) -> Vec<Bins> {
+        state.resize_with(rows.len(), RowState::default);
+        for s in state.iter_mut() {
+            s.reset(self.eps);
+        }
+        let states = &mut state[..rows.len()];
+        self.scan(rows, states, |row, i, j, dot| {
+            let (score, similarity) = self.pair(i, j, dot, exact);
+            row.take(score, similarity, j);
+        });
+        states
             .iter()
             .zip(rows)
             .map(|(row, &i)| row.bins(n, level, |j| exact(i, j)))
             .collect()
     }
 
-    /// One pair `(i, j)` from its f32 dot product: counted with its exact score,
-    /// kept while it may be among that score's best.
+    /// One pair `(i, j)` from its f32 dot product: its exact score, and a
+    /// similarity within `eps` of the exact one (the exact one near a score
+    /// step, where the f32 value could have the wrong score).
     #[inline]
-    fn pair(
-        &self,
-        row: &mut RowState,
-        i: usize,
-        j: usize,
-        dot: f32,
-        margin: f64,
-        exact: &impl Fn(usize, usize) -> f64,
-    ) {
+    fn pair(&self, i: usize, j: usize, dot: f32, exact: &impl Fn(usize, usize) -> f64) -> (u8, f64) {
         let approx = (f64::from(dot) + 1.0) / 2.0;
         let scaled = 100.0 * approx;
         // The nearest step by truncation (scaled > −1 for unit vectors, so the
         // shifted value is positive): no libm call.
         let nearest = ((scaled + 1.5) as i64 - 1) as f64;
-        if self.exact[j] || (scaled - nearest).abs() < margin {
+        if self.exact[j] || (scaled - nearest).abs() < MARGIN_STEPS * self.eps {
             let s = exact(i, j);
-            row.take(score(s), s, j);
+            (score(s), s)
         } else {
             // Not near a step: the f32 value has the exact score.
-            row.take(score(approx), approx, j);
+            (score(approx), approx)
+        }
+    }
+
+    /// One pair of the view pass: its score moves the row's extremes, its
+    /// similarity goes to the row's best entries.
+    #[inline]
+    fn pair_view(
+        &self,
+        row: &mut ViewState,
+        i: usize,
+        j: usize,
+        dot: f32,
+        exact: &impl Fn(usize, usize) -> f64,
+    ) {
+        let (score, similarity) = self.pair(i, j, dot, exact);
+        row.lo = row.lo.min(score);
+        row.hi = row.hi.max(score);
+        row.best.take(similarity, j, self.eps);
+        row.floor32 = (row.best.floor - self.eps) as f32;
+    }
+}
+
+/// Scores are steps of 1/100 of the similarity: a value farther than
+/// `MARGIN_STEPS · eps` from a step (in units of score) has the same score in
+/// f32 as in f64.
+const MARGIN_STEPS: f64 = 100.0;
+
+/// Scratch space of [`Filter::bin_rows`], kept across calls by a thread.
+#[derive(Default)]
+pub(super) struct Scratch {
+    views: Vec<ViewState>,
+    full: Vec<RowState>,
+}
+
+/// What a block of 16 pairs of one row needs from the AVX2 classifier.
+trait Classify {
+    /// The mask of the lanes of `dots` that need a closer look; the others
+    /// are accounted for here.
+    fn classify(&mut self, dots: &[f32; LANES], margin: f64) -> u32;
+}
+
+/// One row of the view pass: its lowest and highest score, and its best
+/// entries.
+struct ViewState {
+    best: RowBest,
+    lo: u8,
+    hi: u8,
+    /// Per lane of the AVX2 classifier: lowest scores (first 8) and highest
+    /// (last 8) of the pairs it settled.
+    range: [i32; 2 * LANES / 2],
+    /// `best.floor − eps` in f32: pairs below it cannot be kept.
+    floor32: f32,
+}
+
+impl ViewState {
+    fn new() -> Self {
+        let mut range = [0i32; LANES];
+        range[..LANES / 2].fill(100);
+        ViewState {
+            best: RowBest::new(),
+            lo: 100,
+            hi: 0,
+            range,
+            floor32: f32::NEG_INFINITY,
+        }
+    }
+
+    /// The row's stage view, or `None` when it needs more than the best
+    /// entries kept.
+    fn view(
+        &mut self,
+        n: usize,
+        level: &[usize],
+        eps: f64,
+        exact: impl Fn(usize) -> f64,
+    ) -> Option<Bins> {
+        if n < 2 {
+            return Some(Bins::default());
+        }
+        let (mins, maxes) = self.range.split_at(LANES / 2);
+        let lo = mins.iter().fold(i32::from(self.lo), |a, &b| a.min(b));
+        let hi = maxes.iter().fold(i32::from(self.hi), |a, &b| a.max(b));
+        self.best.prune(eps);
+        let best = self.best.exact_best(eps, exact);
+        view_from_best(&best, self.best.floor, lo as u8, hi as u8, level)
+    }
+}
+
+impl Classify for ViewState {
+    #[inline]
+    fn classify(&mut self, dots: &[f32; LANES], margin: f64) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: `scan` classifies only when the CPU has AVX2.
+            unsafe { classify_view_avx2(dots, self.floor32, margin as f32, &mut self.range) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = (dots, margin);
+            u32::MAX
+        }
+    }
+}
+
+impl Classify for RowState {
+    #[inline]
+    fn classify(&mut self, dots: &[f32; LANES], margin: f64) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let mut scores = [0i32; LANES];
+            // SAFETY: `scan` classifies only when the CPU has AVX2.
+            let attention =
+                unsafe { classify_avx2(dots, &self.floor32, margin as f32, &mut scores) };
+            for &sc in &scores {
+                self.counts[sc as usize] += 1;
+            }
+            // The lanes to visit are counted there.
+            let mut rest = attention;
+            while rest != 0 {
+                let lane = rest.trailing_zeros() as usize;
+                rest &= rest - 1;
+                self.counts[scores[lane] as usize] -= 1;
+            }
+            attention
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = (dots, margin);
+            u32::MAX
         }
     }
 }
@@ -381,6 +552,66 @@ unsafe fn classify_avx2(
 }
 
 
+/// The view pass's [`classify_avx2`]: one floor for every score (the row's
+/// best entries, `floor` being their floor less `eps`), and instead of a
+/// histogram the lowest and highest scores of the lanes it settles, per lane,
+/// into `range` (8 lowest, then 8 highest). Lanes near a score step are left
+/// out of `range`: their f32 score may be wrong, and they are visited.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn classify_view_avx2(
+    dots: &[f32; LANES],
+    floor: f32,
+    margin: f32,
+    range: &mut [i32; LANES],
+) -> u32 {
+    use std::arch::x86_64::{
+        __m256i, _mm256_add_ps, _mm256_andnot_ps, _mm256_blendv_epi8, _mm256_castps_si256,
+        _mm256_cmp_ps, _mm256_cvttps_epi32, _mm256_loadu_ps, _mm256_loadu_si256, _mm256_max_epi32,
+        _mm256_max_ps, _mm256_min_epi32, _mm256_min_ps, _mm256_movemask_ps, _mm256_mul_ps,
+        _mm256_or_ps, _mm256_round_ps, _mm256_set1_epi32, _mm256_set1_ps, _mm256_setzero_ps,
+        _mm256_setzero_si256, _mm256_storeu_si256, _mm256_sub_ps, _CMP_GE_OQ, _CMP_LT_OQ,
+        _MM_FROUND_NO_EXC, _MM_FROUND_TO_NEAREST_INT,
+    };
+    let half = _mm256_set1_ps(0.5);
+    let hundred = _mm256_set1_ps(100.0);
+    let near_margin = _mm256_set1_ps(margin + 1e-4);
+    // The f32 rounding of `approx` and of the floor (see `classify_avx2`).
+    let floor = _mm256_set1_ps(floor - 1e-6);
+    let sign = _mm256_set1_ps(-0.0);
+    let top = _mm256_set1_epi32(100);
+    // SAFETY: `range` holds 16 values, two halves of eight.
+    let (mut lowest, mut highest) = unsafe {
+        (
+            _mm256_loadu_si256(range.as_ptr().cast::<__m256i>()),
+            _mm256_loadu_si256(range.as_ptr().add(8).cast::<__m256i>()),
+        )
+    };
+    let mut mask = 0u32;
+    for part in 0..2 {
+        // SAFETY: `dots` holds 16 values, two halves of eight.
+        let dot = unsafe { _mm256_loadu_ps(dots.as_ptr().add(8 * part)) };
+        let approx = _mm256_add_ps(_mm256_mul_ps(dot, half), half);
+        let scaled = _mm256_mul_ps(approx, hundred);
+        let nearest = _mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(scaled);
+        let distance = _mm256_andnot_ps(sign, _mm256_sub_ps(scaled, nearest));
+        let near = _mm256_cmp_ps::<_CMP_LT_OQ>(distance, near_margin);
+        let clamped = _mm256_min_ps(_mm256_max_ps(scaled, _mm256_setzero_ps()), hundred);
+        let score = _mm256_cvttps_epi32(clamped);
+        let near_bits = _mm256_castps_si256(near);
+        lowest = _mm256_min_epi32(lowest, _mm256_blendv_epi8(score, top, near_bits));
+        highest = _mm256_max_epi32(highest, _mm256_blendv_epi8(score, _mm256_setzero_si256(), near_bits));
+        let may_enter = _mm256_cmp_ps::<_CMP_GE_OQ>(approx, floor);
+        mask |= (_mm256_movemask_ps(_mm256_or_ps(near, may_enter)) as u32) << (8 * part);
+    }
+    // SAFETY: see above.
+    unsafe {
+        _mm256_storeu_si256(range.as_mut_ptr().cast::<__m256i>(), lowest);
+        _mm256_storeu_si256(range.as_mut_ptr().add(8).cast::<__m256i>(), highest);
+    }
+    mask
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::rows::exact_bins;
@@ -474,7 +705,7 @@ mod tests {
                     rows.len() < level.len(),
                     "{kind:?}: the zero vector is exact"
                 );
-                let mut state = Vec::new();
+                let mut state = Scratch::default();
                 // Tiles of 5 rows (groups of the 4-row kernel and a remainder):
                 // the first rows, and every 41st row after them.
                 let sample: Vec<usize> = rows
@@ -485,12 +716,43 @@ mod tests {
                 for tile in sample.chunks(5) {
                     let fast = filter.bin_rows(kind, &features, &level, tile, &mut state);
                     for (&i, bins) in tile.iter().zip(&fast) {
-                        let slow = exact_bins(kind, &features, &level, i);
+                        let slow = stage_view(&exact_bins(kind, &features, &level, i));
                         assert_eq!(bins, &slow, "{kind:?} row {i}");
                     }
                 }
             }
         }
+    }
+
+    /// A row whose view needs more than its 12 best entries: one duplicate
+    /// (score 100) alone in the top bin, over four crowded bins that Stage C
+    /// reads. Its view comes from the second scan, and equals the exact
+    /// scan's, as every other row's does.
+    #[test]
+    fn a_small_top_bin_over_crowded_bins_is_scanned_again() {
+        let mut vectors = vec![vec![1.0, 0.0], vec![1.0, 0.0]];
+        for k in 0..300 {
+            // Similarities spread over [0, 0.78): scores 0 to 77.
+            let c = 2.0 * (0.78 * f64::from(k) / 300.0) - 1.0;
+            vectors.push(vec![c, (1.0 - c * c).sqrt()]);
+        }
+        let p = level_of(&vectors);
+        let level: Vec<usize> = (1..p.len()).collect();
+        let kind = SimilarityKind::Cosine;
+        let features: Vec<NodeFeatures<'_>> =
+            level.iter().map(|&n| NodeFeatures::new(kind, &p, n)).collect();
+        let filter = Filter::new(kind, &features).expect("a filter for this level");
+        let rows: Vec<usize> = (0..level.len()).collect();
+        let views = filter.bin_rows(kind, &features, &level, &rows, &mut Scratch::default());
+        for (&i, view) in rows.iter().zip(&views) {
+            assert_eq!(view, &stage_view(&exact_bins(kind, &features, &level, i)), "row {i}");
+        }
+        let needed: usize = views[0].bins.iter().map(|b| b.head.len()).sum();
+        assert!(
+            needed > super::super::row_best::WANTED && views[0].bins.len() == 5,
+            "row 0 reads {needed} entries in {} bins",
+            views[0].bins.len()
+        );
     }
 
     /// Only cosine and Pearson levels of equal-length vectors get a filter, and

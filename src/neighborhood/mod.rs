@@ -30,6 +30,8 @@ pub mod projection;
 pub mod similarity;
 /// A level's similarity rows, binned: sparse, filtered or exact dense.
 mod rows;
+/// A row's best entries, kept as it is scanned, and the stage view they give.
+mod row_best;
 /// A row over some columns reduced to what binning reads; rows from parts.
 mod score_tops;
 /// Exact similarity rows without all-pairs work for the sparse measures.

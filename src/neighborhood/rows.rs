@@ -8,8 +8,8 @@
 
 use rayon::prelude::*;
 
-use super::bins::{bin_row, bin_sparse, Bins};
-use super::filtered_rows::{Filter, RowState};
+use super::bins::{bin_row, bin_sparse, stage_view, Bins};
+use super::filtered_rows::{Filter, Scratch};
 use super::kernels::{dot_tile, kernel, KERNEL_ROWS};
 use super::knn_rows::knn_level_bins;
 use super::similarity::{cosine_from_parts, norm_of, pair_similarity, NodeFeatures, SimilarityKind};
@@ -81,7 +81,7 @@ pub(super) fn level_rows_bins(
     let tiles: Vec<Vec<Bins>> = rows
         .par_chunks(TILE_ROWS)
         .map_init(
-            || (vec![Vec::new(); TILE_ROWS], Vec::new(), Vec::new()),
+            || (vec![Vec::new(); TILE_ROWS], Vec::new(), Scratch::default()),
             |(rows, scores, filter_state), span| {
                 if let Some(filter) = &filter {
                     return filtered_tile(
@@ -258,15 +258,16 @@ pub(super) fn exact_bins(
     bin_row(kind, level, i, &row, &mut Vec::new())
 }
 
-/// The bins of the rows `span` of a level through the f32 [`Filter`]; its exact
-/// nodes get the full exact row (`row` and `scores` are scratch space).
+/// The stage views of the rows `span` of a level through the f32 [`Filter`];
+/// its exact nodes' from their full exact row (`row` and `scores` are scratch
+/// space).
 fn filtered_tile(
     kind: SimilarityKind,
     filter: &Filter,
     features: &[NodeFeatures<'_>],
     level: &[usize],
     span: &[usize],
-    (row, scores, state): (&mut Vec<f64>, &mut Vec<u8>, &mut Vec<RowState>),
+    (row, scores, state): (&mut Vec<f64>, &mut Vec<u8>, &mut Scratch),
 ) -> Vec<Bins> {
     let filtered: Vec<usize> = span.iter().copied().filter(|&i| !filter.is_exact(i)).collect();
     let mut fast = filter
@@ -276,7 +277,7 @@ fn filtered_tile(
         .map(|&i| {
         if filter.is_exact(i) {
             similarity_row(kind, features, None, level, i, row);
-            bin_row(kind, level, i, row, scores)
+            stage_view(&bin_row(kind, level, i, row, scores))
         } else {
             fast.next()
                 .expect("invariant: one bin set per filtered row")
