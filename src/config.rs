@@ -617,7 +617,7 @@ impl<'de> Deserialize<'de> for OutputConfig {
 }
 
 /// Kinds of output.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[derive(serde::Serialize, Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum OutputKind {
     /// A picture as SVG.

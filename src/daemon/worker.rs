@@ -17,7 +17,6 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::config::DatasetConfig;
-use crate::fingerprint::{Fingerprint, Fingerprinter};
 use crate::graph::{self, DatasetGraph, GraphOptions, LayoutStep, Stage, StageReport};
 use crate::layout::{LayoutError, ProgressSink, Request};
 use crate::measure::stability::{stability, Stability};
@@ -204,12 +203,6 @@ struct State {
     /// good layout among them: the source of render-only rebuilds and of the
     /// next warm start) and the state a commit could not write.
     graph: DatasetGraph,
-    /// The [`job_key`] last built (or last failed on), so an event that
-    /// changed nothing (a touch, a save without edits) costs nothing.
-    fingerprint: Option<Fingerprint>,
-    /// Whether a build has succeeded: there are good outputs, and a failed
-    /// build's inputs, seen again unchanged, need no second attempt.
-    good: bool,
     /// The outputs of the last rebuild when some could not be written: the
     /// whole set, so that a retry leaves it consistent (the ones that were
     /// written are skipped as unchanged).
@@ -221,38 +214,9 @@ impl Default for State {
         State {
             // `NPTREEMAP_NO_CACHE=1` turns reuse off here too, as for `build`.
             graph: DatasetGraph::new(GraphOptions::from_env()),
-            fingerprint: None,
-            good: false,
             unwritten: None,
         }
     }
-}
-
-/// Everything a rebuild of `job` from `files` depends on: the input bytes
-/// and how they are read, the layout settings, the style, the whole dataset
-/// config (outputs, page, where its state lives) and the page's history. A
-/// rebuild for an edit is skipped only when this is unchanged (issue 30 item
-/// 6: it covered the input bytes only, so a config change coalesced with an
-/// edit that changed no byte was lost). Every field of [`Job`] is named, so
-/// a new one does not compile until it is placed in the key or left out here.
-fn job_key(job: &Job, files: &[pipeline::InputFile]) -> Fingerprint {
-    let Job {
-        // When and why it runs, not what it makes.
-        since: _,
-        next: _,
-        force: _,
-        dataset,
-        request,
-        style,
-        history,
-    } = job;
-    Fingerprinter::new("job")
-        .fingerprint(graph::keys::inputs(dataset, files))
-        .debug(&request.settings())
-        .debug(style)
-        .debug(dataset)
-        .u64(*history as u64)
-        .finish()
 }
 
 /// What happens to a failed dataset's outputs, truthfully: kept when there
@@ -290,23 +254,12 @@ impl State {
         let files = match pipeline::read_inputs(d) {
             Ok(files) => files,
             Err(e) => {
-                self.fingerprint = None;
                 let consequence = kept(d, e.missing_file().is_some());
                 return Outcome::Unreadable(e, consequence);
             }
         };
         let mut stages = StageReport::default();
         stages.record(name, Stage::Read, true, ms_since(started), "");
-        let fingerprint = job_key(job, &files);
-        if data_only(&reason)
-            && self.fingerprint == Some(fingerprint)
-            && self.good
-            && !job.force
-        {
-            tracing::debug!(dataset = name, "inputs unchanged; nothing to do");
-            return Outcome::Unchanged;
-        }
-        self.fingerprint = Some(fingerprint);
         // The graph keeps the dataset's last layouts (the page's history):
         // it knows each one's fingerprint, which keys the page's render.
         self.graph.keep_history(job.history);
@@ -332,6 +285,14 @@ impl State {
             Err(e) => return Outcome::Failed(e, kept(d, false)),
             Ok(build) => build,
         };
+        // The graph's one "nothing changed" decision (`graph::start`): the
+        // inputs, settings, style and history are those the outputs on disk
+        // were made from. An event that changed nothing (a touch, a save
+        // without edits) then says nothing; a render edit or an open
+        // problem is answered with a line.
+        if build.layout == LayoutStep::UpToDate && data_only(&reason) && !job.force {
+            return Outcome::Unchanged;
+        }
         if shared.stopping() {
             return Outcome::Abandoned;
         }
@@ -349,7 +310,6 @@ impl State {
             _ => None,
         };
         let written = self.graph.commit(&graph_job, &mut build);
-        self.good = true;
         // Kept for the retry only when some output could not be written.
         self.unwritten = (!written.failed.is_empty()).then(|| {
             build
@@ -574,7 +534,9 @@ mod tests {
     /// not only the input bytes: an edit that rewrote a file with the same
     /// bytes, handed over with a config whose title (or output list) changed
     /// meanwhile, draws the new title (it was skipped, and the title stayed
-    /// old for good); with the same config as well it is skipped.
+    /// old for good); with the same config as well it is skipped, and with
+    /// the outputs reordered too (the same files), while an added output is
+    /// made. One decision (the graph's) covers it all.
     #[test]
     fn unchanged_bytes_under_a_changed_config_are_not_skipped() {
         let (dir, config) = countries("skip");
@@ -602,11 +564,22 @@ mod tests {
         assert!(built.written.written.contains(&svg), "{:?}", built.written);
         assert!(std::fs::read_to_string(&svg).expect("svg").contains("A new title"));
 
+        // The same outputs in another order make the same files: nothing
+        // to do. One more output is made.
         let mut moved = titled.clone();
         moved.datasets[0].outputs.reverse();
         let d = moved.datasets[0].clone();
         let outcome = state.run("countries", &job_of(&moved, &d, edit()), &shared);
-        assert!(matches!(outcome, Outcome::Built(_)), "an output change is not skipped");
+        assert!(matches!(outcome, Outcome::Unchanged), "reordered outputs make the same files");
+        let mut extra = moved.datasets[0].outputs.last().expect("an SVG output").clone();
+        extra.path = dir.join("out/extra.svg");
+        moved.datasets[0].outputs.push(extra);
+        let d = moved.datasets[0].clone();
+        let Outcome::Built(built) = state.run("countries", &job_of(&moved, &d, edit()), &shared)
+        else {
+            panic!("an output added was skipped");
+        };
+        assert_eq!(built.written.written, vec![dir.join("out/extra.svg")]);
         let _ = std::fs::remove_dir_all(&dir);
     }
 

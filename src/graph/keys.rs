@@ -17,7 +17,7 @@ use crate::render::Style;
 /// paths: a moved file with the same bytes gives the same dataset.
 pub fn inputs(d: &DatasetConfig, files: &[InputFile]) -> Fingerprint {
     let mut f = Fingerprinter::new("inputs");
-    f.str(&d.format).debug(&d.fields).debug(&d.command);
+    f.str(&d.format).value(&d.fields).value(&d.command);
     for file in files {
         f.str(&file.role).bytes(&file.bytes);
     }
@@ -41,7 +41,7 @@ pub fn drawn(inputs: Fingerprint, zero_weights: ZeroWeights) -> Fingerprint {
 /// of their children's, never weighted: `neighborhood::prepare`).
 pub fn similarity(dataset: &Dataset, kind: SimilarityKind) -> Fingerprint {
     Fingerprinter::new("similarity")
-        .debug(&kind)
+        .value(&kind)
         .fingerprint(similarity_of_nodes(dataset))
         .finish()
 }
@@ -85,12 +85,12 @@ fn similarity_of_nodes(dataset: &Dataset) -> Fingerprint {
 /// the similarity hint), for the memo of its prepared form.
 pub fn dataset(dataset: &Dataset) -> Fingerprint {
     let mut f = Fingerprinter::new("dataset");
-    f.debug(&dataset.similarity_hint());
+    f.value(&dataset.similarity_hint());
     for node in dataset.nodes() {
         f.str(&node.label)
             .f64(node.weight.unwrap_or(f64::NAN))
             .f64(node.value)
-            .debug(&node.color)
+            .value(&node.color)
             .u64(u64::from(node.is_virtual));
     }
     f.fingerprint(similarity_of_nodes(dataset));
@@ -113,10 +113,10 @@ pub fn render(
     f.fingerprint(inputs)
         .fingerprint(settings)
         .fingerprint(layout)
-        .debug(&kind)
+        .value(&kind)
         .f64(output.scale);
     if kind != OutputKind::Json {
-        f.debug(style);
+        f.value(style);
     }
     f.finish()
 }

@@ -606,7 +606,7 @@ impl DatasetGraph {
         let t = Instant::now();
         let prepared_key = Fingerprinter::new("prepared")
             .fingerprint(source)
-            .debug(&kind)
+            .value(&kind)
             .finish();
         let prepared = match &self.prepared {
             Some((key, prepared)) if cache && *key == prepared_key => {
