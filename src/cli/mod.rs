@@ -214,12 +214,11 @@ impl LayoutOptions {
     /// The layout to start warm from: `--previous` unless `--cold` (the
     /// graph's one decision, [`crate::graph::start::given`]).
     pub(crate) fn warm_start(&self) -> anyhow::Result<Option<Arc<Previous>>> {
-        let previous = if self.cold {
-            None
-        } else {
-            self.previous_layout()?
-        };
-        Ok(crate::graph::start::given(previous, self.cold))
+        Ok(
+            crate::graph::start::given(self.cold, || self.previous_layout())
+                .transpose()?
+                .flatten(),
+        )
     }
 }
 

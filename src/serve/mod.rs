@@ -51,7 +51,7 @@ use hyper::header::{HeaderValue, ALLOW, HOST};
 use hyper::{Method, Request, Response, StatusCode, Version};
 use tokio::sync::Semaphore;
 
-use crate::config::OutputKind;
+use crate::render::OutputKind;
 use crate::daemon::status::Status;
 use crate::render::html::HISTORY_JS;
 use body::{Body, Hold};
@@ -386,7 +386,7 @@ fn route(target: &str, shared: &Shared) -> Routed {
         routes.refresh();
         if decoded.as_deref() == Some("/") {
             let page = index::index(&routes, &shared.title);
-            return Routed::Ready(ok(page, HTML, "none"));
+            return Routed::Ready(ok(page, OutputKind::Html.content_type(), "none"));
         }
         routes.find(target).cloned()
     };
@@ -425,11 +425,9 @@ async fn load(file: FileAnswer, shared: &Shared) -> Answer {
             OutputKind::Html => {
                 let text = String::from_utf8_lossy(&bytes);
                 let page = index::live_page(&text, &file.dataset, &nonce, &file.key);
-                ok(page, HTML, &nonce)
+                ok(page, OutputKind::Html.content_type(), &nonce)
             }
-            OutputKind::Svg => ok(bytes, "image/svg+xml", &nonce),
-            OutputKind::Png => ok(bytes, "image/png", &nonce),
-            OutputKind::Json => ok(bytes, "application/json", &nonce),
+            kind => ok(bytes, kind.content_type(), &nonce),
         })
     })
     .await;
@@ -444,7 +442,6 @@ async fn load(file: FileAnswer, shared: &Shared) -> Answer {
     }
 }
 
-const HTML: &str = "text/html; charset=utf-8";
 
 fn open(file: &Path) -> Option<(std::fs::File, u64)> {
     let f = std::fs::File::open(file).ok()?;

@@ -10,7 +10,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
-use crate::config::{Config, OutputKind};
+use crate::config::Config;
+use crate::render::OutputKind;
 
 /// One servable file.
 #[derive(Clone, Debug, PartialEq)]
