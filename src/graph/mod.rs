@@ -312,9 +312,8 @@ impl DatasetGraph {
         for stage in [Stage::Parse, Stage::Prepare, Stage::Constraints, Stage::Layout] {
             stages.record(name, stage, false, 0.0, "nothing changed");
         }
-        for out in &outputs {
-            let note = format!("{}: nothing changed", out.path.display());
-            stages.record(name, Stage::Render, false, 0.0, note);
+        for _ in &outputs {
+            stages.record(name, Stage::Render, false, 0.0, "nothing changed");
         }
         let warnings = record
             .warnings
