@@ -189,35 +189,22 @@ const DATA_CLASS: &str = "np-data";
 /// The page's style, scoped to the map's container (see the file's header).
 const STYLE: &str = include_str!("page/page.css");
 
-/// The page's script: one function scope over its parts, in this order
-/// (each file's header says what it owns). It finds everything inside its
-/// own container, so several maps can share a document; user text reaches
-/// the document only through `textContent` and attribute values.
-const SCRIPT_PARTS: [&str; 7] = [
-    include_str!("page/model.js"),
-    include_str!("page/hover.js"),
-    include_str!("page/lod.js"),
-    include_str!("page/zoom.js"),
-    include_str!("page/search.js"),
-    include_str!("page/link.js"),
-    include_str!("page/main.js"),
-];
+/// The page's script: its ES modules (`page/*.js`, each file's header says
+/// what it owns), bundled from `page/main.js` at build time into one
+/// function scope (`page/bundle.rs`, run by `build.rs`). It finds
+/// everything inside its own container, so several maps can share a
+/// document; user text reaches the document only through `textContent` and
+/// attribute values.
+const SCRIPT: &str = include_str!(concat!(env!("OUT_DIR"), "/page.js"));
 
-/// The script parts of a page with history, after [`SCRIPT_PARTS`]'s: the
-/// morph the live preview shares (`page/history.js`) and the page's own
-/// steps through its past layouts. Left out of a page without history, so
-/// that page keeps its bytes.
-const HISTORY_PARTS: [&str; 2] = [
-    include_str!("page/history.js"),
-    include_str!("page/past.js"),
-];
+/// The script of a page with history: [`SCRIPT`]'s modules, then the
+/// page's own steps through its past layouts (`page/past.js`, with the morph
+/// the live preview shares, `page/history.js`). A page without history
+/// keeps [`SCRIPT`], and so its bytes.
+const SCRIPT_WITH_HISTORY: &str = include_str!(concat!(env!("OUT_DIR"), "/page-history.js"));
 
-/// The step control's style, with [`HISTORY_PARTS`] only.
+/// The step control's style, with [`SCRIPT_WITH_HISTORY`] only.
 const HISTORY_STYLE: &str = include_str!("page/history.css");
-
-/// The morph and step code shared by the page's steps and the live
-/// preview's (src/serve serves it ahead of its own script).
-pub const HISTORY_JS: &str = include_str!("page/history.js");
 
 /// Width over height of the SVG's `viewBox`.
 fn view_aspect(svg: &str) -> Option<f64> {
@@ -329,13 +316,12 @@ fn legend_html(items: &[LegendItem], key: &str) -> String {
 pub fn html(svg: &str, data: &HtmlData) -> String {
     let json = data_json(data);
     let key = page_key(svg, &json);
-    let parts: &[&str] = if data.history.is_empty() {
-        &[]
+    let script = if data.history.is_empty() {
+        SCRIPT
     } else {
-        &HISTORY_PARTS
+        SCRIPT_WITH_HISTORY
     };
-    let script_len: usize = SCRIPT_PARTS.iter().chain(parts).map(|s| s.len()).sum();
-    let mut out = String::with_capacity(svg.len() + json.len() + STYLE.len() + script_len + 4096);
+    let mut out = String::with_capacity(svg.len() + json.len() + STYLE.len() + script.len() + 4096);
     out.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
     out.push_str(
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>",
@@ -419,11 +405,9 @@ pub fn html(svg: &str, data: &HtmlData) -> String {
         "<script type=\"application/json\" class=\"{DATA_CLASS}\" id=\"{key}-data\">\n"
     ));
     out.push_str(&json);
-    out.push_str("\n</script>\n<script>\n(function () {\n\"use strict\";\n");
-    for part in SCRIPT_PARTS.iter().chain(parts) {
-        out.push_str(part);
-    }
-    out.push_str("})();\n</script>\n</div>\n</body>\n</html>\n");
+    out.push_str("\n</script>\n<script>\n");
+    out.push_str(script);
+    out.push_str("</script>\n</div>\n</body>\n</html>\n");
     out
 }
 

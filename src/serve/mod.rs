@@ -53,7 +53,6 @@ use tokio::sync::Semaphore;
 
 use crate::render::OutputKind;
 use crate::daemon::status::Status;
-use crate::render::html::HISTORY_JS;
 use body::{Body, Hold};
 use events::Hub;
 use paths::Routes;
@@ -74,9 +73,11 @@ const MAX_FILE: u64 = 512 << 20;
 /// answered 503.
 const BUDGET_WAIT: Duration = Duration::from_secs(5);
 
-/// The browser side of the preview (served after the morph it shares with
-/// the page's own steps, [`crate::render::html::HISTORY_JS`]).
-const LIVE_JS: &str = include_str!("live.js");
+/// The browser side of the preview: `live.js` and the morph it imports from
+/// the page's own steps (`render/page/history.js`), bundled at build time
+/// into one function scope (`render/page/bundle.rs`, run by `build.rs`), so
+/// that no name of its reaches the page's.
+const LIVE_JS: &str = include_str!(concat!(env!("OUT_DIR"), "/live.js"));
 /// Its style (the error overlay, the figures panel).
 const LIVE_CSS: &str = include_str!("live.css");
 
@@ -372,9 +373,7 @@ fn route(target: &str, shared: &Shared) -> Routed {
     let decoded = paths::decode(target);
     match decoded.as_deref() {
         Some("/_np/live.js") => {
-            // One function scope: the morph's name stays out of the page's.
-            let script = format!("(function () {{\n{HISTORY_JS}{LIVE_JS}}})();\n");
-            return Routed::Ready(ok(script, "text/javascript; charset=utf-8", "none"));
+            return Routed::Ready(ok(LIVE_JS, "text/javascript; charset=utf-8", "none"));
         }
         Some("/_np/live.css") => {
             return Routed::Ready(ok(LIVE_CSS, "text/css; charset=utf-8", "none"))

@@ -24,6 +24,7 @@ mod legibility;
 mod light_outputs;
 mod neighborhood;
 mod packaging;
+mod page_scripts;
 mod paper_data;
 mod picture_options;
 mod plain_method;

@@ -85,6 +85,7 @@ fn package_lists_hold_sources_docs_and_licences_only() {
                 || matches!(
                     f,
                     "Cargo.toml"
+                        | "build.rs"
                         | "Cargo.toml.orig"
                         | "Cargo.lock"
                         | ".cargo_vcs_info.json"
@@ -100,4 +101,7 @@ fn package_lists_hold_sources_docs_and_licences_only() {
     let main = package_list("nptreemap");
     assert!(main.iter().any(|f| f == "src/render/fonts/DejaVuSans.ttf"));
     assert!(main.iter().any(|f| f == "config/default.yaml"));
+    // The build script that bundles the page's scripts, and what it reads.
+    assert!(main.iter().any(|f| f == "build.rs"));
+    assert!(main.iter().any(|f| f == "src/render/page/bundle.rs"));
 }

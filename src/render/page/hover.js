@@ -1,12 +1,16 @@
-// Hover, focus and the found cell (part of the page's script, see
-// src/render/html.rs). The picture itself never changes on hover: a second
-// SVG over it (its own compositing layer) holds a veil in the background
-// colour, three quarters opaque, and on top of it the hovered cell and its
-// neighbours drawn again with their labels and the tabs between them, the
-// partners' outlines and the focus ring. So a hover repaints that small layer
-// only, whatever the size of the map, and tabs, labels and markers of the
-// other cells are dimmed with them.
-var over = svg.cloneNode(false);
+// Hover, focus and the found cell, drawn on a layer of their own.
+// A module of the page's script (bundled by src/render/page/bundle.rs). The
+// picture itself never changes on hover: a second SVG over it (its own
+// compositing layer) holds a veil in the background colour, three quarters
+// opaque, and on top of it the hovered cell and its neighbours drawn again
+// with their labels and the tabs between them, the partners' outlines and the
+// focus ring. So a hover repaints that small layer only, whatever the size of
+// the map, and tabs, labels and markers of the other cells are dimmed with
+// them.
+import { EMPTY, NS, cells, data, ids, index, isLeaf, map, near, part, partners, pathLabels, root, svg, weights } from "./model.js";
+import { labelFor } from "./lod.js";
+
+export const over = svg.cloneNode(false);
 over.removeAttribute("width");
 over.removeAttribute("height");
 over.setAttribute("class", "np-hover");
@@ -25,9 +29,11 @@ over.appendChild(layer);
 map.appendChild(over);
 var tip = part("tooltip");
 var current = -1;
+// The leaf (or found group) drawn on the layer, -1 when none.
+export function hovered() { return current; }
 
-// Tabs by the leaves they join, and the picture's labels by node, found on
-// first use (a page that is only looked at never pays for them).
+// Tabs by the leaves they join, found on first use (a page that is only
+// looked at never pays for them).
 var tabsOf = null;
 function tabsFor(i) {
   if (!tabsOf) {
@@ -42,18 +48,6 @@ function tabsFor(i) {
     });
   }
   return tabsOf.get(i) || EMPTY;
-}
-var staticLabels = null;
-function staticLabel(i) {
-  if (!staticLabels) {
-    staticLabels = new Map();
-    var group = svg.querySelector("g.np-labels");
-    var placed = data.labels ? data.labels.placed : EMPTY;
-    if (group && placed.length === group.children.length) {
-      for (var k = 0; k < placed.length; k++) { staticLabels.set(placed[k], group.children[k]); }
-    }
-  }
-  return staticLabels.get(i);
 }
 
 // A copy of `el` for the layer, wrapped in a copy of its parent group
@@ -83,7 +77,7 @@ function outline(i, cls) {
 function clearLayer() {
   while (layer.firstChild) { layer.removeChild(layer.firstChild); }
 }
-function clear() {
+export function clear() {
   current = -1;
   clearLayer();
   over.classList.remove("np-on");
@@ -93,7 +87,7 @@ function clear() {
 
 // The hovered (or focused, or found) leaf i: its neighbourhood over the
 // veil, its partners outlined, a ring when `ring`, and the tooltip.
-function highlight(i, ring) {
+export function highlight(i, ring) {
   current = i;
   clearLayer();
   var keep = new Set(near[i]);
@@ -182,7 +176,7 @@ function fillTip(i) {
 
 // Beside the point, flipped to its other side near the window's edge so
 // the tooltip never runs out of view; moved by a transform (no layout).
-function place(cx, cy) {
+export function place(cx, cy) {
   // Fractional sizes: a rounded one lets the last fraction of a pixel out.
   var r = tip.getBoundingClientRect(), w = Math.ceil(r.width), h = Math.ceil(r.height);
   var x = cx + 14, y = cy + 14;
@@ -192,7 +186,7 @@ function place(cx, cy) {
 }
 // Below the cell's middle (above it near the window's bottom), so the
 // tooltip leaves the cell in view.
-function placeAt(i) {
+export function placeAt(i) {
   var r = cells[i].getBoundingClientRect();
   place(r.left + r.width / 2, r.top + Math.max(r.height - 8, r.height / 2));
 }

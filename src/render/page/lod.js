@@ -1,20 +1,40 @@
-// Labels for a zoomed view (part of the page's script, see
-// src/render/html.rs): when the view shows part of the map z times larger,
-// every leaf in view gets the label the picture would give it at that
-// scale, by the picture's rules: the largest size at which the text fits in
-// the cell around its centroid, shown when it reaches the picture's minimum
-// size on screen (cut with an ellipsis after at least four characters when
-// the whole text does not), never above the picture's maximum. The group
-// names of the two levels below the view are drawn large and light. Text
-// widths are measured by the browser in the labels' own font. Labels stay
-// SVG text, so the browser's find (Ctrl-F) sees them.
-var LS = data.labels || null;
+// Labels: the picture's own by node, and those placed for a zoomed view.
+// A module of the page's script (bundled by src/render/page/bundle.rs). When
+// the view shows part of the map z times larger, every leaf in view gets the
+// label the picture would give it at that scale, by the picture's rules: the
+// largest size at which the text fits in the cell around its centroid, shown
+// when it reaches the picture's minimum size on screen (cut with an ellipsis
+// after at least four characters when the whole text does not), never above
+// the picture's maximum. The group names of the two levels below the view are
+// drawn large and light. Text widths are measured by the browser in the
+// labels' own font. Labels stay SVG text, so the browser's find (Ctrl-F) sees
+// them.
+import { EMPTY, N, NS, bbox, cells, centroid, data, depths, full, ids, isLeaf, labels, leafCells, poly, root, svg, within } from "./model.js";
+
+// How the picture labels cells (src/render/html.rs, `HtmlLabels`); null
+// when it has no leaf labels.
+export const LS = data.labels || null;
 var zoomLabels = null, zoomGroups = null, zoomLabelOf = new Map();
 var measure = null, widthCache = new Map();
 // Ascent plus descent of a line, and the air kept around the text, in em.
-var LINE_EM = 1.2, PAD_EM = 0.15;
+export const LINE_EM = 1.2, PAD_EM = 0.15;
 
-function textWidth(s) {
+// The picture's labels by node, found on first use (a page that is only
+// looked at never pays for them).
+var staticLabels = null;
+function staticLabel(i) {
+  if (!staticLabels) {
+    staticLabels = new Map();
+    var group = svg.querySelector("g.np-labels");
+    var placed = data.labels ? data.labels.placed : EMPTY;
+    if (group && placed.length === group.children.length) {
+      for (var k = 0; k < placed.length; k++) { staticLabels.set(placed[k], group.children[k]); }
+    }
+  }
+  return staticLabels.get(i);
+}
+
+export function textWidth(s) {
   var w = widthCache.get(s);
   if (w === undefined) {
     if (!measure) {
@@ -29,7 +49,7 @@ function textWidth(s) {
 
 // The largest font size (canvas units) at which a box of `wEm` x `hEm`
 // font sizes centred on (cx, cy) lies inside convex cell i.
-function fitSize(i, cx, cy, wEm, hEm) {
+export function fitSize(i, cx, cy, wEm, hEm) {
   var p = poly(i), n = p.length, best = Infinity;
   if (n < 6) { return 0; }
   // The polygon's orientation decides which side of each edge is inside.
@@ -50,17 +70,18 @@ function fitSize(i, cx, cy, wEm, hEm) {
 // Screen pixels per canvas unit when the whole map shows (the picture's
 // box does not change with its view box; a resize forgets it).
 var unitPxKnown = 0;
-function unitPx() {
+export function unitPx() {
   if (!unitPxKnown) {
     var r = svg.getBoundingClientRect();
     unitPxKnown = r.width > 0 ? r.width / full[2] : 1;
   }
   return unitPxKnown;
 }
+export function forgetUnitPx() { unitPxKnown = 0; }
 // Smallest zoom label on screen, pixels: the picture's smallest size, as
 // a PNG at scale 1 draws it; the largest is the picture's largest label as
 // it shows on this screen, and never less than twice that.
-var MIN_PX = LS ? Math.max(LS.min, 6) : 9;
+export const MIN_PX = LS ? Math.max(LS.min, 6) : 9;
 function sizeRange(z) {
   var px = unitPx() * z;
   return [MIN_PX / px, Math.max(LS.max * unitPx(), 2 * MIN_PX) / px];
@@ -68,7 +89,7 @@ function sizeRange(z) {
 
 // The shortest text leaf i may show: the label itself when short, else
 // its first four characters and an ellipsis.
-function shortestText(i) {
+export function shortestText(i) {
   var chars = Array.from(labels[i]);
   return chars.length <= 5 ? labels[i] : chars.slice(0, 4).join("").replace(/\s+$/, "") + "\u2026";
 }
@@ -98,10 +119,10 @@ function fitLeaf(i, z, range) {
 }
 
 // The label shown for node i now: the zoomed view's, else the picture's.
-function labelFor(i) {
+export function labelFor(i) {
   return root.classList.contains("np-zoomed") ? zoomLabelOf.get(i) : staticLabel(i);
 }
-function labelShown(i, z) {
+export function labelShown(i, z) {
   if (z > 1.0001) { return !!fitLeaf(i, z); }
   return !!staticLabel(i);
 }
@@ -116,7 +137,7 @@ function textAt(x, y, size, text, halo) {
   return t;
 }
 
-function dropZoomLabels() {
+export function dropZoomLabels() {
   [zoomLabels, zoomGroups].forEach(function (g) { if (g && g.parentNode) { g.parentNode.removeChild(g); } });
   zoomLabels = zoomGroups = null;
   zoomLabelOf = new Map();
@@ -124,7 +145,7 @@ function dropZoomLabels() {
 
 // Places the labels of everything in view box `box` (zoomed z times) and,
 // for the two levels below `g`, the group names.
-function placeZoomLabels(box, z, g, before) {
+export function placeZoomLabels(box, z, g, before) {
   dropZoomLabels();
   if (!LS || z <= 1.0001) { return; }
   var x0 = box[0], y0 = box[1], x1 = box[0] + box[2], y1 = box[1] + box[3];

@@ -1,9 +1,19 @@
-// The page's events and start (last part of the page's script, see
-// src/render/html.rs): mouse and pen hover, keyboard focus, touch (a first
-// tap shows the tooltip, a second tap on the same cell zooms), clicks and
-// keys for the zoom, the optimisation slider, the unrealised-links toggle,
-// the picture's size within the window, and the mark `nptreemap-ready`
-// once everything answers.
+// The page's events and start: the entry module of the page's script.
+// Bundled by src/render/page/bundle.rs; what it imports runs before it. Mouse
+// and pen hover, keyboard focus, touch (a first tap shows the tooltip, a
+// second tap on the same cell zooms), clicks and keys for the zoom, the
+// optimisation slider, the unrealised-links toggle, the picture's size within
+// the window, and the mark `nptreemap-ready` once everything answers.
+import {
+  N, NS, cells, centroid, data, globally, ids, index, isLeaf, leafOf, map, nodeOf, part, partners, pathLabels, retire, root,
+  svg, weights
+} from "./model.js";
+import { clear, highlight, hovered, place, placeAt } from "./hover.js";
+import { forgetUnitPx } from "./lod.js";
+import { isOutside, view, zoomInto, zoomOut, zoomToAtOnce } from "./zoom.js";
+import { searchBox } from "./search.js";
+import { showLink } from "./link.js";
+
 var pointer = "mouse";
 var tapped = -1;
 
@@ -15,13 +25,13 @@ map.addEventListener("pointerover", function (e) {
   if (e.pointerType === "touch") { return; }
   pointer = e.pointerType || "mouse";
   var i = leafOf(e.target);
-  if (i === current) { return; }
+  if (i === hovered()) { return; }
   if (i < 0) { clear(); return; }
   highlight(i, false);
   place(e.clientX, e.clientY);
 });
 map.addEventListener("pointermove", function (e) {
-  if (e.pointerType !== "touch" && current >= 0) { place(e.clientX, e.clientY); }
+  if (e.pointerType !== "touch" && hovered() >= 0) { place(e.clientX, e.clientY); }
 });
 map.addEventListener("pointerleave", function (e) {
   if (e.pointerType !== "touch") { clear(); }
@@ -48,7 +58,7 @@ map.addEventListener("focusout", function (e) {
 });
 
 map.addEventListener("click", function (e) {
-  if (e.target === outsideVeil) { zoomOut(); return; }
+  if (isOutside(e.target)) { zoomOut(); return; }
   var i = nodeOf(e.target);
   if (i < 0) { return; }
   if (pointer === "touch" && isLeaf(i) && tapped !== i) {
@@ -64,7 +74,7 @@ map.addEventListener("click", function (e) {
 });
 // A tap elsewhere on the page ends the touch hover.
 globally(document, "click", function (e) {
-  if (pointer === "touch" && !map.contains(e.target) && current >= 0) { tapped = -1; clear(); }
+  if (pointer === "touch" && !map.contains(e.target) && hovered() >= 0) { tapped = -1; clear(); }
 });
 map.addEventListener("keydown", function (e) {
   var i = leafOf(e.target);
@@ -142,7 +152,7 @@ root.addEventListener("keydown", function (e) {
     var above = map.getBoundingClientRect().top - root.getBoundingClientRect().top;
     var room = Math.max(240, window.innerHeight - above - 16);
     map.style.maxWidth = Math.round(room * aspect) + "px";
-    unitPxKnown = 0;
+    forgetUnitPx();
   }
   fit();
   globally(window, "resize", fit);
@@ -154,16 +164,12 @@ root.addEventListener("keydown", function (e) {
 root.npView = {
   get: function () {
     return { node: ids[view.node], leaf: view.leaf >= 0 ? ids[view.leaf] : null,
-      current: current >= 0 ? ids[current] : null, search: box.value };
+      current: hovered() >= 0 ? ids[hovered()] : null, search: searchBox.value };
   },
   set: function (s) {
     var g = index.get(s.node), l = s.leaf === null ? -1 : index.get(s.leaf);
-    if (g !== undefined && (g !== 0 || l !== -1)) {
-      instantZoom = true;
-      zoomTo(g, l === undefined ? -1 : l);
-      instantZoom = false;
-    }
-    if (s.search) { box.value = s.search; }
+    if (g !== undefined && (g !== 0 || l !== -1)) { zoomToAtOnce(g, l === undefined ? -1 : l); }
+    if (s.search) { searchBox.value = s.search; }
     var c = s.current === null ? undefined : index.get(s.current);
     if (c !== undefined && isLeaf(c)) { highlight(c, false); placeAt(c); }
   }
@@ -171,6 +177,6 @@ root.npView = {
 
 // glue: issue 30. The live preview calls this on the map it replaces, so
 // that nothing outside the map keeps the old one alive.
-root.npRetire = function () { if (life) { life.abort(); } };
+root.npRetire = retire;
 
 if (window.performance && performance.mark) { performance.mark("nptreemap-ready"); }

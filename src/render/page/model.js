@@ -1,30 +1,38 @@
-// The page's model of its map (first part of the page's script, see
-// src/render/html.rs): the data block read once into arrays by node index
-// (labels, parents, children, depths, subtree ranges), relations made
-// symmetric, the cells of the picture by index, and the polygons and boxes
-// parsed from their path data on first use. Maps and arrays, never plain
-// objects keyed by id: ids such as "constructor" or "__proto__" are data.
+// The page's model of its map: its parts, its data, its cells, its listeners.
+// A module of the page's script (bundled by src/render/page/bundle.rs) that
+// imports nothing: the map's container and parts, the data block read once
+// into arrays by node index (labels, parents, children, depths, subtree
+// ranges), relations made symmetric, the cells of the picture by index, the
+// polygons and boxes parsed from their path data on first use, and the
+// listeners the map keeps on the window and the document. Maps and arrays,
+// never plain objects keyed by id: ids such as "constructor" or "__proto__"
+// are data.
 if (window.performance && performance.mark) { performance.mark("nptreemap-start"); }
-var root = document.currentScript.parentNode;
-function part(name) { return root.querySelector(".np-" + name); }
+export const root = document.currentScript.parentNode;
+export function part(name) { return root.querySelector(".np-" + name); }
 // Listeners on the window or the document outlive the map: they are added
 // through `globally`, so that a map that is replaced (the live preview
-// swaps in the rebuilt one) takes them with it (`root.npRetire`, in
-// main.js) instead of keeping itself alive through them.
+// swaps in the rebuilt one) takes them with it (`retire`, which main.js
+// hands the live preview as `root.npRetire`) instead of keeping itself
+// alive through them.
 var life = window.AbortController ? new AbortController() : null;
-function globally(target, type, fn) {
+export function globally(target, type, fn) {
   target.addEventListener(type, fn, life ? { signal: life.signal } : false);
 }
-var data = JSON.parse(part("data").textContent);
-var map = part("map");
-var svg = map.querySelector("svg");
-var NS = svg.namespaceURI;
-var N = data.nodes.length;
-var ids = new Array(N), labels = new Array(N), weights = new Array(N);
-var parents = new Int32Array(N), depths = new Int32Array(N);
-var kids = new Array(N), near = new Array(N), partners = new Array(N);
-var index = new Map();
-var EMPTY = [];
+export function retire() { if (life) { life.abort(); } }
+export const data = JSON.parse(part("data").textContent);
+export const map = part("map");
+export const svg = map.querySelector("svg");
+export const NS = svg.namespaceURI;
+// The picture's whole view box (the zoom changes the picture's own).
+export const full = svg.getAttribute("viewBox").split(/[\s,]+/).map(Number);
+export const N = data.nodes.length;
+export const ids = new Array(N), labels = new Array(N), weights = new Array(N);
+export const parents = new Int32Array(N), depths = new Int32Array(N);
+const kids = new Array(N);
+export const near = new Array(N), partners = new Array(N);
+export const index = new Map();
+export const EMPTY = [];
 (function () {
   var i, n;
   for (i = 0; i < N; i++) {
@@ -50,11 +58,11 @@ var EMPTY = [];
     (n.partners || EMPTY).forEach(function (p) { add(partners, i, p); add(partners, p[0], [i, p[1]]); });
   }
 })();
-function isLeaf(i) { return kids[i].length === 0; }
+export function isLeaf(i) { return kids[i].length === 0; }
 
 // Pre-order positions: node k lies in the subtree of g when
 // first[g] <= first[k] <= last[g].
-var first = new Int32Array(N), last = new Int32Array(N);
+const first = new Int32Array(N), last = new Int32Array(N);
 (function () {
   if (!N) { return; }
   var stack = [0], seen = new Uint8Array(N), order = 0;
@@ -70,42 +78,48 @@ var first = new Int32Array(N), last = new Int32Array(N);
     }
   }
 })();
-function within(g, k) { return first[g] <= first[k] && first[k] <= last[g]; }
+export function within(g, k) { return first[g] <= first[k] && first[k] <= last[g]; }
 
 // Root to node, both included.
-function ancestors(i) {
+export function ancestors(i) {
   var out = [];
   for (var k = i; k >= 0; k = parents[k]) { out.unshift(k); }
   return out;
 }
 // The names from the top-level group down to the node (the root's name
 // is the map's, not the node's).
-function pathLabels(i) {
+export function pathLabels(i) {
   return ancestors(i).slice(1).map(function (k) { return labels[k]; });
 }
 
-var cells = new Array(N);
-var leafCells = [];
+export const cells = new Array(N);
+export const leafCells = [];
 Array.prototype.forEach.call(svg.querySelectorAll("path[data-id]"), function (el) {
   var i = index.get(el.getAttribute("data-id"));
   if (i === undefined) { return; }
   cells[i] = el;
   if (isLeaf(i)) { leafCells.push(i); }
 });
-function nodeOf(target) {
+export function nodeOf(target) {
   var el = target && target.closest ? target.closest("path[data-id]") : null;
   if (!el || el.ownerSVGElement !== svg) { return -1; }
   var i = index.get(el.getAttribute("data-id"));
   return i === undefined ? -1 : i;
 }
-function leafOf(target) {
+export function leafOf(target) {
   var i = nodeOf(target);
   return i >= 0 && isLeaf(i) ? i : -1;
 }
 
 // Cell polygons as flat coordinate arrays, from the paths' "Mx,yLx,y...Z".
 var polys = new Array(N), boxes = new Array(N);
-function poly(i) {
+// The cells' outlines changed (page/past.js drew another layout): parsed
+// again on next use.
+export function forgetOutlines() {
+  polys = new Array(N);
+  boxes = new Array(N);
+}
+export function poly(i) {
   if (polys[i] === undefined) {
     var el = cells[i];
     var nums = el ? (el.getAttribute("d").match(/-?[0-9.]+(?:e-?[0-9]+)?/g) || EMPTY) : EMPTY;
@@ -116,7 +130,7 @@ function poly(i) {
   return polys[i];
 }
 // [x0, y0, x1, y1] of a cell.
-function bbox(i) {
+export function bbox(i) {
   if (boxes[i] === undefined) {
     var p = poly(i), b = [Infinity, Infinity, -Infinity, -Infinity];
     for (var k = 0; k + 1 < p.length; k += 2) {
@@ -128,7 +142,7 @@ function bbox(i) {
   return boxes[i];
 }
 // Area-weighted centroid of a cell.
-function centroid(i) {
+export function centroid(i) {
   var p = poly(i), a = 0, cx = 0, cy = 0, n = p.length;
   for (var k = 0; k + 1 < n; k += 2) {
     var x0 = p[k], y0 = p[k + 1], x1 = p[(k + 2) % n], y1 = p[(k + 3) % n];

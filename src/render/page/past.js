@@ -1,12 +1,17 @@
-// The page's steps through the session's past layouts (issue 25: a page
-// written by `watch` with `history:` carries them in `data.history`,
-// oldest first; the picture as drawn is the latest). ◀ and ▶ morph every
-// cell to its outline and fill in that layout (page/history.js, the live
-// preview's morph); cells a layout lacks fade out, cells only a past
-// layout has are drawn in a layer of their own. While a past layout shows,
-// the labels, tabs and markers (which are the latest layout's) are hidden.
-// With prefers-reduced-motion the picture changes at once. Only path data
-// and colours are set; ids reach the document as attribute values.
+// The page's steps through the session's past layouts (issue 25).
+// The second entry module of a page with history, after main.js
+// (src/render/html.rs). A page written by `watch` with `history:` carries
+// them in `data.history`, oldest first; the picture as drawn is the latest. ◀
+// and ▶ morph every cell to its outline and fill in that layout
+// (page/history.js, the live preview's morph); cells a layout lacks fade out,
+// cells only a past layout has are drawn in a layer of their own. While a
+// past layout shows, the labels, tabs and markers (which are the latest
+// layout's) are hidden. With prefers-reduced-motion the picture changes at
+// once. Only path data and colours are set; ids reach the document as
+// attribute values.
+import { NS, data, forgetOutlines, part, root, svg } from "./model.js";
+import { animate, draw, fade, still, stepper, track } from "./history.js";
+
 (function () {
   var back = part("history-back");
   if (!back || !data.history || !data.history.length) { return; }
@@ -54,7 +59,7 @@
       var hidden = el.style.opacity === "0";
       if (!c) { if (!hidden) { outgoing.push(el); } return; }
       if (hidden) { incoming.push(el); }
-      var t = npMorph.track(el, el.getAttribute("d"), c[1], el.getAttribute("fill"), c[2]);
+      var t = track(el, el.getAttribute("d"), c[1], el.getAttribute("fill"), c[2]);
       if (t) { tracks.push(t); }
     }
     drawn.forEach(each);
@@ -72,8 +77,7 @@
         }
       });
       // The model's outlines are parsed again from the cells as they are.
-      polys = new Array(N);
-      boxes = new Array(N);
+      forgetOutlines();
       root.toggleAttribute("data-np-past", past);
       shown = k;
       stats.at = k;
@@ -82,14 +86,14 @@
       next();
     }
     if (past) { root.toggleAttribute("data-np-past", true); }
-    if (npMorph.still()) { finish(); return; }
-    npMorph.animate(stats, 360, function (t) {
-      npMorph.draw(tracks, t);
-      npMorph.fade(incoming, 0, 1, t);
-      npMorph.fade(outgoing, 1, 0, t);
+    if (still()) { finish(); return; }
+    animate(stats, 360, function (t) {
+      draw(tracks, t);
+      fade(incoming, 0, 1, t);
+      fade(outgoing, 1, 0, t);
     }, finish);
   }
-  var steps = npMorph.stepper(back, part("history-ahead"), part("history-label"), show);
+  var steps = stepper(back, part("history-ahead"), part("history-label"), show);
   steps.set(layouts.length, layouts.length - 1);
   root.setAttribute("data-np-history-at", String(layouts.length - 1));
 })();

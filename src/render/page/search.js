@@ -1,10 +1,16 @@
-// The search box (part of the page's script, see src/render/html.rs): finds
-// nodes by label or by path as the reader types (case-insensitive), lists
-// the best matches (at most MATCHES: whole labels, then label starts, then
-// label parts, then paths), and on Enter (or a click on a match) zooms to
-// the match and highlights it. `/` anywhere outside a text field jumps to
-// the box. A combobox with a listbox, for screen readers.
-var box = part("search-box"), list = part("matches");
+// The search box and its list of matches.
+// A module of the page's script (bundled by src/render/page/bundle.rs): finds
+// nodes by label or by path as the reader types (case-insensitive), lists the
+// best matches (at most MATCHES: whole labels, then label starts, then label
+// parts, then paths), and on Enter (or a click on a match) zooms to the match
+// and highlights it. `/` anywhere outside a text field jumps to the box. A
+// combobox with a listbox, for screen readers.
+import { N, cells, globally, ids, labels, map, parents, part, pathLabels, root } from "./model.js";
+import { highlight, placeAt } from "./hover.js";
+import { zoomStraightTo } from "./zoom.js";
+
+export const searchBox = part("search-box");
+var list = part("matches");
 var MATCHES = 12;
 var lowerLabels = null, lowerPaths = null;
 var matches = [], active = -1, found = -1;
@@ -34,14 +40,14 @@ function search(q) {
 }
 
 function showMatches() {
-  var q = box.value.trim().toLowerCase();
+  var q = searchBox.value.trim().toLowerCase();
   while (list.firstChild) { list.removeChild(list.firstChild); }
   matches = [];
   active = -1;
-  box.removeAttribute("aria-activedescendant");
+  searchBox.removeAttribute("aria-activedescendant");
   if (!q) {
     list.hidden = true;
-    box.setAttribute("aria-expanded", "false");
+    searchBox.setAttribute("aria-expanded", "false");
     return;
   }
   var r = search(q);
@@ -74,7 +80,7 @@ function showMatches() {
     r.total > matches.length ? (r.total - matches.length) + " more; type more to narrow" : "";
   if (note.textContent) { list.appendChild(note); }
   list.hidden = false;
-  box.setAttribute("aria-expanded", "true");
+  searchBox.setAttribute("aria-expanded", "true");
   if (matches.length) { select(0); }
 }
 
@@ -86,12 +92,12 @@ function select(k) {
   active = k;
   items[k].setAttribute("aria-selected", "true");
   items[k].scrollIntoView({ block: "nearest" });
-  box.setAttribute("aria-activedescendant", items[k].id);
+  searchBox.setAttribute("aria-activedescendant", items[k].id);
 }
 
 function closeList() {
   list.hidden = true;
-  box.setAttribute("aria-expanded", "false");
+  searchBox.setAttribute("aria-expanded", "false");
 }
 
 // Zooms to match i and highlights it: a leaf with its neighbourhood, a
@@ -117,8 +123,8 @@ function go(i) {
   })();
 }
 
-box.addEventListener("input", showMatches);
-box.addEventListener("keydown", function (e) {
+searchBox.addEventListener("input", showMatches);
+searchBox.addEventListener("keydown", function (e) {
   if (e.key === "ArrowDown" || e.key === "ArrowUp") {
     e.preventDefault();
     if (list.hidden) { showMatches(); }
@@ -128,12 +134,12 @@ box.addEventListener("keydown", function (e) {
     if (list.hidden) { showMatches(); }
     if (matches.length) { go(matches[Math.max(0, active)]); }
   } else if (e.key === "Escape") {
-    if (!list.hidden) { closeList(); } else if (box.value) { box.value = ""; showMatches(); } else { box.blur(); }
+    if (!list.hidden) { closeList(); } else if (searchBox.value) { searchBox.value = ""; showMatches(); } else { searchBox.blur(); }
     e.stopPropagation();
   }
 });
-box.addEventListener("focus", function () { if (box.value.trim()) { showMatches(); } });
-box.addEventListener("blur", closeList);
+searchBox.addEventListener("focus", function () { if (searchBox.value.trim()) { showMatches(); } });
+searchBox.addEventListener("blur", closeList);
 
 // `/` focuses the box of the map in use: the one holding the focus, else
 // the one the pointer was on last, else the first in the document.
@@ -148,8 +154,8 @@ globally(document, "keydown", function (e) {
   var chosen = mine || (!anyFocus && (last ? last === root.id : maps[0] === root));
   if (!chosen) { return; }
   e.preventDefault();
-  box.focus();
-  box.select();
+  searchBox.focus();
+  searchBox.select();
 });
 map.addEventListener("pointerenter", function () {
   document.documentElement.setAttribute("data-np-last", root.id);

@@ -191,12 +191,13 @@ fn page_has_its_parts() {
     ] {
         assert!(page.contains(part), "{part}");
     }
-    for script in SCRIPT_PARTS {
+    for script in [SCRIPT, SCRIPT_WITH_HISTORY] {
         assert!(!script.contains("innerHTML"));
         assert!(!script.contains("insertAdjacentHTML"));
         assert!(!script.contains("document.write"));
-        // Every part says what it owns.
-        assert!(script.starts_with("// "), "{}", &script[..40]);
+        // One function scope, in the page as it is.
+        assert!(script.starts_with("(function () {\n\"use strict\";\n"));
+        assert!(page.contains(SCRIPT) && script.ends_with("})();\n"));
     }
     assert!(STYLE.starts_with("/* "));
     // Every id carries the page's key, and two maps get two keys.
@@ -392,7 +393,13 @@ fn a_page_without_history_is_the_page_as_before() {
     let page = html_page_with_history(&computed, &style, &[]);
     assert_eq!(page, html_page(&computed, &style));
     // Nothing of the steps: no control, no script, no style, no data.
-    for part in ["np-history", "npMorph", "data-np-past", "\"history\""] {
+    for part in [
+        "np-history",
+        "// src/render/page/history.js\n",
+        "// src/render/page/past.js\n",
+        "data-np-past",
+        "\"history\"",
+    ] {
         assert!(!page.contains(part), "{part} in a page without history");
     }
 }
@@ -421,8 +428,10 @@ fn past_layouts_are_the_earlier_pages_cells_and_stay_escaped() {
         drawn_cells(&earlier),
         "the layout moved"
     );
-    // The control says where it is; the script and its tags are the page's.
+    // The control says where it is; the script and its tags are the page's,
+    // the steps' modules added.
     assert!(page.contains("layout 3 of 3 (latest)"));
+    assert!(page.contains("// src/render/page/past.js\n"));
     let lower = page.to_lowercase();
     let plain = html_page(&after, &style).to_lowercase();
     for tag in ["<script", "</script", "<b>"] {

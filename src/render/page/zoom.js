@@ -1,13 +1,25 @@
-// The zoom (part of the page's script, see src/render/html.rs): a click
-// (Enter on a focused cell, a breadcrumb, a search) shows a group, or a
-// leaf's surroundings, as large as the picture allows. The cells outside
-// the view's group dim under one veil with a hole in its shape (one
-// element, whatever the map's size), labels are placed for the zoomed
-// extent, the breadcrumb names the way back (Escape goes one step up).
-var full = svg.getAttribute("viewBox").split(/[\s,]+/).map(Number);
+// The zoom: the view (a group, or a leaf's surroundings) and its breadcrumb.
+// A module of the page's script (bundled by src/render/page/bundle.rs): a
+// click (Enter on a focused cell, a breadcrumb, a search) shows a group, or a
+// leaf's surroundings, as large as the picture allows. The cells outside the
+// view's group dim under one veil with a hole in its shape (one element,
+// whatever the map's size), labels are placed for the zoomed extent, the
+// breadcrumb names the way back (Escape goes one step up).
+import { N, NS, ancestors, cells, centroid, data, full, ids, isLeaf, labels, leafCells, parents, part, root, svg, within } from "./model.js";
+import { clear, highlight, hovered, over } from "./hover.js";
+import {
+  LINE_EM, LS, MIN_PX, PAD_EM, dropZoomLabels, fitSize, labelShown, placeZoomLabels, shortestText, textWidth, unitPx
+} from "./lod.js";
+
 var crumbs = part("crumbs");
-// The view: a group, and optionally a leaf of it shown larger still.
-var view = { node: 0, leaf: -1, box: full };
+// The view: a group, and optionally a leaf of it shown larger still. Only
+// this file changes it (main.js reads it).
+export const view = { node: 0, leaf: -1, box: full };
+function setViewTo(node, leaf, box) {
+  view.node = node;
+  view.leaf = leaf;
+  view.box = box;
+}
 var outsideVeil = null;
 var focusable = new Uint8Array(N);
 // Zoom steps that would enlarge the view less than this are passed over.
@@ -80,12 +92,15 @@ function setOutside(g) {
   svg.appendChild(outsideVeil);
 }
 
-function zoomTo(g, leaf) {
+// Whether `el` is the veil over the cells outside the view's group.
+export function isOutside(el) { return outsideVeil !== null && el === outsideVeil; }
+
+export function zoomTo(g, leaf) {
   if (g < 0 || g >= N) { return; }
   var box = leaf >= 0 ? leafBox(leaf, g) : (g === 0 ? full : (data.nodes[g].zoom || full));
   var from = svg.getAttribute("viewBox").split(/[\s,]+/).map(Number);
-  var wasCurrent = current, ring = over.querySelector(".np-ring-outer") !== null;
-  view = { node: g, leaf: leaf, box: box };
+  var wasCurrent = hovered(), ring = over.querySelector(".np-ring-outer") !== null;
+  setViewTo(g, leaf, box);
   clear();
   dropZoomLabels();
   setOutside(g);
@@ -107,9 +122,16 @@ function zoomTo(g, leaf) {
   });
 }
 
+// zoomTo without the animation (the live preview restoring a view).
+export function zoomToAtOnce(g, leaf) {
+  instantZoom = true;
+  zoomTo(g, leaf);
+  instantZoom = false;
+}
+
 // One step back: from a leaf to its group, from a group to the group above
 // it that is worth zooming into (or the whole map).
-function zoomOut() {
+export function zoomOut() {
   if (view.leaf >= 0) { zoomTo(view.node, -1); return; }
   for (var k = parents[view.node]; k >= 0; k = parents[k]) {
     if (k === 0 || data.nodes[k].zoom) { zoomTo(k, -1); return; }
@@ -146,7 +168,7 @@ function gain(g) {
 // The next zoom towards node i: the first group below the view on its way
 // that enlarges the view enough; past the last group, the leaf itself
 // while its label does not show yet.
-function zoomInto(i) {
+export function zoomInto(i) {
   var path = ancestors(i);
   var at = path.indexOf(view.node);
   if (at < 0) { zoomTo(0, -1); return; }
@@ -160,13 +182,13 @@ function zoomInto(i) {
 
 // Straight to node i (the search): its deepest group worth zooming into,
 // then the leaf itself when its label would not show there.
-function zoomStraightTo(i) {
+export function zoomStraightTo(i) {
   var g = isLeaf(i) ? parents[i] : i;
   while (g > 0 && !data.nodes[g].zoom) { g = parents[g]; }
   if (g < 0) { g = 0; }
   var box = g === 0 ? full : data.nodes[g].zoom;
   if (isLeaf(i) && !labelShown(i, zoomOf(box))) {
-    view = { node: g, leaf: -1, box: box };
+    setViewTo(g, -1, box);
     zoomTo(g, i);
   } else {
     zoomTo(g, -1);
