@@ -20,7 +20,7 @@ use nptreemap_formats::{Carry, FormatOptions, Limits};
 
 /// The built-in defaults, every key documented (`config/default.yaml`); the
 /// tests check that every key parses and matches [`Config`]'s defaults.
-#[cfg(test)]
+#[cfg(any(test, feature = "cli"))]
 pub(crate) const DEFAULT_YAML: &str = include_str!("../config/default.yaml");
 
 /// A parsed, path-resolved configuration.

@@ -179,7 +179,7 @@ fn timed(
 fn stability_against(
     graph: &mut DatasetGraph,
     previous: &Arc<Previous>,
-    job: &super::Job,
+    job: &super::Resolved,
     mut request: Request,
     done: (&Computed, f64),
 ) -> anyhow::Result<Vec<StabilityRow>> {

@@ -46,7 +46,7 @@ use queue::Queue;
 use reporter::{Follow, Reporter};
 use status::Status;
 use watcher::{Batch, DirWatcher, Message, Timing};
-use worker::{Done, Job, Shared, Worker};
+use worker::{Done, Task, Shared, Worker};
 
 /// How the daemon runs.
 #[derive(Clone, Debug, Default)]
@@ -419,7 +419,7 @@ impl Daemon<'_> {
                 queue::Next::Build(Reason::Start) | queue::Next::Retry => now,
                 _ => self.last_batch,
             };
-            let job = Job {
+            let job = Task {
                 since,
                 next,
                 request: self.config.request(&d),
@@ -443,7 +443,7 @@ impl Daemon<'_> {
     }
 
     /// Sends `job` to `name`'s worker, starting one if needed.
-    fn send(&mut self, name: &str, job: Job) {
+    fn send(&mut self, name: &str, job: Task) {
         if !self.workers.contains_key(name) {
             match Worker::spawn(name, self.shared.clone()) {
                 Ok(worker) => {

@@ -17,6 +17,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::config::DatasetConfig;
+use crate::graph::memo::ms_since;
 use crate::graph::{self, DatasetGraph, GraphOptions, LayoutStep, Stage, StageReport};
 use crate::layout::{LayoutError, ProgressSink, Request};
 use crate::measure::stability::{stability, Stability};
@@ -36,7 +37,7 @@ use super::FirstBuildProgress;
 const STACK: usize = 8 << 20;
 
 /// One task for a worker, with the config it runs under.
-pub struct Job {
+pub struct Task {
     /// When the batch that asked for it ended (its debounce over): the
     /// rebuild's time is counted from it.
     pub since: Instant,
@@ -128,7 +129,7 @@ impl Shared {
 
 /// A dataset's worker thread, as the daemon holds it.
 pub struct Worker {
-    jobs: Sender<Job>,
+    jobs: Sender<Task>,
     /// Whether a task was sent and its outcome has not come back yet.
     pub busy: bool,
 }
@@ -151,7 +152,7 @@ impl Worker {
     }
 
     /// Hands the worker a task; false when the worker is gone.
-    pub fn send(&mut self, job: Job) -> bool {
+    pub fn send(&mut self, job: Task) -> bool {
         let sent = self.jobs.send(job).is_ok();
         self.busy = sent;
         sent
@@ -159,18 +160,18 @@ impl Worker {
 }
 
 /// What runs a task (a parameter so that tests can make one panic).
-type Run<'a> = dyn FnMut(&mut State, &Job, &Shared) -> Outcome + 'a;
+type Run<'a> = dyn FnMut(&mut Remembered, &Task, &Shared) -> Outcome + 'a;
 
 /// The worker's loop: one task at a time until the daemon drops its end.
-fn serve(name: &str, jobs: &Receiver<Job>, shared: &Shared, run: &mut Run<'_>) {
-    let mut state = State::default();
+fn serve(name: &str, jobs: &Receiver<Task>, shared: &Shared, run: &mut Run<'_>) {
+    let mut state = Remembered::default();
     for job in jobs {
         let outcome = catch_unwind(AssertUnwindSafe(|| run(&mut state, &job, shared)))
             .unwrap_or_else(|panic| {
                 // What the task left half-done cannot be trusted: start over
                 // (the next rebuild is a full one, cold unless a layout is
                 // stored).
-                state = State::default();
+                state = Remembered::default();
                 Outcome::Panicked(panic_message(panic.as_ref()))
             });
         let done = Done {
@@ -198,7 +199,7 @@ fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
 }
 
 /// What a worker remembers of its dataset between tasks.
-struct State {
+struct Remembered {
     /// The dataset's stage graph: the last result of every stage (the last
     /// good layout among them: the source of render-only rebuilds and of the
     /// next warm start) and the state a commit could not write.
@@ -209,9 +210,9 @@ struct State {
     unwritten: Option<Vec<Rendered>>,
 }
 
-impl Default for State {
+impl Default for Remembered {
     fn default() -> Self {
-        State {
+        Remembered {
             // `NPTREEMAP_NO_CACHE=1` turns reuse off here too, as for `build`.
             graph: DatasetGraph::new(GraphOptions::from_env()),
             unwritten: None,
@@ -231,8 +232,8 @@ pub fn kept(d: &DatasetConfig, missing_input: bool) -> &'static str {
     }
 }
 
-impl State {
-    fn run(&mut self, name: &str, job: &Job, shared: &Shared) -> Outcome {
+impl Remembered {
+    fn run(&mut self, name: &str, job: &Task, shared: &Shared) -> Outcome {
         if shared.stopping() {
             return Outcome::Abandoned;
         }
@@ -248,7 +249,7 @@ impl State {
     /// Hands the dataset's files to its graph, which runs the stages their
     /// changes call for (warm or cold is its decision, `graph::start`), and
     /// writes what changed.
-    fn build(&mut self, name: &str, reason: Reason, job: &Job, shared: &Shared) -> Outcome {
+    fn build(&mut self, name: &str, reason: Reason, job: &Task, shared: &Shared) -> Outcome {
         let d = &job.dataset;
         let started = Instant::now();
         let files = match pipeline::read_inputs(d) {
@@ -349,7 +350,7 @@ impl State {
 
     /// Writes again what the last rebuild could not write: its outputs, and
     /// the state folder.
-    fn retry(&mut self, job: &Job, shared: &Shared) -> Outcome {
+    fn retry(&mut self, job: &Task, shared: &Shared) -> Outcome {
         if self.unwritten.is_none() && !self.graph.unstored() {
             return Outcome::Unchanged;
         }
@@ -438,18 +439,14 @@ impl Drop for Bar<'_> {
     }
 }
 
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1000.0
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::config::Config;
 
     /// A task for dataset `d` of `config`.
-    fn job_of(config: &Config, d: &DatasetConfig, next: Next) -> Job {
-        Job {
+    fn job_of(config: &Config, d: &DatasetConfig, next: Next) -> Task {
+        Task {
             since: Instant::now(),
             next,
             request: config.request(d),
@@ -541,7 +538,7 @@ mod tests {
     fn unchanged_bytes_under_a_changed_config_are_not_skipped() {
         let (dir, config) = countries("skip");
         let (shared, _outcomes, _woken) = shared();
-        let mut state = State::default();
+        let mut state = Remembered::default();
         let edit = || Next::Build(Reason::Data(vec!["countries.csv".to_string()]));
         let d = config.datasets[0].clone();
         let first = state.run("countries", &job_of(&config, &d, Next::Build(Reason::Start)), &shared);

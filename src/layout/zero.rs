@@ -16,8 +16,10 @@ use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
 
 /// What becomes of items of weight 0. Named in configs
 /// (`layout.zero_weights`) and on the command line (`--zero-weights`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize)]
-#[cfg_attr(feature = "cli", derive(serde::Serialize, clap::ValueEnum))]
+#[derive(
+    serde::Serialize, Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize,
+)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 #[non_exhaustive]
 pub enum ZeroWeights {
