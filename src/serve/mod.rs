@@ -355,7 +355,7 @@ fn check_host<B>(request: &Request<B>, port: u16, local: IpAddr) -> Option<Answe
 
 /// A file to read for a request, with what its answer needs.
 struct FileAnswer {
-    file: std::fs::File,
+    file: crate::workspace::Opened,
     len: u64,
     kind: OutputKind,
     dataset: String,
@@ -442,17 +442,12 @@ async fn load(file: FileAnswer, shared: &Shared) -> Answer {
 }
 
 
-fn open(file: &Path) -> Option<(std::fs::File, u64)> {
-    let f = std::fs::File::open(file).ok()?;
-    let len = f.metadata().ok()?.len().min(MAX_FILE);
-    Some((f, len))
+fn open(file: &Path) -> Option<(crate::workspace::Opened, u64)> {
+    crate::workspace::open_capped(file, MAX_FILE)
 }
 
-fn read(file: std::fs::File) -> Option<Vec<u8>> {
-    use std::io::Read;
-    let mut bytes = Vec::new();
-    file.take(MAX_FILE).read_to_end(&mut bytes).ok()?;
-    Some(bytes)
+fn read(file: crate::workspace::Opened) -> Option<Vec<u8>> {
+    crate::workspace::read_opened(file, MAX_FILE)
 }
 
 /// Headers of every answer with a body of ours.
