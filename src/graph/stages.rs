@@ -528,7 +528,9 @@ pub fn dataset(dataset: &Dataset) -> Fingerprint {
     f.finish()
 }
 
-/// Render: one output's bytes depend on the layout (the inputs and settings
+/// Render: one output's bytes depend on the renderers themselves (a
+/// fingerprint of their sources, made at compile time: outputs of another
+/// version are made again), the layout (the inputs and settings
 /// it was made from and the stored layout's bytes, which hold every cell and
 /// constraint), the style (unless its kind shows none), the output's kind
 /// and scale, and the past layouts of a kind that shows them (their stored
@@ -542,7 +544,8 @@ pub fn output_key(
 ) -> Fingerprint {
     let kind = output.kind();
     let mut f = Fingerprinter::new("render");
-    f.fingerprint(key.inputs)
+    f.str(env!("NPTREEMAP_RENDER_SOURCE"))
+        .fingerprint(key.inputs)
         .fingerprint(key.settings)
         .fingerprint(layout)
         .value(&kind)
