@@ -12,6 +12,7 @@ use crate::layout::{Canvas, Method, NeighborParams, Outline, Params, Request, Ze
 use crate::neighborhood::SimilarityKind;
 use crate::render::overlay::OverlayStyle;
 use crate::render::{
+    OutputKind,
     Border, ColorBy, ColorScale, LabelStyle, LegendOrder, PageFields, PaletteKind, Rgb, Style,
     SvgStyle,
 };
@@ -19,7 +20,7 @@ use nptreemap_formats::{Carry, FormatOptions, Limits};
 
 /// The built-in defaults, every key documented (`config/default.yaml`); the
 /// tests check that every key parses and matches [`Config`]'s defaults.
-#[cfg(test)]
+#[cfg(any(test, feature = "cli"))]
 pub(crate) const DEFAULT_YAML: &str = include_str!("../config/default.yaml");
 
 /// A parsed, path-resolved configuration.
@@ -567,6 +568,16 @@ pub struct OutputConfig {
     pub scale: f64,
 }
 
+impl OutputConfig {
+    /// Its kind: as given, else by its path's extension, else SVG (a
+    /// config always gives or implies one; this is for outputs built in code).
+    pub fn kind(&self) -> OutputKind {
+        self.kind
+            .or_else(|| OutputKind::of_path(&self.path))
+            .unwrap_or(OutputKind::Svg)
+    }
+}
+
 fn one() -> f64 {
     1.0
 }
@@ -614,20 +625,6 @@ impl<'de> Deserialize<'de> for OutputConfig {
         }
         deserializer.deserialize_any(Entry)
     }
-}
-
-/// Kinds of output.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum OutputKind {
-    /// A picture as SVG.
-    Svg,
-    /// A picture as PNG.
-    Png,
-    /// The layout JSON.
-    Json,
-    /// An interactive HTML page.
-    Html,
 }
 
 /// What the raw file holds (before paths are resolved).
@@ -845,7 +842,7 @@ impl Config {
             for (k, out) in d.outputs.iter_mut().enumerate() {
                 out.path = base.join(&out.path);
                 if out.kind.is_none() {
-                    out.kind = kind_of(&out.path);
+                    out.kind = OutputKind::of_path(&out.path);
                 }
                 if out.kind.is_none() {
                     return Err(ConfigError::Value {
@@ -1039,18 +1036,6 @@ fn check_exec(d: &DatasetConfig, i: usize) -> Result<(), ConfigError> {
     }
     // Its range was checked as it was read (`exec_timeout`).
     Ok(())
-}
-
-/// The output kind a path's extension names.
-pub fn kind_of(path: &Path) -> Option<OutputKind> {
-    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
-    match ext.as_str() {
-        "svg" => Some(OutputKind::Svg),
-        "png" => Some(OutputKind::Png),
-        "json" => Some(OutputKind::Json),
-        "html" | "htm" => Some(OutputKind::Html),
-        _ => None,
-    }
 }
 
 /// The reader's messages start with the path, which [`ConfigFileError`] puts

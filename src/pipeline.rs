@@ -10,14 +10,14 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use crate::config::{
-    ConfigFileError, DatasetConfig, OutputConfig, OutputKind, DEFAULT_EXEC_TIMEOUT, EXEC_FORMAT,
+    ConfigFileError, DatasetConfig, OutputConfig, DEFAULT_EXEC_TIMEOUT, EXEC_FORMAT,
     MAX_EXEC_TIMEOUT,
 };
 use crate::exec::{self, ExecError};
 use crate::layout::{compute, Computed, LayoutError, Previous, Request};
-use crate::render::{html_page, picture, Style};
+use crate::render::{OutputError, Style};
 #[cfg(feature = "png")]
-use crate::render::{png, PngError};
+use crate::render::PngError;
 use crate::workspace::FileError;
 use crate::{layout_json, state, store, workspace};
 use nptreemap_formats::{registry, suggest, Dataset, Inputs};
@@ -416,47 +416,38 @@ pub fn render_outputs(
     let mut svg_text = None;
     outputs
         .iter()
-        .map(|out| render_output(computed, style, out, &mut svg_text))
+        .map(|out| {
+            let bytes = render_output(computed, style, out, &[], &mut svg_text)?;
+            Ok(Rendered {
+                path: out.path.clone(),
+                bytes,
+            })
+        })
         .collect()
 }
 
-/// One output of [`render_outputs`]; `svg_text` keeps the picture's SVG
-/// text between the outputs of one layout.
+/// One output of [`render_outputs`] (its kind's renderer,
+/// [`OutputKind::render`]), with the `past` layouts an HTML page shows;
+/// `svg_text` keeps the picture's SVG text between the outputs of one layout.
 pub fn render_output(
     computed: &Computed,
     style: &Style,
     out: &OutputConfig,
+    past: &[std::sync::Arc<Computed>],
     svg_text: &mut Option<String>,
-) -> Result<Rendered, BuildError> {
-    let bytes = match out.kind.unwrap_or(OutputKind::Svg) {
-        OutputKind::Svg => svg_text
-            .get_or_insert_with(|| picture(computed, style))
-            .clone()
-            .into_bytes(),
-        #[cfg(feature = "png")]
-        OutputKind::Png => {
-            let text = svg_text.get_or_insert_with(|| picture(computed, style));
-            png(text, out.scale).map_err(|source| BuildError::Png {
-                path: out.path.clone(),
-                source,
-            })?
-        }
-        #[cfg(not(feature = "png"))]
-        OutputKind::Png => {
-            let _ = svg_text;
-            return Err(BuildError::Unsupported {
-                path: out.path.clone(),
-                what: "PNG output",
-                feature: "png",
-            });
-        }
-        OutputKind::Json => layout_json::document(computed).into_bytes(),
-        OutputKind::Html => html_page(computed, style).into_bytes(),
-    };
-    Ok(Rendered {
-        path: out.path.clone(),
-        bytes,
-    })
+) -> Result<Vec<u8>, BuildError> {
+    let path = out.path.clone();
+    out.kind()
+        .render(computed, style, out.scale, past, svg_text)
+        .map_err(|e| match e {
+            #[cfg(feature = "png")]
+            OutputError::Png(source) => BuildError::Png { path, source },
+            OutputError::Unsupported { what, feature } => BuildError::Unsupported {
+                path,
+                what,
+                feature,
+            },
+        })
 }
 
 /// The input warnings of a parsed dataset (a header without rows, a column
@@ -653,7 +644,7 @@ mod tests {
     fn png_output_needs_the_png_feature() {
         let out = |path: &str| OutputConfig {
             path: PathBuf::from(path),
-            kind: crate::config::kind_of(Path::new(path)),
+            kind: crate::render::OutputKind::of_path(Path::new(path)),
             scale: 1.0,
         };
         let computed = computed();

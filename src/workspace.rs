@@ -281,6 +281,56 @@ pub fn exists(path: &Path) -> bool {
     path.exists()
 }
 
+/// Where the symbolic link at `path` points, if it is one.
+pub fn link_target(path: &Path) -> Option<PathBuf> {
+    std::fs::read_link(path).ok()
+}
+
+/// `path` with every link and `..` resolved, if it exists.
+pub fn canonical(path: &Path) -> Option<PathBuf> {
+    std::fs::canonicalize(path).ok()
+}
+
+/// When the file at `path` was last modified, if that can be told.
+pub fn modified(path: &Path) -> Option<std::time::SystemTime> {
+    std::fs::metadata(path).and_then(|m| m.modified()).ok()
+}
+
+/// A folder's identity (device and inode on Unix; elsewhere all folders
+/// look alike), to tell a folder made again under the same name from the
+/// one that was there; `None` when `dir` is not a folder.
+pub fn dir_identity(dir: &Path) -> Option<(u64, u64)> {
+    let meta = std::fs::metadata(dir).ok().filter(std::fs::Metadata::is_dir)?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        Some((meta.dev(), meta.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        Some((0, 0))
+    }
+}
+
+/// A file [`open_capped`] opened.
+pub type Opened = std::fs::File;
+
+/// An output file opened for serving, with its length capped at `cap`
+/// bytes (what [`read_opened`] will read of it).
+pub fn open_capped(path: &Path, cap: u64) -> Option<(Opened, u64)> {
+    let f = std::fs::File::open(path).ok()?;
+    let len = f.metadata().ok()?.len().min(cap);
+    Some((f, len))
+}
+
+/// At most `cap` bytes of a file [`open_capped`] opened.
+pub fn read_opened(file: Opened, cap: u64) -> Option<Vec<u8>> {
+    let mut bytes = Vec::new();
+    file.take(cap).read_to_end(&mut bytes).ok()?;
+    Some(bytes)
+}
+
 /// What is at a path a writer is about to replace, looked at without
 /// opening it (nothing there blocks, a FIFO included).
 #[derive(Debug)]

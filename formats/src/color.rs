@@ -7,7 +7,7 @@ use std::fmt;
 use std::str::FromStr;
 
 /// An opaque sRGB colour, 8 bits per channel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
+#[derive(serde::Serialize, Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
 #[serde(try_from = "String")]
 pub struct Rgb {
     /// Red, 0..=255.

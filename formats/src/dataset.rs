@@ -64,7 +64,7 @@ pub struct Node {
 }
 
 /// What the source data says about how node similarity should be measured.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SimilarityHint {
     /// Cosine similarity of the feature vectors, rescaled to [0, 1].
     Cosine,

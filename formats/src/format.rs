@@ -64,7 +64,7 @@ impl<'a> Inputs<'a> {
 
 /// What a format does with a reference to an id that no node has
 /// (`fields.on_unknown_id`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+#[derive(serde::Serialize, Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum OnUnknownId {
     /// Skip it with a warning. The default, for the daemon's sake: a row
@@ -81,7 +81,7 @@ pub enum OnUnknownId {
 /// optional; each format documents its defaults. Formats ignore fields that do not
 /// apply to them. Deserialises from a config's `fields:` mapping (unknown keys
 /// are errors), so the config and the formats share this one type.
-#[derive(Clone, Debug, Default, PartialEq, serde::Deserialize)]
+#[derive(serde::Serialize, Clone, Debug, Default, PartialEq, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FormatOptions {
     /// The id column (default `id`).

@@ -41,7 +41,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     request.realized = args.realized;
     // Read even with --cold, for the stability figures.
     let previous = args.options.previous_layout()?;
-    request.previous = crate::graph::start::given(previous.clone(), args.options.cold);
+    request.previous = crate::graph::start::given(args.options.cold, || previous.clone()).flatten();
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..args.repeat.max(1) {

@@ -50,7 +50,7 @@ impl ConfigArg {
 pub(crate) fn find_upward(dir: &Path) -> Option<PathBuf> {
     dir.ancestors()
         .map(|d| d.join(CONFIG_NAME))
-        .find(|p| p.is_file())
+        .find(|p| crate::workspace::is_file(p))
 }
 
 #[cfg(test)]

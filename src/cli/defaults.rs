@@ -4,9 +4,7 @@
 
 use clap::Args;
 
-/// The documented defaults (`config/default.yaml`; a test in `src/config.rs`
-/// checks that it parses to the code's defaults).
-const DEFAULT_YAML: &str = include_str!("../../config/default.yaml");
+use crate::config::DEFAULT_YAML;
 
 /// Arguments of `nptreemap config`.
 #[derive(Debug, Args)]

@@ -103,7 +103,8 @@ pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
     for method in methods {
         let mut request = job.request.clone();
         request.method = method;
-        request.previous = crate::graph::start::given(previous.clone(), args.options.cold);
+        request.previous =
+            crate::graph::start::given(args.options.cold, || previous.clone()).flatten();
         let (computed, time_ms) = timed(&mut graph, &job.config, &job.dataset, &request)?;
         let m = table2(&computed);
         if let Some(out) = &args.out {
@@ -178,7 +179,7 @@ fn timed(
 fn stability_against(
     graph: &mut DatasetGraph,
     previous: &Arc<Previous>,
-    job: &super::Job,
+    job: &super::Resolved,
     mut request: Request,
     done: (&Computed, f64),
 ) -> anyhow::Result<Vec<StabilityRow>> {

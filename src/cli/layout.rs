@@ -8,10 +8,11 @@ use clap::Args;
 
 use super::progress::LayoutBar;
 use super::{LayoutOptions, UsageError};
-use crate::config::{kind_of, OutputConfig};
+use crate::config::OutputConfig;
 use crate::graph::{DatasetGraph, GraphOptions, StageReport};
 use crate::layout::{Method, Start};
 use crate::pipeline;
+use crate::render::OutputKind;
 
 /// Arguments of `nptreemap layout`.
 #[derive(Debug, Args)]
@@ -47,7 +48,7 @@ pub(crate) fn run(args: &LayoutArgs) -> anyhow::Result<()> {
         .out
         .iter()
         .map(|path| {
-            let kind = kind_of(path).ok_or_else(|| {
+            let kind = OutputKind::of_path(path).ok_or_else(|| {
                 UsageError(format!(
                     "{}: unknown output kind (use a .json, .svg, .png or .html extension)",
                     path.display()

@@ -104,7 +104,7 @@ pub(crate) struct LayoutOptions {
 
 /// A single dataset resolved from [`LayoutOptions`]: read and parsed, with the
 /// request and style its source and the flags give.
-pub(crate) struct Job {
+pub(crate) struct Resolved {
     /// The dataset as configured (a one-file dataset for INPUT).
     pub(crate) config: DatasetConfig,
     /// Its parsed data.
@@ -118,7 +118,7 @@ pub(crate) struct Job {
     pub(crate) reads: Vec<Named>,
 }
 
-impl Job {
+impl Resolved {
     /// Refuses outputs over what the job reads, over each other or over
     /// special files, then removes temp files killed runs left beside them.
     pub(crate) fn check_outputs(&self, outputs: &[PathBuf]) -> Result<(), BuildError> {
@@ -136,7 +136,7 @@ impl LayoutOptions {
     /// Resolves the source, reads and parses the dataset, and applies the
     /// flags to the source's settings. `method` is the method asked for, if
     /// any (each command has its own `--method`).
-    pub(crate) fn job(&self, method: Option<Method>) -> anyhow::Result<Job> {
+    pub(crate) fn job(&self, method: Option<Method>) -> anyhow::Result<Resolved> {
         let mut reads = Vec::new();
         let (config, mut request, style) = match (&self.input, &self.config) {
             (Some(input), _) => (
@@ -193,7 +193,7 @@ impl LayoutOptions {
         if let Some(previous) = &self.previous {
             reads.push(Named::new(previous, "the --previous layout"));
         }
-        Ok(Job {
+        Ok(Resolved {
             config,
             dataset,
             request,
@@ -214,12 +214,11 @@ impl LayoutOptions {
     /// The layout to start warm from: `--previous` unless `--cold` (the
     /// graph's one decision, [`crate::graph::start::given`]).
     pub(crate) fn warm_start(&self) -> anyhow::Result<Option<Arc<Previous>>> {
-        let previous = if self.cold {
-            None
-        } else {
-            self.previous_layout()?
-        };
-        Ok(crate::graph::start::given(previous, self.cold))
+        Ok(
+            crate::graph::start::given(self.cold, || self.previous_layout())
+                .transpose()?
+                .flatten(),
+        )
     }
 }
 

@@ -94,6 +94,29 @@ pub fn dirs_of(paths: &BTreeSet<PathBuf>) -> BTreeSet<PathBuf> {
         .collect()
 }
 
+/// What a batch means, the one pure decision of the watch loop: the work
+/// the config's change calls for (`new`: the config as read again, when it
+/// changed and is usable; it then replaces `old`), the datasets whose inputs
+/// are among `paths`, and with `reload` (SIGHUP) every dataset read again.
+pub fn classify(
+    paths: &BTreeSet<PathBuf>,
+    old: &Config,
+    new: Option<&Config>,
+    reload: bool,
+) -> ChangeSet {
+    let mut set = new.map_or_else(ChangeSet::default, |new| diff(old, new));
+    let config = new.unwrap_or(old);
+    for (name, reason) in touched(config, paths).relayout {
+        set.relayout.entry(name).or_insert(reason);
+    }
+    if reload {
+        for d in &config.datasets {
+            set.relayout.entry(d.name.clone()).or_insert(Reason::Reload);
+        }
+    }
+    set
+}
+
 /// The datasets reading any of `paths`, with the changed file names.
 pub fn touched(config: &Config, paths: &BTreeSet<PathBuf>) -> ChangeSet {
     let mut set = ChangeSet::default();

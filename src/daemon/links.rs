@@ -74,7 +74,7 @@ fn chain(path: &Path) -> Vec<PathBuf> {
     let mut hops = vec![path.to_path_buf()];
     let mut at = path.to_path_buf();
     while hops.len() <= MAX_HOPS {
-        let Ok(target) = std::fs::read_link(&at) else {
+        let Some(target) = crate::workspace::link_target(&at) else {
             break;
         };
         let next = match at.parent() {
@@ -94,9 +94,9 @@ fn chain(path: &Path) -> Vec<PathBuf> {
 /// `path` with its folder resolved, when the folder exists.
 fn real_folder(path: &Path) -> PathBuf {
     match (path.parent(), path.file_name()) {
-        (Some(dir), Some(name)) => std::fs::canonicalize(dir)
+        (Some(dir), Some(name)) => crate::workspace::canonical(dir)
             .map(|d| d.join(name))
-            .unwrap_or_else(|_| path.to_path_buf()),
+            .unwrap_or_else(|| path.to_path_buf()),
         _ => path.to_path_buf(),
     }
 }

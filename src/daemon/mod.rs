@@ -20,6 +20,8 @@ pub mod event;
 pub mod links;
 /// Work waiting per dataset, and retries of failed writes.
 pub mod queue;
+/// The status reporter: lines, events and their de-duplication.
+pub mod reporter;
 /// The status lines.
 pub mod status;
 /// notify over directories, and batching of its events.
@@ -41,9 +43,10 @@ use change::{ChangeSet, Reason};
 use event::Report;
 use links::Aliases;
 use queue::Queue;
-use status::{Line, Status};
+use reporter::{Follow, Reporter};
+use status::Status;
 use watcher::{Batch, DirWatcher, Message, Timing};
-use worker::{Done, Job, Outcome, Shared, Worker};
+use worker::{Done, Task, Shared, Worker};
 
 /// How the daemon runs.
 #[derive(Clone, Debug, Default)]
@@ -114,14 +117,13 @@ impl DaemonError {
     }
 }
 
-/// The daemon's state: the last good config, each dataset's worker, and
-/// what has been reported.
+/// The daemon's state: the last good config, each dataset's worker, the
+/// work waiting, and the reporter.
 struct Daemon<'a> {
     config_path: PathBuf,
     config: Config,
     timing: Timing,
     stop: Arc<AtomicBool>,
-    report: &'a mut dyn FnMut(Report),
     /// What the workers share; its `done` end is `done`.
     shared: Arc<Shared>,
     done: Receiver<Done>,
@@ -133,24 +135,11 @@ struct Daemon<'a> {
     aliases: Aliases,
     /// The folders watched (or waited for), as last given to the watcher.
     dirs: BTreeSet<PathBuf>,
-    /// Parse failures not reported yet, by dataset, with when they happened:
-    /// a file read while a writer is still at it (editors and scripts writing
-    /// in place truncate first) fails to parse, and the write's own events
-    /// bring a rebuild that succeeds. A failure is reported only when the
-    /// inputs then stay quiet for [`SETTLE`]; a good rebuild forgets it.
-    pending: BTreeMap<String, (Status, Instant)>,
-    /// When the last relevant event arrived (for [`SETTLE`]).
-    last_event: Instant,
+    /// Every line and event, and what was said.
+    reporter: Reporter<'a>,
     /// When the last batch with relevant paths ended (its debounce over):
     /// the rebuilds it causes are timed from it.
     last_batch: Instant,
-    /// The problems last reported per subject (a dataset or `config`), until
-    /// they are fixed: the same problems are not reported twice in a row,
-    /// and the fix is announced ("ok again").
-    troubled: BTreeMap<String, BTreeSet<String>>,
-    /// The input warnings last reported per dataset: a warning is printed
-    /// again only when it was gone in between (issue 21 item 4).
-    warned: BTreeMap<String, BTreeSet<String>>,
     /// Batches with relevant paths so far, numbered in the debug log.
     batches: u64,
     /// Whether the loop was idle (nothing queued, no rebuild running) when
@@ -158,19 +147,10 @@ struct Daemon<'a> {
     idle: bool,
 }
 
-/// How long the inputs must stay unchanged after a parse failure before it
-/// is reported (see `Daemon::pending`): long enough for a writer descheduled
-/// mid-write on a busy machine, short for a person fixing a typo.
-const SETTLE: Duration = Duration::from_millis(1000);
-
 /// How often watched folders (and the links to inputs) are looked at
 /// between events: a folder deleted and made again, one missing at start,
 /// or a link pointed elsewhere is watched again within this.
 const POLL: Duration = Duration::from_millis(500);
-
-/// The most input warnings printed for one rebuild; more are summed up in
-/// one line (a million repeated pairs must not flood the journal).
-const MAX_WARNINGS: usize = 50;
 
 /// A channel for [`run`]: give the sender to whatever should stop the daemon
 /// (a signal handler sends [`Message::Stop`]) or reload it ([`Message::Reload`]).
@@ -232,23 +212,19 @@ pub fn run(
         config,
         timing: options.timing,
         stop,
-        report,
         shared,
         done,
         workers: BTreeMap::new(),
         queue: Queue::default(),
         aliases: Aliases::default(),
         dirs: BTreeSet::new(),
-        pending: BTreeMap::new(),
-        last_event: Instant::now(),
+        reporter: Reporter::new(report),
         last_batch: Instant::now(),
-        troubled: BTreeMap::new(),
-        warned: BTreeMap::new(),
         batches: 0,
         idle: false,
     };
     daemon.sync_watches(&mut watcher);
-    daemon.say(Status::Watching {
+    daemon.reporter.say(Status::Watching {
         config: daemon.config_path.clone(),
         datasets: daemon.config.datasets.len(),
         dirs: watcher.watched().len(),
@@ -261,63 +237,65 @@ pub fn run(
     daemon.watch(&mut watcher, rx);
     daemon.stop.store(true, Ordering::SeqCst);
     shutdown();
-    daemon.say(Status::Stopped);
+    daemon.reporter.say(Status::Stopped);
     Ok(())
 }
 
 impl Daemon<'_> {
-    /// The loop: wait for events (or an outcome, or the next due time),
-    /// turn them into work, hand it out, report, until a stop.
+    /// The loop: a batch of events (or an outcome, or the next due time),
+    /// what it means, the work handed out, the outcomes reported, until a
+    /// stop.
     fn watch(&mut self, watcher: &mut DirWatcher, rx: &Receiver<Message>) {
-        while !self.stopping() {
-            let aliases = self.aliases.clone();
-            let batch = watcher::next_batch(
-                rx,
-                self.timing,
-                &|p: &Path| aliases.contains(p),
-                Some(self.wait()),
-            );
-            let (events, reload) = match batch {
-                Batch::Stop => break,
-                Batch::Idle => (BTreeSet::new(), false),
-                Batch::Paths(paths) => (paths, false),
-                Batch::Reload(paths) => (paths, true),
-            };
-            // Events on a link's target stand for the configured path.
-            let mut paths = aliases.watched_of(&events);
-            // Folders deleted and made again (or appeared) since the last
-            // look: their files may have changed without an event.
-            for dir in watcher.check() {
-                paths.extend(aliases.watched_in(&dir));
-            }
-            if !paths.is_empty() {
-                self.last_event = Instant::now();
-                self.last_batch = self.last_event;
-                self.batches += 1;
-                tracing::debug!(batch = self.batches, ?paths, "batch");
-            }
-            let mut work = ChangeSet::default();
-            if reload || paths.contains(&self.config_path) {
-                if let Some(set) = self.reload_config(reload) {
-                    work = set;
-                }
+        while let Some((paths, reload)) = self.next_batch(watcher, rx) {
+            let config_changed = reload || paths.contains(&self.config_path);
+            let new = config_changed.then(|| self.read_config(reload)).flatten();
+            let work = change::classify(&paths, &self.config, new.as_ref(), reload);
+            if let Some(new) = new {
+                self.config = new;
             }
             // A link pointed elsewhere, a new input: watch where they lead.
             self.sync_watches(watcher);
-            for (name, reason) in change::touched(&self.config, &paths).relayout {
-                work.relayout.entry(name).or_insert(reason);
-            }
-            if reload {
-                for d in &self.config.datasets {
-                    work.relayout.entry(d.name.clone()).or_insert(Reason::Reload);
-                }
-            }
             self.schedule(work);
             self.collect();
             self.dispatch();
-            self.report_settled();
+            self.reporter.settle();
             self.note_idle(!paths.is_empty());
         }
+    }
+
+    /// Waits for the next batch: its paths (events on a link's target stand
+    /// for the configured path; folders made again count for their files)
+    /// and whether it asks for a reload; `None` at a stop.
+    fn next_batch(
+        &mut self,
+        watcher: &mut DirWatcher,
+        rx: &Receiver<Message>,
+    ) -> Option<(BTreeSet<PathBuf>, bool)> {
+        if self.stopping() {
+            return None;
+        }
+        let aliases = self.aliases.clone();
+        let wait = self.reporter.wait(&self.queue);
+        let batch = watcher::next_batch(rx, self.timing, &|p: &Path| aliases.contains(p), Some(wait));
+        let (events, reload) = match batch {
+            Batch::Stop => return None,
+            Batch::Idle => (BTreeSet::new(), false),
+            Batch::Paths(paths) => (paths, false),
+            Batch::Reload(paths) => (paths, true),
+        };
+        let mut paths = aliases.watched_of(&events);
+        // Folders deleted and made again (or appeared) since the last look:
+        // their files may have changed without an event.
+        for dir in watcher.check() {
+            paths.extend(aliases.watched_in(&dir));
+        }
+        if !paths.is_empty() {
+            self.last_batch = Instant::now();
+            self.reporter.events(self.last_batch);
+            self.batches += 1;
+            tracing::debug!(batch = self.batches, ?paths, "batch");
+        }
+        Some((paths, reload))
     }
 
     /// Logs (at debug level) when every change handed to the loop so far
@@ -346,64 +324,6 @@ impl Daemon<'_> {
         self.stop.load(Ordering::Relaxed)
     }
 
-    /// Reports one line, with its time of day.
-    fn say(&mut self, status: Status) {
-        (self.report)(Report::Line(Line::now(status)));
-    }
-
-    /// How long the loop may wait for events: until the next pending problem
-    /// or retry is due, and at most [`POLL`].
-    fn wait(&self) -> Duration {
-        let now = Instant::now();
-        self.pending
-            .values()
-            .map(|(_, at)| (*at).max(self.last_event) + SETTLE)
-            .chain(self.queue.next_due())
-            .map(|due| due.saturating_duration_since(now))
-            .fold(POLL, Duration::min)
-    }
-
-    /// Reports the pending problems whose inputs stayed quiet for [`SETTLE`].
-    fn report_settled(&mut self) {
-        let now = Instant::now();
-        let due: Vec<String> = self
-            .pending
-            .iter()
-            .filter(|(_, (_, at))| now >= (*at).max(self.last_event) + SETTLE)
-            .map(|(name, _)| name.clone())
-            .collect();
-        for name in due {
-            if let Some((problem, _)) = self.pending.remove(&name) {
-                self.problems(&name, vec![problem]);
-            }
-        }
-    }
-
-    /// Reports the problems of one outcome about `subject`, except those
-    /// reported for it last time (a retry failing as before says nothing
-    /// new; a problem gone and back is reported again).
-    fn problems(&mut self, subject: &str, problems: Vec<Status>) {
-        let key = |p: &Status| match p {
-            // The error, not the consequence: the same failure is the same
-            // problem whatever became of the other outputs meanwhile.
-            Status::Problem { message, .. } => message.clone(),
-            other => other.to_string(),
-        };
-        let before = self.troubled.remove(subject).unwrap_or_default();
-        let now: BTreeSet<String> = problems.iter().map(key).collect();
-        for problem in problems {
-            if !before.contains(&key(&problem)) {
-                self.say(problem);
-            }
-        }
-        self.troubled.insert(subject.to_string(), now);
-    }
-
-    /// Forgets `subject`'s problems; true when there were some (it is ok again).
-    fn fixed(&mut self, subject: &str) -> bool {
-        self.troubled.remove(subject).is_some()
-    }
-
     /// Watches the folders of the config and of every input, and of the
     /// files their links lead to; reports folders that cannot be watched
     /// (missing ones are polled until they exist).
@@ -416,7 +336,7 @@ impl Daemon<'_> {
         for (dir, e) in watcher.sync(&dirs) {
             let subject = dir.display().to_string();
             let line = Status::problem(subject, &e, "watched as soon as it exists");
-            self.say(line);
+            self.reporter.say(line);
         }
         self.dirs = dirs;
     }
@@ -424,25 +344,23 @@ impl Daemon<'_> {
     /// Reads the config again (it changed, or `forced` by SIGHUP). One that
     /// does not parse, or whose outputs are unsafe, is reported and the
     /// previous one kept; otherwise returns what changed.
-    fn reload_config(&mut self, forced: bool) -> Option<ChangeSet> {
+    fn read_config(&mut self, forced: bool) -> Option<Config> {
         let new = match Config::from_path(&self.config_path) {
             Ok(new) => new,
             Err(e) => {
                 let problem = Status::problem("config", &e, "previous config kept");
-                self.problems("config", vec![problem]);
+                self.reporter.problems("config", vec![problem]);
                 return None;
             }
         };
         let (reads, writes) = pipeline::files_of(&self.config_path, &new.datasets);
         if let Err(e) = pipeline::check_outputs(&reads, &writes) {
             let problem = Status::problem("config", &e, "previous config kept");
-            self.problems("config", vec![problem]);
+            self.reporter.problems("config", vec![problem]);
             return None;
         }
         pipeline::remove_stale_temps(&writes);
-        let set = change::diff(&self.config, &new);
-        self.config = new;
-        let again = self.fixed("config");
+        let again = self.reporter.fixed("config");
         let message = match (again, forced) {
             (true, true) => "ok again; reloaded on SIGHUP",
             (true, false) => "ok again",
@@ -450,12 +368,12 @@ impl Daemon<'_> {
             (false, false) => "",
         };
         if !message.is_empty() {
-            self.say(Status::Note {
+            self.reporter.say(Status::Note {
                 subject: "config".to_string(),
                 message: message.to_string(),
             });
         }
-        Some(set)
+        Some(new)
     }
 
     /// Queues the work of a batch; a dataset that left the config is
@@ -463,10 +381,8 @@ impl Daemon<'_> {
     fn schedule(&mut self, work: ChangeSet) {
         for name in &work.removed {
             self.queue.forget(name);
-            self.pending.remove(name);
-            self.troubled.remove(name);
-            self.warned.remove(name);
-            self.say(Status::Note {
+            self.reporter.forget(name);
+            self.reporter.say(Status::Note {
                 subject: name.clone(),
                 message: "no longer in the config; its outputs are left as they are".to_string(),
             });
@@ -503,12 +419,12 @@ impl Daemon<'_> {
                 queue::Next::Build(Reason::Start) | queue::Next::Retry => now,
                 _ => self.last_batch,
             };
-            let job = Job {
+            let job = Task {
                 since,
                 next,
                 request: self.config.request(&d),
                 style: self.config.style(&d),
-                force: self.troubled.contains_key(&name),
+                force: self.reporter.troubled(&name),
                 history: self.config.history,
                 dataset: d,
             };
@@ -527,7 +443,7 @@ impl Daemon<'_> {
     }
 
     /// Sends `job` to `name`'s worker, starting one if needed.
-    fn send(&mut self, name: &str, job: Job) {
+    fn send(&mut self, name: &str, job: Task) {
         if !self.workers.contains_key(name) {
             match Worker::spawn(name, self.shared.clone()) {
                 Ok(worker) => {
@@ -535,7 +451,7 @@ impl Daemon<'_> {
                 }
                 Err(e) => {
                     let problem = Status::problem(name, &e, "tried again at the next change");
-                    self.problems(name, vec![problem]);
+                    self.reporter.problems(name, vec![problem]);
                     return;
                 }
             }
@@ -548,140 +464,29 @@ impl Daemon<'_> {
         }
     }
 
-    /// Reports the outcomes the workers sent back.
+    /// Reports the outcomes the workers sent back, and queues the retries
+    /// of what they could not write.
     fn collect(&mut self) {
         while let Ok(done) = self.done.try_recv() {
             if let Some(worker) = self.workers.get_mut(&done.name) {
                 worker.busy = false;
             }
+            // A dataset that left the config meanwhile: nothing to say.
+            let Some(d) = self.dataset(&done.name).cloned() else {
+                continue;
+            };
             if self.stopping() {
                 continue;
             }
-            self.outcome(done);
-        }
-    }
-
-    /// Reports one outcome: its event, then its lines.
-    fn outcome(&mut self, Done { name, reason, outcome }: Done) {
-        // A dataset that left the config meanwhile: nothing to say.
-        let Some(d) = self.dataset(&name).cloned() else {
-            return;
-        };
-        if let Some(event) = event::of(&name, &reason, &outcome) {
-            (self.report)(Report::Rebuilt(Arc::new(event)));
-        }
-        match outcome {
-            Outcome::Unchanged => {}
-            Outcome::Abandoned => tracing::debug!(dataset = name, "stopping; rebuild abandoned"),
-            Outcome::Unreadable(e, consequence) => {
-                self.problems(&name, vec![Status::problem(&name, &e, consequence)]);
+            let name = done.name.clone();
+            match self.reporter.outcome(&d, done) {
+                Follow::Retry => {
+                    let wait = self.queue.failed(&name, Instant::now());
+                    tracing::debug!(dataset = name, ?wait, "writes retried");
+                }
+                Follow::Written => self.queue.written(&name),
+                Follow::Nothing => {}
             }
-            Outcome::Failed(e, consequence) if e.fault() == Fault::Input => {
-                tracing::debug!(dataset = name, error = ?e.to_string(), "input refused; reported unless the input changes again");
-                let problem = Status::problem(&name, &e, consequence);
-                self.pending.insert(name, (problem, Instant::now()));
-            }
-            Outcome::Failed(e, consequence) => {
-                self.problems(&name, vec![Status::problem(&name, &e, consequence)]);
-            }
-            Outcome::Panicked(message) => {
-                let problem = Status::Problem {
-                    subject: name.clone(),
-                    message: event::panicked(&message),
-                    consequence: worker::kept(&d, false).to_string(),
-                };
-                self.problems(&name, vec![problem]);
-            }
-            Outcome::Built(built) => self.built(&name, built),
         }
-    }
-
-    /// Reports a rebuild that wrote its outputs (or tried): its new warnings,
-    /// each output that failed, then its line; schedules a retry of what was
-    /// not written.
-    fn built(&mut self, name: &str, built: worker::Built) {
-        let worker::Built {
-            reason,
-            layout,
-            ms,
-            written,
-            warnings,
-            unsaved,
-            ..
-        } = built;
-        self.pending.remove(name);
-        let retry = reason == Reason::Retry;
-        if !retry {
-            self.warn(name, warnings);
-        }
-        // With -v: the figure benches/incremental.py reads.
-        tracing::info!("{name}: outputs on disk {ms:.1} ms after the batch ({reason})");
-        let failed = written.failed.len();
-        let others = match (written.written.len(), written.unchanged.len()) {
-            (0, 0) => "no output written".to_string(),
-            (0, _) => "the other outputs unchanged".to_string(),
-            (w, 0) => format!("{w} other output(s) written"),
-            (w, u) => format!("{w} other output(s) written, {u} unchanged"),
-        };
-        if let Some(e) = &unsaved {
-            tracing::warn!(dataset = name, error = ?e.to_string(), "cannot store the layout for warm starts; retried");
-        }
-        let recovered = if failed == 0 {
-            self.fixed(name)
-        } else {
-            let consequence = format!("{others}; written again as soon as it can be");
-            let problems = written
-                .failed
-                .iter()
-                .map(|e| Status::problem(name, e, consequence.clone()))
-                .collect();
-            self.problems(name, problems);
-            false
-        };
-        if failed > 0 || unsaved.is_some() {
-            let wait = self.queue.failed(name, Instant::now());
-            tracing::debug!(dataset = name, ?wait, "writes retried");
-        } else {
-            self.queue.written(name);
-        }
-        // A retry says something only when it made a difference: the
-        // outputs are all written now after a reported failure.
-        if retry && !recovered {
-            return;
-        }
-        self.say(Status::Built {
-            dataset: name.to_string(),
-            reason,
-            layout,
-            ms,
-            written: written.written,
-            unchanged: written.unchanged.len(),
-            failed,
-            recovered,
-        });
-    }
-
-    /// Reports the warnings of a rebuild that were not reported for the
-    /// dataset's last one, at most [`MAX_WARNINGS`] of them.
-    fn warn(&mut self, name: &str, warnings: Vec<String>) {
-        let before = self.warned.remove(name).unwrap_or_default();
-        let fresh: Vec<&String> = warnings.iter().filter(|w| !before.contains(*w)).collect();
-        for message in fresh.iter().take(MAX_WARNINGS) {
-            self.say(Status::Warning {
-                subject: name.to_string(),
-                message: (*message).clone(),
-            });
-        }
-        if fresh.len() > MAX_WARNINGS {
-            self.say(Status::Warning {
-                subject: name.to_string(),
-                message: format!(
-                    "and {} more warning(s) (`nptreemap check` lists them all)",
-                    fresh.len() - MAX_WARNINGS
-                ),
-            });
-        }
-        self.warned
-            .insert(name.to_string(), warnings.into_iter().collect());
     }
 }

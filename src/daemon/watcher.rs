@@ -68,19 +68,7 @@ impl Default for Timing {
 type DirId = (u64, u64);
 
 fn dir_id(dir: &Path) -> Option<DirId> {
-    let meta = std::fs::metadata(dir)
-        .ok()
-        .filter(std::fs::Metadata::is_dir)?;
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt;
-        Some((meta.dev(), meta.ino()))
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = meta;
-        Some((0, 0))
-    }
+    crate::workspace::dir_identity(dir)
 }
 
 /// A notify watcher over directories, updated by mark-and-sweep; a wanted

@@ -17,7 +17,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::config::DatasetConfig;
-use crate::fingerprint::{Fingerprint, Fingerprinter};
+use crate::graph::memo::ms_since;
 use crate::graph::{self, DatasetGraph, GraphOptions, LayoutStep, Stage, StageReport};
 use crate::layout::{LayoutError, ProgressSink, Request};
 use crate::measure::stability::{stability, Stability};
@@ -37,7 +37,7 @@ use super::FirstBuildProgress;
 const STACK: usize = 8 << 20;
 
 /// One task for a worker, with the config it runs under.
-pub struct Job {
+pub struct Task {
     /// When the batch that asked for it ended (its debounce over): the
     /// rebuild's time is counted from it.
     pub since: Instant,
@@ -129,7 +129,7 @@ impl Shared {
 
 /// A dataset's worker thread, as the daemon holds it.
 pub struct Worker {
-    jobs: Sender<Job>,
+    jobs: Sender<Task>,
     /// Whether a task was sent and its outcome has not come back yet.
     pub busy: bool,
 }
@@ -152,7 +152,7 @@ impl Worker {
     }
 
     /// Hands the worker a task; false when the worker is gone.
-    pub fn send(&mut self, job: Job) -> bool {
+    pub fn send(&mut self, job: Task) -> bool {
         let sent = self.jobs.send(job).is_ok();
         self.busy = sent;
         sent
@@ -160,18 +160,18 @@ impl Worker {
 }
 
 /// What runs a task (a parameter so that tests can make one panic).
-type Run<'a> = dyn FnMut(&mut State, &Job, &Shared) -> Outcome + 'a;
+type Run<'a> = dyn FnMut(&mut Remembered, &Task, &Shared) -> Outcome + 'a;
 
 /// The worker's loop: one task at a time until the daemon drops its end.
-fn serve(name: &str, jobs: &Receiver<Job>, shared: &Shared, run: &mut Run<'_>) {
-    let mut state = State::default();
+fn serve(name: &str, jobs: &Receiver<Task>, shared: &Shared, run: &mut Run<'_>) {
+    let mut state = Remembered::default();
     for job in jobs {
         let outcome = catch_unwind(AssertUnwindSafe(|| run(&mut state, &job, shared)))
             .unwrap_or_else(|panic| {
                 // What the task left half-done cannot be trusted: start over
                 // (the next rebuild is a full one, cold unless a layout is
                 // stored).
-                state = State::default();
+                state = Remembered::default();
                 Outcome::Panicked(panic_message(panic.as_ref()))
             });
         let done = Done {
@@ -199,60 +199,25 @@ fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
 }
 
 /// What a worker remembers of its dataset between tasks.
-struct State {
+struct Remembered {
     /// The dataset's stage graph: the last result of every stage (the last
     /// good layout among them: the source of render-only rebuilds and of the
     /// next warm start) and the state a commit could not write.
     graph: DatasetGraph,
-    /// The [`job_key`] last built (or last failed on), so an event that
-    /// changed nothing (a touch, a save without edits) costs nothing.
-    fingerprint: Option<Fingerprint>,
-    /// Whether a build has succeeded: there are good outputs, and a failed
-    /// build's inputs, seen again unchanged, need no second attempt.
-    good: bool,
     /// The outputs of the last rebuild when some could not be written: the
     /// whole set, so that a retry leaves it consistent (the ones that were
     /// written are skipped as unchanged).
     unwritten: Option<Vec<Rendered>>,
 }
 
-impl Default for State {
+impl Default for Remembered {
     fn default() -> Self {
-        State {
+        Remembered {
             // `NPTREEMAP_NO_CACHE=1` turns reuse off here too, as for `build`.
             graph: DatasetGraph::new(GraphOptions::from_env()),
-            fingerprint: None,
-            good: false,
             unwritten: None,
         }
     }
-}
-
-/// Everything a rebuild of `job` from `files` depends on: the input bytes
-/// and how they are read, the layout settings, the style, the whole dataset
-/// config (outputs, page, where its state lives) and the page's history. A
-/// rebuild for an edit is skipped only when this is unchanged (issue 30 item
-/// 6: it covered the input bytes only, so a config change coalesced with an
-/// edit that changed no byte was lost). Every field of [`Job`] is named, so
-/// a new one does not compile until it is placed in the key or left out here.
-fn job_key(job: &Job, files: &[pipeline::InputFile]) -> Fingerprint {
-    let Job {
-        // When and why it runs, not what it makes.
-        since: _,
-        next: _,
-        force: _,
-        dataset,
-        request,
-        style,
-        history,
-    } = job;
-    Fingerprinter::new("job")
-        .fingerprint(graph::keys::inputs(dataset, files))
-        .debug(&request.settings())
-        .debug(style)
-        .debug(dataset)
-        .u64(*history as u64)
-        .finish()
 }
 
 /// What happens to a failed dataset's outputs, truthfully: kept when there
@@ -267,8 +232,8 @@ pub fn kept(d: &DatasetConfig, missing_input: bool) -> &'static str {
     }
 }
 
-impl State {
-    fn run(&mut self, name: &str, job: &Job, shared: &Shared) -> Outcome {
+impl Remembered {
+    fn run(&mut self, name: &str, job: &Task, shared: &Shared) -> Outcome {
         if shared.stopping() {
             return Outcome::Abandoned;
         }
@@ -284,29 +249,18 @@ impl State {
     /// Hands the dataset's files to its graph, which runs the stages their
     /// changes call for (warm or cold is its decision, `graph::start`), and
     /// writes what changed.
-    fn build(&mut self, name: &str, reason: Reason, job: &Job, shared: &Shared) -> Outcome {
+    fn build(&mut self, name: &str, reason: Reason, job: &Task, shared: &Shared) -> Outcome {
         let d = &job.dataset;
         let started = Instant::now();
         let files = match pipeline::read_inputs(d) {
             Ok(files) => files,
             Err(e) => {
-                self.fingerprint = None;
                 let consequence = kept(d, e.missing_file().is_some());
                 return Outcome::Unreadable(e, consequence);
             }
         };
         let mut stages = StageReport::default();
         stages.record(name, Stage::Read, true, ms_since(started), "");
-        let fingerprint = job_key(job, &files);
-        if data_only(&reason)
-            && self.fingerprint == Some(fingerprint)
-            && self.good
-            && !job.force
-        {
-            tracing::debug!(dataset = name, "inputs unchanged; nothing to do");
-            return Outcome::Unchanged;
-        }
-        self.fingerprint = Some(fingerprint);
         // The graph keeps the dataset's last layouts (the page's history):
         // it knows each one's fingerprint, which keys the page's render.
         self.graph.keep_history(job.history);
@@ -332,6 +286,14 @@ impl State {
             Err(e) => return Outcome::Failed(e, kept(d, false)),
             Ok(build) => build,
         };
+        // The graph's one "nothing changed" decision (`graph::start`): the
+        // inputs, settings, style and history are those the outputs on disk
+        // were made from. An event that changed nothing (a touch, a save
+        // without edits) then says nothing; a render edit or an open
+        // problem is answered with a line.
+        if build.layout == LayoutStep::UpToDate && data_only(&reason) && !job.force {
+            return Outcome::Unchanged;
+        }
         if shared.stopping() {
             return Outcome::Abandoned;
         }
@@ -349,7 +311,6 @@ impl State {
             _ => None,
         };
         let written = self.graph.commit(&graph_job, &mut build);
-        self.good = true;
         // Kept for the retry only when some output could not be written.
         self.unwritten = (!written.failed.is_empty()).then(|| {
             build
@@ -389,7 +350,7 @@ impl State {
 
     /// Writes again what the last rebuild could not write: its outputs, and
     /// the state folder.
-    fn retry(&mut self, job: &Job, shared: &Shared) -> Outcome {
+    fn retry(&mut self, job: &Task, shared: &Shared) -> Outcome {
         if self.unwritten.is_none() && !self.graph.unstored() {
             return Outcome::Unchanged;
         }
@@ -478,18 +439,14 @@ impl Drop for Bar<'_> {
     }
 }
 
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1000.0
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::config::Config;
 
     /// A task for dataset `d` of `config`.
-    fn job_of(config: &Config, d: &DatasetConfig, next: Next) -> Job {
-        Job {
+    fn job_of(config: &Config, d: &DatasetConfig, next: Next) -> Task {
+        Task {
             since: Instant::now(),
             next,
             request: config.request(d),
@@ -574,12 +531,14 @@ mod tests {
     /// not only the input bytes: an edit that rewrote a file with the same
     /// bytes, handed over with a config whose title (or output list) changed
     /// meanwhile, draws the new title (it was skipped, and the title stayed
-    /// old for good); with the same config as well it is skipped.
+    /// old for good); with the same config as well it is skipped, and with
+    /// the outputs reordered too (the same files), while an added output is
+    /// made. One decision (the graph's) covers it all.
     #[test]
     fn unchanged_bytes_under_a_changed_config_are_not_skipped() {
         let (dir, config) = countries("skip");
         let (shared, _outcomes, _woken) = shared();
-        let mut state = State::default();
+        let mut state = Remembered::default();
         let edit = || Next::Build(Reason::Data(vec!["countries.csv".to_string()]));
         let d = config.datasets[0].clone();
         let first = state.run("countries", &job_of(&config, &d, Next::Build(Reason::Start)), &shared);
@@ -602,11 +561,22 @@ mod tests {
         assert!(built.written.written.contains(&svg), "{:?}", built.written);
         assert!(std::fs::read_to_string(&svg).expect("svg").contains("A new title"));
 
+        // The same outputs in another order make the same files: nothing
+        // to do. One more output is made.
         let mut moved = titled.clone();
         moved.datasets[0].outputs.reverse();
         let d = moved.datasets[0].clone();
         let outcome = state.run("countries", &job_of(&moved, &d, edit()), &shared);
-        assert!(matches!(outcome, Outcome::Built(_)), "an output change is not skipped");
+        assert!(matches!(outcome, Outcome::Unchanged), "reordered outputs make the same files");
+        let mut extra = moved.datasets[0].outputs.last().expect("an SVG output").clone();
+        extra.path = dir.join("out/extra.svg");
+        moved.datasets[0].outputs.push(extra);
+        let d = moved.datasets[0].clone();
+        let Outcome::Built(built) = state.run("countries", &job_of(&moved, &d, edit()), &shared)
+        else {
+            panic!("an output added was skipped");
+        };
+        assert_eq!(built.written.written, vec![dir.join("out/extra.svg")]);
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -19,7 +19,7 @@ pub enum GeomError {
 }
 
 /// A convex polygon with positive orientation.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(serde::Serialize, Clone, Debug, PartialEq)]
 pub struct ConvexPolygon {
     points: Vec<Point>,
 }

@@ -37,11 +37,13 @@
 //! manifest, no constraint cache, no stored layout: a cold start), which is
 //! how the tests show that each of their assertions depends on a cache.
 
-/// The keys of the stages.
-pub mod keys;
+/// One stage's memo slot.
+pub mod memo;
 /// What the stages did.
 pub mod report;
-/// Warm or cold: the one decision.
+/// The stages: slots, keys and methods, and the chain that runs them.
+pub mod stages;
+/// Where a build starts: nothing to do, the layout in memory, warm or cold.
 pub mod start;
 
 use std::collections::VecDeque;
@@ -51,14 +53,14 @@ use std::time::Instant;
 
 use nptreemap_formats::Dataset;
 
-use crate::config::{DatasetConfig, OutputConfig, OutputKind};
-use crate::fingerprint::{Fingerprint, Fingerprinter};
-use crate::layout::compute::{lay_out_planned, plan, Prepared};
-use crate::layout::{zero, Computed, LayoutError, Previous, Request, Start};
-use crate::neighborhood::{build_constraints, prepare, Constraint, SimilarityKind};
-use crate::pipeline::{self, BuildError, InputFile, Rendered, Written};
-use crate::render::{html_page_with_history, Style};
-use crate::state::manifest::{self, LayoutRecord, Manifest, OutputRecord};
+use crate::config::DatasetConfig;
+use crate::fingerprint::Fingerprint;
+use crate::layout::compute::{lay_out_planned, plan, Plan, Prepared};
+use crate::layout::{zero, Computed, Previous, Request, Start, ZeroItems};
+use crate::neighborhood::Constraint;
+use crate::pipeline::{self, BuildError, Rendered, Written};
+use crate::render::Style;
+use crate::state::manifest::{self, Manifest};
 use crate::state::{self};
 use crate::workspace;
 pub use report::{Stage, StageReport};
@@ -131,6 +133,28 @@ pub struct OutputBuild {
 }
 
 impl OutputBuild {
+    /// An output rendered now, to go where `disk` was found.
+    fn made(path: PathBuf, bytes: Vec<u8>, disk: Option<OnDisk>) -> Self {
+        OutputBuild {
+            path,
+            fingerprint: Fingerprint::of_bytes(&bytes),
+            len: bytes.len() as u64,
+            bytes: Some(bytes),
+            on_disk: disk.map(|f| f.fingerprint),
+        }
+    }
+
+    /// An output its file holds already.
+    fn on_disk(path: PathBuf, disk: OnDisk) -> Self {
+        OutputBuild {
+            path,
+            bytes: None,
+            fingerprint: disk.fingerprint,
+            len: disk.len,
+            on_disk: Some(disk.fingerprint),
+        }
+    }
+
     /// Whether writing it would change the file.
     pub fn stale(&self) -> bool {
         self.on_disk != Some(self.fingerprint)
@@ -183,25 +207,15 @@ struct Pending {
     manifest: Option<Manifest>,
 }
 
-/// The last layout a graph made, with what it was made from.
-struct Last {
-    inputs: Fingerprint,
-    settings: Fingerprint,
-    state: Fingerprint,
-    computed: Arc<Computed>,
-}
-
 /// One dataset's stage graph: the last result of each stage with its key.
 #[derive(Default)]
 pub struct DatasetGraph {
     options: GraphOptions,
     /// The manifest as last read or written (loaded at the first build).
     manifest: Option<Manifest>,
-    parsed: Option<(Fingerprint, Arc<Dataset>)>,
-    prepared: Option<(Fingerprint, Arc<Dataset>)>,
-    constraints: Option<(Fingerprint, Arc<Vec<Constraint>>)>,
-    last: Option<Last>,
-    /// The layouts before `last` this graph made, oldest first, at most
+    /// Each stage's last result with its key.
+    slots: stages::Slots,
+    /// The layouts before the last one this graph made, oldest first, at most
     /// `history` of them: the HTML page's past layouts (`history:`, issue
     /// 25). In memory only: a session's history, not the state folder's.
     past: VecDeque<(Fingerprint, Arc<Computed>)>,
@@ -215,10 +229,6 @@ pub struct DatasetGraph {
     /// moved since (a `state_dir:` edit, another set of outputs), so that the
     /// new folder holds the layout its manifest vouches for.
     stored_at: Option<PathBuf>,
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1000.0
 }
 
 /// An output's file as the build found it.
@@ -268,26 +278,16 @@ impl DatasetGraph {
             &job.dataset.name,
             Stage::Read,
             true,
-            ms_since(t),
+            memo::ms_since(t),
             format!("{} file(s), {size} bytes", files.len()),
         );
         self.build_from(job, &files, stages)
     }
 
-    /// [`DatasetGraph::build`] from files already read.
-    pub fn build_from(
-        &mut self,
-        job: &Job<'_>,
-        files: &[InputFile],
-        mut stages: StageReport,
-    ) -> Result<DatasetBuild, BuildError> {
-        let d = job.dataset;
-        let name = d.name.as_str();
+    /// The manifest as last read or written (read at the first build).
+    fn manifest_of(&mut self, d: &DatasetConfig) -> Manifest {
         let cache = self.options.cache;
-        let inputs = keys::inputs(d, files);
-        let settings = manifest::settings_key(&job.request.settings());
-        let manifest = self
-            .manifest
+        self.manifest
             .get_or_insert_with(|| {
                 if cache {
                     manifest::read(d)
@@ -295,263 +295,19 @@ impl DatasetGraph {
                     Manifest::default()
                 }
             })
-            .clone();
-        let disk: Vec<Option<OnDisk>> = d.outputs.iter().map(|o| on_disk(&o.path)).collect();
-
-        if let Some(done) = self.up_to_date(job, &manifest, inputs, settings, &disk, &mut stages) {
-            return Ok(done);
-        }
-
-        // Parse.
-        let t = Instant::now();
-        let dataset = match &self.parsed {
-            Some((key, dataset)) if cache && *key == inputs => {
-                stages.record(name, Stage::Parse, false, ms_since(t), "inputs unchanged");
-                Arc::clone(dataset)
-            }
-            _ => {
-                let dataset = Arc::new(pipeline::parse_inputs(d, files)?);
-                stages.record(
-                    name,
-                    Stage::Parse,
-                    true,
-                    ms_since(t),
-                    format!("{} nodes", dataset.len()),
-                );
-                self.parsed = Some((inputs, Arc::clone(&dataset)));
-                dataset
-            }
-        };
-        let mut warnings = pipeline::warnings(files, &dataset);
-        let warning_record: Vec<(String, String)> = dataset
-            .warnings()
-            .iter()
-            .map(|w| (w.role.clone(), w.to_string()))
-            .collect();
-        let layout_error = |source: LayoutError| BuildError::Layout {
-            dataset: d.name.clone(),
-            source,
-        };
-        // Items of weight 0 hidden or kept (issue 34): everything below
-        // works on what is drawn.
-        let mode = job.request.params.zero_weights;
-        let (dataset, zero) = zero::apply(&dataset, mode);
-        let planned = plan(&dataset, &job.request).map_err(layout_error)?;
-
-        // Layout: the last one in memory when it was made from these inputs
-        // and settings, else prepare, constraints and a run from the start
-        // the one decision picks.
-        let mut notes = Vec::new();
-        let mut pending = Pending::default();
-        let mut started_from = None;
-        let (computed, state, step, layout_ms) = match &self.last {
-            Some(last)
-                if cache && !job.cold && last.inputs == inputs && last.settings == settings =>
-            {
-                for stage in [Stage::Prepare, Stage::Constraints, Stage::Layout] {
-                    stages.record(name, stage, false, 0.0, "in memory");
-                }
-                if self.stored_at != state::layout_path(d) {
-                    pending.layout = Some((state::layout::text(&last.computed), last.state));
-                }
-                (Arc::clone(&last.computed), last.state, LayoutStep::Reused, 0.0)
-            }
-            _ => {
-                let input = match planned.kind {
-                    None => Prepared::Plain(Arc::clone(&dataset)),
-                    Some(kind) => {
-                        let kind = (kind, planned.constraints);
-                        let source = keys::drawn(inputs, mode);
-                        let (prepared, constraints, fresh) =
-                            self.similar(Some(d), source, &dataset, kind, name, &mut stages);
-                        if let Some(key) = fresh {
-                            pending.constraints =
-                                Some((key, Arc::clone(&prepared), Arc::clone(&constraints)));
-                        }
-                        Prepared::Similar(prepared, constraints.as_ref().clone())
-                    }
-                };
-                let memory = self.last.as_ref().map(|last| start::Memory {
-                    settings: last.settings,
-                    computed: &last.computed,
-                });
-                let chosen = start::choose(d, cold_because(job.cold, cache), memory, settings);
-                // The stored layout's warning first: it is about the whole run.
-                if let Some(warning) = chosen.warning {
-                    warnings.insert(0, warning);
-                }
-                let mut request = job.request.clone();
-                request.previous = chosen.previous;
-                started_from = request.previous.clone();
-                let t = Instant::now();
-                let computed =
-                    lay_out_planned(input, planned, &request, zero).map_err(layout_error)?;
-                let layout_ms = ms_since(t);
-                let report = &computed.report;
-                let step = match (&computed.start, chosen.cold_because) {
-                    (Start::Warm { .. }, _)
-                        if report.iterations == 0 && report.reused == report.diagrams =>
-                    {
-                        LayoutStep::Reused
-                    }
-                    (Start::Warm { .. }, _) => LayoutStep::Warm,
-                    (Start::Refused(why), _) => {
-                        notes.push(format!("previous layout not used ({why}); laid out cold"));
-                        LayoutStep::Cold(why.to_string())
-                    }
-                    (_, why) => LayoutStep::Cold(why.unwrap_or("no previous layout").to_string()),
-                };
-                let note = match &step {
-                    LayoutStep::Reused => "every diagram as stored, no tick".to_string(),
-                    LayoutStep::Warm => format!("warm, {} ticks", report.iterations),
-                    LayoutStep::Cold(why) => format!("cold: {why}"),
-                    LayoutStep::UpToDate => String::new(),
-                };
-                stages.record(name, Stage::Layout, step != LayoutStep::Reused, layout_ms, note);
-                let text = state::layout::text(&computed);
-                let state = Fingerprint::of_bytes(text.as_bytes());
-                if chosen.stored != Some(state) {
-                    pending.layout = Some((text, state));
-                }
-                let computed = Arc::new(computed);
-                // The layout it replaces becomes history when it differs.
-                if let Some(last) = self.last.take().filter(|l| l.state != state) {
-                    self.past.push_back((last.state, last.computed));
-                }
-                while self.past.len() > self.history {
-                    self.past.pop_front();
-                }
-                self.last = Some(Last {
-                    inputs,
-                    settings,
-                    state,
-                    computed: Arc::clone(&computed),
-                });
-                (computed, state, step, layout_ms)
-            }
-        };
-
-        // Render the outputs whose files do not hold their bytes already.
-        let mut svg_text = None;
-        let mut outputs = Vec::with_capacity(d.outputs.len());
-        let mut records = Vec::with_capacity(d.outputs.len());
-        // The past layouts are one more input of the HTML page's render,
-        // keyed by their stored layouts' fingerprints (as the current one
-        // is): a page is rendered again when its history changed, and the
-        // other outputs, which do not show it, are not.
-        let past: Vec<Arc<Computed>> = self.past.iter().map(|(_, c)| Arc::clone(c)).collect();
-        let past_states: Vec<Fingerprint> = self.past.iter().map(|(s, _)| *s).collect();
-        for (out, disk) in d.outputs.iter().zip(&disk) {
-            let html = out.kind == Some(OutputKind::Html) && !past.is_empty();
-            let mut key = keys::render(inputs, settings, state, &job.style, out);
-            if html {
-                key = keys::history(key, &past_states);
-            }
-            let t = Instant::now();
-            let known = manifest
-                .output(d, &out.path)
-                .filter(|r| cache && r.render == key && disk.map(|f| f.fingerprint) == Some(r.bytes));
-            let built = match known {
-                Some(record) => {
-                    stages.record(name, Stage::Render, false, ms_since(t), "file up to date");
-                    OutputBuild {
-                        path: out.path.clone(),
-                        bytes: None,
-                        fingerprint: record.bytes,
-                        len: disk.map_or(0, |f| f.len),
-                        on_disk: disk.map(|f| f.fingerprint),
-                    }
-                }
-                None => {
-                    let Rendered { path, bytes } = if html {
-                        Rendered {
-                            path: out.path.clone(),
-                            bytes: html_page_with_history(&computed, &job.style, &past).into_bytes(),
-                        }
-                    } else {
-                        pipeline::render_output(&computed, &job.style, out, &mut svg_text)?
-                    };
-                    stages.record(name, Stage::Render, true, ms_since(t), kind_name(out));
-                    OutputBuild {
-                        path,
-                        fingerprint: Fingerprint::of_bytes(&bytes),
-                        len: bytes.len() as u64,
-                        bytes: Some(bytes),
-                        on_disk: disk.map(|f| f.fingerprint),
-                    }
-                }
-            };
-            records.push(OutputRecord {
-                path: manifest::relative(d, &out.path),
-                render: key,
-                bytes: built.fingerprint,
-            });
-            outputs.push(built);
-        }
-        let realized = computed.realized.iter().filter(|r| **r).count();
-        pending.manifest = Some(Manifest {
-            format: manifest::FORMAT.to_string(),
-            layout: Some(LayoutRecord {
-                inputs: Some(inputs),
-                settings,
-                state,
-                constraints: computed.constraints.len(),
-                realized,
-                warnings: warning_record,
-            }),
-            outputs: records,
-        });
-        let started_from = started_from.filter(|_| step == LayoutStep::Warm);
-        Ok(DatasetBuild {
-            name: d.name.clone(),
-            layout: step,
-            layout_ms,
-            constraints: computed.constraints.len(),
-            realized,
-            computed: Some(computed),
-            outputs,
-            warnings,
-            notes,
-            stages,
-            started_from,
-            pending,
-        })
+            .clone()
     }
 
-    /// The build when nothing changed since the manifest was written: the
-    /// same inputs and layout settings as the stored layout, and every
-    /// output's file holding what the same layout and style rendered.
+    /// The build when nothing changed since the manifest was written
+    /// ([`start::decide`]): every output as its file holds it, and the
+    /// warnings the manifest recorded.
     fn up_to_date(
         &self,
-        job: &Job<'_>,
-        manifest: &Manifest,
-        inputs: Fingerprint,
-        settings: Fingerprint,
-        disk: &[Option<OnDisk>],
-        stages: &mut StageReport,
-    ) -> Option<DatasetBuild> {
-        let d = job.dataset;
-        if !self.options.cache || job.cold {
-            return None;
-        }
-        let record = manifest
-            .layout
-            .as_ref()
-            .filter(|r| r.inputs == Some(inputs) && r.settings == settings)?;
-        let mut outputs = Vec::with_capacity(d.outputs.len());
-        for (out, disk) in d.outputs.iter().zip(disk) {
-            let key = keys::render(inputs, settings, record.state, &job.style, out);
-            let r = manifest
-                .output(d, &out.path)
-                .filter(|r| r.render == key && disk.map(|f| f.fingerprint) == Some(r.bytes))?;
-            outputs.push(OutputBuild {
-                path: out.path.clone(),
-                bytes: None,
-                fingerprint: r.bytes,
-                len: disk.map_or(0, |f| f.len),
-                on_disk: disk.map(|f| f.fingerprint),
-            });
-        }
+        d: &DatasetConfig,
+        record: &manifest::LayoutRecord,
+        outputs: Vec<OutputBuild>,
+        mut stages: StageReport,
+    ) -> DatasetBuild {
         let name = d.name.as_str();
         for stage in [Stage::Parse, Stage::Prepare, Stage::Constraints, Stage::Layout] {
             stages.record(name, stage, false, 0.0, "nothing changed");
@@ -559,20 +315,19 @@ impl DatasetGraph {
         for _ in &outputs {
             stages.record(name, Stage::Render, false, 0.0, "nothing changed");
         }
-        let files: Vec<(String, PathBuf)> =
-            d.files.iter().map(|(r, p)| (r.clone(), p.clone())).collect();
         let warnings = record
             .warnings
             .iter()
             .map(|(role, message)| {
-                let file = files
+                let file = d
+                    .files
                     .iter()
-                    .find(|(r, _)| r == role)
+                    .find(|(r, _)| *r == role)
                     .map_or_else(|| role.clone(), |(_, p)| p.display().to_string());
                 format!("{file}: {message}")
             })
             .collect();
-        Some(DatasetBuild {
+        DatasetBuild {
             name: d.name.clone(),
             layout: LayoutStep::UpToDate,
             layout_ms: 0.0,
@@ -582,87 +337,10 @@ impl DatasetGraph {
             outputs,
             warnings,
             notes: Vec::new(),
-            stages: std::mem::take(stages),
+            stages,
             started_from: None,
             pending: Pending::default(),
-        })
-    }
-
-    /// Prepare and constraints for a similarity run: from memory when their
-    /// keys match, the constraints else from the state folder's cache (for a
-    /// configured dataset `d`), else computed; none when the plan needs none
-    /// (`needed` false: `plain`, issue 34). The third value is the
-    /// constraints' key when they were computed (for the cache).
-    fn similar(
-        &mut self,
-        d: Option<&DatasetConfig>,
-        source: Fingerprint,
-        dataset: &Dataset,
-        (kind, needed): (SimilarityKind, bool),
-        name: &str,
-        stages: &mut StageReport,
-    ) -> (Arc<Dataset>, Arc<Vec<Constraint>>, Option<Fingerprint>) {
-        let cache = self.options.cache;
-        let t = Instant::now();
-        let prepared_key = Fingerprinter::new("prepared")
-            .fingerprint(source)
-            .debug(&kind)
-            .finish();
-        let prepared = match &self.prepared {
-            Some((key, prepared)) if cache && *key == prepared_key => {
-                stages.record(name, Stage::Prepare, false, ms_since(t), "dataset unchanged");
-                Arc::clone(prepared)
-            }
-            _ => {
-                let prepared = Arc::new(prepare(dataset));
-                stages.record(
-                    name,
-                    Stage::Prepare,
-                    true,
-                    ms_since(t),
-                    format!("{} nodes", prepared.len()),
-                );
-                self.prepared = Some((prepared_key, Arc::clone(&prepared)));
-                prepared
-            }
-        };
-        let t = Instant::now();
-        if !needed {
-            stages.record(name, Stage::Constraints, false, 0.0, "none needed (plain)");
-            return (prepared, Arc::new(Vec::new()), None);
         }
-        let key = keys::similarity(dataset, kind);
-        if let Some((k, constraints)) = &self.constraints {
-            if cache && *k == key {
-                stages.record(name, Stage::Constraints, false, ms_since(t), "similarity unchanged");
-                return (prepared, Arc::clone(constraints), None);
-            }
-        }
-        if let Some(cached) = d
-            .filter(|_| cache)
-            .and_then(|d| state::constraints::read(d, key, &prepared))
-        {
-            let constraints = Arc::new(cached);
-            stages.record(
-                name,
-                Stage::Constraints,
-                false,
-                ms_since(t),
-                format!("{} from the cache", constraints.len()),
-            );
-            self.constraints = Some((key, Arc::clone(&constraints)));
-            return (prepared, constraints, None);
-        }
-        let constraints = Arc::new(build_constraints(&prepared, kind));
-        stages.record(
-            name,
-            Stage::Constraints,
-            true,
-            ms_since(t),
-            format!("{} constraints", constraints.len()),
-        );
-        self.constraints = Some((key, Arc::clone(&constraints)));
-        (prepared, constraints, Some(key))
     }
 
     /// Runs the stages before the layout (prepare and constraints) for a
@@ -674,16 +352,7 @@ impl DatasetGraph {
         dataset: &Dataset,
         request: &Request,
     ) -> Result<(), BuildError> {
-        let (dataset, _) = zero::apply(&Arc::new(dataset.clone()), request.params.zero_weights);
-        let planned = plan(&dataset, request).map_err(|source| BuildError::Layout {
-            dataset: d.name.clone(),
-            source,
-        })?;
-        if let Some(kind) = planned.kind {
-            let source = keys::dataset(&dataset);
-            let kind = (kind, planned.constraints);
-            self.similar(None, source, &dataset, kind, &d.name, &mut StageReport::default());
-        }
+        self.prepared_run(d, dataset, request, &mut StageReport::default())?;
         Ok(())
     }
 
@@ -697,30 +366,37 @@ impl DatasetGraph {
         request: &Request,
         stages: &mut StageReport,
     ) -> Result<Computed, BuildError> {
-        let layout_error = |source| BuildError::Layout {
-            dataset: d.name.clone(),
-            source,
-        };
-        let (dataset, zero) = zero::apply(&Arc::new(dataset.clone()), request.params.zero_weights);
-        let planned = plan(&dataset, request).map_err(layout_error)?;
-        let input = match planned.kind {
-            None => Prepared::Plain(dataset),
-            Some(kind) => {
-                let source = keys::dataset(&dataset);
-                let kind = (kind, planned.constraints);
-                let (prepared, constraints, _) =
-                    self.similar(None, source, &dataset, kind, &d.name, stages);
-                Prepared::Similar(prepared, constraints.as_ref().clone())
-            }
-        };
+        let (input, planned, zero) = self.prepared_run(d, dataset, request, stages)?;
         let t = Instant::now();
-        let computed = lay_out_planned(input, planned, request, zero).map_err(layout_error)?;
+        let computed = lay_out_planned(input, planned, request, zero)
+            .map_err(|e| stages::layout_error(d, e))?;
         let note = match &computed.start {
             Start::Warm { .. } => "warm",
             _ => "cold",
         };
-        stages.record(&d.name, Stage::Layout, true, ms_since(t), note);
+        stages.record(&d.name, Stage::Layout, true, memo::ms_since(t), note);
         Ok(computed)
+    }
+
+    /// The input of a run on a dataset given in memory, its plan and what
+    /// was hidden of it, through the prepare and constraints slots.
+    fn prepared_run(
+        &mut self,
+        d: &DatasetConfig,
+        dataset: &Dataset,
+        request: &Request,
+        stages: &mut StageReport,
+    ) -> Result<(Prepared, Plan, Arc<ZeroItems>), BuildError> {
+        let (dataset, zero) = zero::apply(&Arc::new(dataset.clone()), request.params.zero_weights);
+        let planned = plan(&dataset, request).map_err(|e| stages::layout_error(d, e))?;
+        let mut cx = memo::Cx {
+            name: &d.name,
+            cache: self.options.cache,
+            stages,
+        };
+        let source = stages::dataset(&dataset);
+        let input = self.similar(None, source, &dataset, &planned, &mut cx, &mut Pending::default());
+        Ok((input, planned, zero))
     }
 
     /// Writes a build's stale outputs (atomically, all or none of a set
@@ -748,7 +424,7 @@ impl DatasetGraph {
         }
         // One pass writes the set (under one lock): each output gets its
         // share of the time.
-        let ms = ms_since(t) / build.outputs.len().max(1) as f64;
+        let ms = memo::ms_since(t) / build.outputs.len().max(1) as f64;
         for o in &build.outputs {
             let wrote = written.written.contains(&o.path);
             let note = if wrote { "written" } else { "file unchanged" };
@@ -814,21 +490,4 @@ impl DatasetGraph {
         self.stored_at = state::layout_path(d);
         Ok(())
     }
-}
-
-/// Why a build may not start warm, if it may not.
-fn cold_because(cold: bool, cache: bool) -> Option<&'static str> {
-    if cold {
-        Some("--cold")
-    } else if !cache {
-        Some("caching off: NPTREEMAP_NO_CACHE")
-    } else {
-        None
-    }
-}
-
-fn kind_name(out: &OutputConfig) -> String {
-    out.path
-        .extension()
-        .map_or_else(String::new, |e| e.to_string_lossy().into_owned())
 }

@@ -1,31 +1,36 @@
-//! Warm or cold: the one place a build decides which previous layout its
-//! layout starts from. In order:
+//! Where a build starts: the one place that decides whether anything needs
+//! doing at all, and which previous layout a layout starts from. Every
+//! command and the daemon go through [`decide`] (or, for `layout`, `eval`
+//! and `bench`, which build no configured dataset, [`given`]); its reason is
+//! in the layout stage's `-v` line. In order:
 //!
-//! For `layout`, `eval` and `bench`, which build no configured dataset, the
-//! previous layout is the `--previous` file, unless `--cold` ([`given`]).
-//! For `build` and `watch` ([`choose`]), in order:
-//!
-//! 1. `--cold` (or caching turned off, `NPTREEMAP_NO_CACHE`): none.
-//! 2. The graph's own last layout, kept in memory between rebuilds (the
-//!    watch daemon), if it was made with the layout settings in force.
-//! 3. The stored layout (`crate::state::layout`), if it records that it was
+//! 1. `--cold` (or caching turned off, `NPTREEMAP_NO_CACHE`): a cold layout,
+//!    nothing reused.
+//! 2. Nothing changed: the manifest records the same inputs and layout
+//!    settings, and every output's file holds what they render (the style
+//!    and the page's history included in each output's key): nothing runs.
+//!    The daemon's "an event that changed nothing says nothing" is this.
+//! 3. The graph's own last layout, kept in memory between rebuilds (the
+//!    watch daemon): taken over when made from the same inputs and settings,
+//!    else the warm start when made with the same settings.
+//! 4. The stored layout (`crate::state::layout`), if it records that it was
 //!    made with the layout settings in force.
-//! 4. Otherwise none, and the build says why: nothing stored yet, the
+//! 5. Otherwise cold, and the build says why: nothing stored yet, the
 //!    layout settings changed (seed, method, outline, canvas, similarity,
 //!    convergence, iterations: every setting that shapes the picture), or
 //!    the stored layout has no record of its settings (an older version made
 //!    it).
 //!
 //! The layout core then checks that the previous layout fits the data
-//! (`Previous::fits`: at least half the nodes survive); one that does not
-//! is refused and the layout starts cold, as it says.
+//! (`Previous::fits`: at least half the nodes survive, the same canvas);
+//! one that does not is refused there, since only the core knows the nodes
+//! that survive, and the build says so.
 
 use std::sync::Arc;
 
-use crate::config::DatasetConfig;
 use crate::fingerprint::Fingerprint;
 use crate::layout::{Computed, Previous};
-use crate::state;
+use crate::state::layout::StoredLayout;
 
 /// The previous layout chosen for a run, and why.
 #[derive(Debug, Default)]
@@ -41,69 +46,109 @@ pub struct Chosen {
     pub warning: Option<String>,
 }
 
-/// The graph's last layout and the settings it was made with.
+/// The graph's last layout and what it was made from.
 pub struct Memory<'a> {
+    /// Its inputs' fingerprint.
+    pub inputs: Fingerprint,
     /// Its settings' fingerprint.
     pub settings: Fingerprint,
     /// The layout.
     pub computed: &'a Computed,
 }
 
-/// The previous layout of a run given one on the command line
-/// (`--previous`): it, unless `cold` (`--cold`).
-pub fn given(previous: Option<Arc<Previous>>, cold: bool) -> Option<Arc<Previous>> {
+/// What [`decide`] decides from.
+pub struct Facts<'a> {
+    /// Why nothing may be reused, if so ([`refusal`]).
+    pub refusal: Option<&'static str>,
+    /// The fingerprint of the inputs as read now.
+    pub inputs: Fingerprint,
+    /// The fingerprint of the layout settings in force.
+    pub settings: Fingerprint,
+    /// Whether the outputs on disk are what these inputs, settings and style
+    /// make (the manifest vouches for each file's bytes).
+    pub outputs_current: bool,
+    /// The graph's last layout, if it has one.
+    pub memory: Option<Memory<'a>>,
+}
+
+/// Where a build starts.
+#[derive(Debug)]
+pub enum Decision {
+    /// Nothing changed: nothing runs.
+    UpToDate,
+    /// The layout in memory was made from the same inputs and settings: it
+    /// is the layout, and only what it feeds runs.
+    Same,
+    /// Lay out, from the previous layout chosen (or cold, with why).
+    LayOut(Chosen),
+}
+
+/// Why a build may not reuse anything, if it may not: `--cold`, or caching
+/// turned off.
+pub fn refusal(cold: bool, cache: bool) -> Option<&'static str> {
     if cold {
-        None
+        Some("--cold")
+    } else if !cache {
+        Some("caching off: NPTREEMAP_NO_CACHE")
     } else {
-        previous
+        None
     }
 }
 
-/// Chooses the previous layout of a run with layout settings `settings`
-/// (see the module doc for the order); `cold` says why none may be used
-/// (`--cold`), if so.
-pub fn choose(
-    d: &DatasetConfig,
-    cold: Option<&'static str>,
-    memory: Option<Memory<'_>>,
-    settings: Fingerprint,
-) -> Chosen {
-    let cold_because = |why| Chosen {
-        cold_because: Some(why),
-        ..Chosen::default()
+/// The decision (see the module doc for the order). `stored` reads the
+/// stored layout; it is called only when the decision needs it.
+pub fn decide(facts: Facts<'_>, stored: impl FnOnce() -> StoredLayout) -> Decision {
+    let cold = |why| {
+        Decision::LayOut(Chosen {
+            cold_because: Some(why),
+            ..Chosen::default()
+        })
     };
-    if let Some(why) = cold {
-        return cold_because(why);
+    if let Some(why) = facts.refusal {
+        return cold(why);
     }
-    if let Some(memory) = memory {
-        if memory.settings != settings {
-            return cold_because("the layout settings changed");
+    if facts.outputs_current {
+        return Decision::UpToDate;
+    }
+    if let Some(memory) = facts.memory {
+        if memory.settings != facts.settings {
+            return cold("the layout settings changed");
         }
-        return Chosen {
+        if memory.inputs == facts.inputs {
+            return Decision::Same;
+        }
+        return Decision::LayOut(Chosen {
             previous: Some(Arc::new(memory.computed.previous())),
             ..Chosen::default()
-        };
+        });
     }
-    let stored = state::layout::read(d);
+    let stored = stored();
     if let Some(warning) = stored.warning {
-        return Chosen {
+        return Decision::LayOut(Chosen {
             cold_because: Some("the stored layout cannot be read"),
             warning: Some(warning),
             ..Chosen::default()
-        };
+        });
     }
     let (Some(previous), Some(bytes)) = (stored.previous, stored.fingerprint) else {
-        return cold_because("no stored layout");
+        return cold("no stored layout");
     };
     match stored.settings {
-        Some(made_with) if made_with == settings => Chosen {
+        Some(made_with) if made_with == facts.settings => Decision::LayOut(Chosen {
             previous: Some(previous),
             // Left by an older version elsewhere: not where it is kept now,
             // so the commit writes it there.
             stored: (!stored.older).then_some(bytes),
             ..Chosen::default()
-        },
-        Some(_) => cold_because("the layout settings changed since the stored layout"),
-        None => cold_because("the stored layout has no record of its layout settings"),
+        }),
+        Some(_) => cold("the layout settings changed since the stored layout"),
+        None => cold("the stored layout has no record of its layout settings"),
     }
+}
+
+/// The previous layout of a run given one on the command line
+/// (`--previous`): what `previous` gives (reading it only then), unless
+/// `cold` (`--cold`).
+pub fn given<T>(cold: bool, previous: impl FnOnce() -> T) -> Option<T> {
+    (!cold).then(previous)
 }

@@ -138,7 +138,7 @@ pub struct Request {
 /// dataset, these settings and the previous layout it started from; the
 /// build records them beside a stored layout so that a warm start from a
 /// layout made with other settings (another seed, say) is never taken.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(serde::Serialize, Clone, Debug, Default, PartialEq)]
 #[non_exhaustive]
 pub struct LayoutSettings {
     /// Layout parameters.

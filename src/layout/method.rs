@@ -4,7 +4,7 @@
 
 /// A layout strategy. Named in configs (`layout.method`) and on the command
 /// line (`--method`) by [`Method::name`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
+#[derive(serde::Serialize, Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 #[non_exhaustive]

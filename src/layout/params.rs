@@ -7,7 +7,7 @@ use super::LayoutError;
 use crate::geom::{ConvexPolygon, Point};
 
 /// The drawing surface, in output units (pixels for SVG).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(serde::Serialize, Clone, Copy, Debug, PartialEq)]
 pub struct Canvas {
     /// Width. Default: 1000.
     pub width: f64,
@@ -26,7 +26,7 @@ impl Default for Canvas {
 
 /// The shape of the root cell. Named in configs (`layout.outline`) and on the
 /// command line (`--outline`) as `rect`, `circle` or `ngon`.
-#[derive(Clone, Debug, PartialEq, serde::Deserialize)]
+#[derive(serde::Serialize, Clone, Debug, PartialEq, serde::Deserialize)]
 #[serde(try_from = "String")]
 #[non_exhaustive]
 pub enum Outline {
@@ -104,7 +104,7 @@ pub const CANVAS_MIN: f64 = 1.0;
 pub const CANVAS_MAX: f64 = 1_000_000.0;
 
 /// Parameters of a layout run.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(serde::Serialize, Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct Params {
     /// Drawing surface. Default: 1000 × 1000.

@@ -16,7 +16,9 @@ use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
 
 /// What becomes of items of weight 0. Named in configs
 /// (`layout.zero_weights`) and on the command line (`--zero-weights`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize)]
+#[derive(
+    serde::Serialize, Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize,
+)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 #[non_exhaustive]

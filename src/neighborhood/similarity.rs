@@ -21,7 +21,7 @@ use nptreemap_formats::{Dataset, Features, SimilarityHint, SparseVector};
 ///
 /// Named in configs (`similarity:`) and on the command line (`--similarity`)
 /// as `cosine`, `jaccard`, `binary`, `neighbors` and `pearson`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
+#[derive(serde::Serialize, Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 #[non_exhaustive]

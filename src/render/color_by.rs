@@ -11,7 +11,7 @@ use nptreemap_formats::Dataset;
 use super::palette::{from_oklch, Rgb};
 
 /// How values map to colours.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(serde::Serialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum ColorScale {
     /// Low to high, dark blue to yellow (cividis: even in lightness, readable
@@ -42,7 +42,7 @@ impl ColorScale {
 }
 
 /// Colour the leaves by `field` (a column carried into the nodes' fields).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(serde::Serialize, Clone, Debug, PartialEq)]
 pub struct ColorBy {
     /// The column (or hierarchy JSON property) holding a number per leaf.
     pub field: String,

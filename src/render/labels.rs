@@ -16,7 +16,7 @@ use crate::geom::{cross, ConvexPolygon, Point};
 use crate::layout::Layout;
 
 /// How labels are chosen and sized (the config's `render.labels`).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(serde::Serialize, Clone, Debug, PartialEq)]
 pub struct LabelStyle {
     /// Leaf labels at all. Default: true.
     pub show: bool,

@@ -13,6 +13,8 @@ pub mod html;
 pub mod labels;
 /// The legend band: top-level groups and the overlay's glyphs.
 pub mod legend;
+/// The kinds of output and their renderers.
+pub mod output;
 /// Interlocking tabs and unrealised-link markers drawn over the treemap.
 pub mod overlay;
 /// Colours: hex parsing, the Tableau palettes, lightness variations for children.
@@ -35,6 +37,7 @@ pub use html::{
     html, html_page, html_page_with_history, HtmlData, HtmlEmpty, HtmlFrame, HtmlLayout, HtmlNode,
 };
 pub use labels::LabelStyle;
+pub use output::{OutputError, OutputKind};
 pub use palette::{PaletteKind, Rgb};
 pub use picture::{picture, Border, LegendOrder, PageFields, Style};
 #[cfg(feature = "png")]

@@ -29,7 +29,7 @@ pub struct Link {
 }
 
 /// Overlay settings.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(serde::Serialize, Clone, Debug, PartialEq)]
 pub struct OverlayStyle {
     /// Draw the dashed links of unrealised constraints visibly (they are
     /// always present, hidden, for the HTML page's checkbox). Default: false.

@@ -66,7 +66,7 @@ pub const OKABE_ITO: [Rgb; 7] = [
 ];
 
 /// Which categorical palette the top-level groups take.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(serde::Serialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum PaletteKind {
     /// Tableau 10 up to ten groups, Tableau 20 up to twenty, then a generated

@@ -23,7 +23,7 @@ use crate::geom::Point;
 use crate::layout::{Computed, Layout};
 
 /// How the picture looks, beyond the geometry of its layout.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(serde::Serialize, Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct Style {
     /// Cells, outlines, labels, background and display size.
@@ -51,7 +51,7 @@ pub struct Style {
 }
 
 /// The data's own columns in the HTML page (issue 24 item 4).
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(serde::Serialize, Clone, Debug, Default, PartialEq, Eq)]
 pub struct PageFields {
     /// Fields (carried columns) shown in the tooltip, in this order.
     pub fields: Vec<String>,
@@ -63,7 +63,7 @@ pub struct PageFields {
 }
 
 /// The order of the legend's groups.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(serde::Serialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum LegendOrder {
     /// Heaviest first.
@@ -94,7 +94,7 @@ impl LegendOrder {
 }
 
 /// The line drawn around the root outline.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(serde::Serialize, Clone, Copy, Debug, PartialEq)]
 pub struct Border {
     /// Line colour.
     pub color: Rgb,

@@ -20,7 +20,7 @@ const STROKE_DECAY: f64 = 0.5;
 const MIN_STROKE_WIDTH: f64 = 0.5;
 
 /// How the picture looks. Geometry comes from the layout; this only styles it.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(serde::Serialize, Clone, Debug, PartialEq)]
 pub struct SvgStyle {
     /// The `width` attribute (display size). The `viewBox` is always the layout's
     /// canvas, so a different size scales the whole picture.

@@ -51,7 +51,7 @@ use hyper::header::{HeaderValue, ALLOW, HOST};
 use hyper::{Method, Request, Response, StatusCode, Version};
 use tokio::sync::Semaphore;
 
-use crate::config::OutputKind;
+use crate::render::OutputKind;
 use crate::daemon::status::Status;
 use body::{Body, Hold};
 use events::Hub;
@@ -355,7 +355,7 @@ fn check_host<B>(request: &Request<B>, port: u16, local: IpAddr) -> Option<Answe
 
 /// A file to read for a request, with what its answer needs.
 struct FileAnswer {
-    file: std::fs::File,
+    file: crate::workspace::Opened,
     len: u64,
     kind: OutputKind,
     dataset: String,
@@ -385,7 +385,7 @@ fn route(target: &str, shared: &Shared) -> Routed {
         routes.refresh();
         if decoded.as_deref() == Some("/") {
             let page = index::index(&routes, &shared.title);
-            return Routed::Ready(ok(page, HTML, "none"));
+            return Routed::Ready(ok(page, OutputKind::Html.content_type(), "none"));
         }
         routes.find(target).cloned()
     };
@@ -424,11 +424,9 @@ async fn load(file: FileAnswer, shared: &Shared) -> Answer {
             OutputKind::Html => {
                 let text = String::from_utf8_lossy(&bytes);
                 let page = index::live_page(&text, &file.dataset, &nonce, &file.key);
-                ok(page, HTML, &nonce)
+                ok(page, OutputKind::Html.content_type(), &nonce)
             }
-            OutputKind::Svg => ok(bytes, "image/svg+xml", &nonce),
-            OutputKind::Png => ok(bytes, "image/png", &nonce),
-            OutputKind::Json => ok(bytes, "application/json", &nonce),
+            kind => ok(bytes, kind.content_type(), &nonce),
         })
     })
     .await;
@@ -443,19 +441,13 @@ async fn load(file: FileAnswer, shared: &Shared) -> Answer {
     }
 }
 
-const HTML: &str = "text/html; charset=utf-8";
 
-fn open(file: &Path) -> Option<(std::fs::File, u64)> {
-    let f = std::fs::File::open(file).ok()?;
-    let len = f.metadata().ok()?.len().min(MAX_FILE);
-    Some((f, len))
+fn open(file: &Path) -> Option<(crate::workspace::Opened, u64)> {
+    crate::workspace::open_capped(file, MAX_FILE)
 }
 
-fn read(file: std::fs::File) -> Option<Vec<u8>> {
-    use std::io::Read;
-    let mut bytes = Vec::new();
-    file.take(MAX_FILE).read_to_end(&mut bytes).ok()?;
-    Some(bytes)
+fn read(file: crate::workspace::Opened) -> Option<Vec<u8>> {
+    crate::workspace::read_opened(file, MAX_FILE)
 }
 
 /// Headers of every answer with a body of ours.

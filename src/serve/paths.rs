@@ -10,7 +10,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
-use crate::config::{Config, OutputKind};
+use crate::config::Config;
+use crate::render::OutputKind;
+use crate::workspace;
 
 /// One servable file.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,9 +52,7 @@ impl Routes {
     /// that does not parse keeps the last good routes (as the daemon keeps
     /// the last good config).
     pub(crate) fn refresh(&mut self) {
-        let stamp = std::fs::metadata(&self.config_path)
-            .and_then(|m| m.modified())
-            .ok();
+        let stamp = workspace::modified(&self.config_path);
         if stamp.is_some() && stamp == self.stamp {
             return;
         }
@@ -134,9 +134,9 @@ pub(crate) fn decode(target: &str) -> Option<String> {
 /// once every symlink is resolved; `None` otherwise (a symlink placed there
 /// pointing elsewhere, a folder, a missing file).
 pub(crate) fn inside(route: &Route) -> Option<PathBuf> {
-    let folder = route.file.parent()?.canonicalize().ok()?;
-    let real = route.file.canonicalize().ok()?;
-    (real.starts_with(&folder) && real.is_file()).then_some(real)
+    let folder = workspace::canonical(route.file.parent()?)?;
+    let real = workspace::canonical(&route.file)?;
+    (real.starts_with(&folder) && workspace::is_file(&real)).then_some(real)
 }
 
 /// A URL path segment of `text`, percent-encoded where needed.

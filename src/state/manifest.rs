@@ -93,10 +93,10 @@ pub fn relative(d: &DatasetConfig, path: &Path) -> String {
 /// The fingerprint of the layout settings that shape the picture: the
 /// canvas, outline, seed, method, similarity, convergence and iteration
 /// settings, and those of the similarity-driven methods: every field of
-/// [`LayoutSettings`], by its `Debug` text, so a field added later is never
+/// [`LayoutSettings`], by its serialisation, so a field added later is never
 /// left out.
 pub fn settings_key(settings: &LayoutSettings) -> Fingerprint {
-    Fingerprinter::new("settings").debug(settings).finish()
+    Fingerprinter::new("settings").value(settings).finish()
 }
 
 /// Reads a dataset's manifest; empty when there is none or it cannot be used.

@@ -3,7 +3,7 @@
 //! constants behind them and where each comes from.
 
 /// Settings of the similarity-driven methods.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(serde::Serialize, Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct NeighborParams {
     /// Lloyd ticks of the equal-area CVT every diagram starts from. Default: 40.

@@ -1,0 +1,586 @@
+//! The stages of one dataset's build: for each, its memo slot, its key
+//! (what its result depends on, as a fingerprint) and one short method, and
+//! the chain that runs them ([`DatasetGraph::build_from`]). Each key names
+//! exactly the inputs of its stage, so a stage is reused precisely while
+//! those are unchanged; adding an input to a stage means adding it to its
+//! key here, and adding a stage means a slot, a key and a method here and a
+//! [`Stage`] in `report.rs`.
+//!
+//! Keys feed typed values ([`Fingerprinter::value`], serde), never `Debug`
+//! text.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use nptreemap_formats::{Dataset, Features};
+
+use super::memo::{ms_since, Cx, Made, Memo};
+use super::start::{self, Chosen, Decision};
+use super::{DatasetBuild, DatasetGraph, Job, LayoutStep, OnDisk, OutputBuild, Pending};
+use super::{Stage, StageReport};
+use crate::config::{DatasetConfig, OutputConfig};
+use crate::fingerprint::{Fingerprint, Fingerprinter};
+use crate::layout::compute::{lay_out_planned, plan, Plan, Prepared};
+use crate::layout::zero::{self, ZeroItems};
+use crate::layout::{Computed, LayoutError, Start, ZeroWeights};
+use crate::neighborhood::{build_constraints, prepare, Constraint, SimilarityKind};
+use crate::pipeline::{self, BuildError, InputFile};
+use crate::render::Style;
+use crate::state::manifest::{self, LayoutRecord, Manifest, OutputRecord};
+use crate::state;
+
+/// The memo slots of the stages.
+#[derive(Default)]
+pub(super) struct Slots {
+    /// Parse: the dataset, by [`inputs`].
+    parsed: Memo<Fingerprint, Arc<Dataset>>,
+    /// Prepare: virtual nodes and aggregated vectors, by [`prepared`].
+    prepared: Memo<Fingerprint, Arc<Dataset>>,
+    /// Constraints, by [`similarity`].
+    constraints: Memo<Fingerprint, Arc<Vec<Constraint>>>,
+    /// Layout: the last layout, by the inputs and settings it was made
+    /// from; also the next warm start ([`start`]).
+    pub(super) layout: Memo<LayoutKey, Laid>,
+}
+
+/// What a layout was made from.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct LayoutKey {
+    /// The inputs' key.
+    pub inputs: Fingerprint,
+    /// The layout settings' key.
+    pub settings: Fingerprint,
+}
+
+/// A layout and the fingerprint of its stored text (its identity in the
+/// render keys and the page's history).
+#[derive(Clone)]
+pub(super) struct Laid {
+    pub(super) state: Fingerprint,
+    pub(super) computed: Arc<Computed>,
+}
+
+/// What the layout stage hands on.
+struct LayoutOut {
+    laid: Laid,
+    step: LayoutStep,
+    ms: f64,
+    started_from: Option<Arc<crate::layout::Previous>>,
+}
+
+impl DatasetGraph {
+    /// [`DatasetGraph::build`] from files already read: the chain of stages.
+    pub fn build_from(
+        &mut self,
+        job: &Job<'_>,
+        files: &[InputFile],
+        mut stages: StageReport,
+    ) -> Result<DatasetBuild, BuildError> {
+        let d = job.dataset;
+        let key = LayoutKey {
+            inputs: inputs(d, files),
+            settings: manifest::settings_key(&job.request.settings()),
+        };
+        let manifest = self.manifest_of(d);
+        let disk: Vec<Option<OnDisk>> = d.outputs.iter().map(|o| super::on_disk(&o.path)).collect();
+        let current = self.current_outputs(job, &manifest, key, &disk);
+        let memory = self.slots.layout.last().map(|(k, laid)| start::Memory {
+            inputs: k.inputs,
+            settings: k.settings,
+            computed: &laid.computed,
+        });
+        let facts = start::Facts {
+            refusal: start::refusal(job.cold, self.options.cache),
+            inputs: key.inputs,
+            settings: key.settings,
+            outputs_current: current.is_some(),
+            memory,
+        };
+        let decision = start::decide(facts, || state::layout::read(d));
+        if let (Decision::UpToDate, Some(outputs), Some(record)) =
+            (&decision, current, manifest.layout.as_ref())
+        {
+            return Ok(self.up_to_date(d, record, outputs, stages));
+        }
+        let mut cx = Cx {
+            name: &d.name,
+            cache: self.options.cache,
+            stages: &mut stages,
+        };
+        let dataset = self.parse(d, files, key.inputs, &mut cx)?;
+        let mut warnings = pipeline::warnings(files, &dataset);
+        let mode = job.request.params.zero_weights;
+        // Items of weight 0 hidden or kept (issue 34): everything below
+        // works on what is drawn.
+        let (drawn, zero) = zero::apply(&dataset, mode);
+        let planned = plan(&drawn, &job.request).map_err(|e| layout_error(d, e))?;
+        let mut pending = Pending::default();
+        let mut notes = Vec::new();
+        let out = match decision {
+            Decision::LayOut(chosen) => {
+                if let Some(warning) = &chosen.warning {
+                    // First: it is about the whole run.
+                    warnings.insert(0, warning.clone());
+                }
+                let source = drawn_key(key.inputs, mode);
+                let input = self.similar(Some(d), source, &drawn, &planned, &mut cx, &mut pending);
+                self.lay_out_from(job, key, chosen, (input, planned, zero), &mut cx, &mut pending, &mut notes)?
+            }
+            _ => self.same(d, &mut cx, &mut pending),
+        };
+        let outputs = self.render(job, key, &out.laid, &manifest, &disk, &mut cx)?;
+        let record = LayoutRecord {
+            inputs: Some(key.inputs),
+            settings: key.settings,
+            state: out.laid.state,
+            constraints: out.laid.computed.constraints.len(),
+            realized: out.laid.computed.realized.iter().filter(|r| **r).count(),
+            warnings: dataset
+                .warnings()
+                .iter()
+                .map(|w| (w.role.clone(), w.to_string()))
+                .collect(),
+        };
+        let records = outputs.iter().map(|(r, _)| r.clone()).collect();
+        let realized = record.realized;
+        pending.manifest = Some(Manifest {
+            format: manifest::FORMAT.to_string(),
+            layout: Some(record),
+            outputs: records,
+        });
+        Ok(DatasetBuild {
+            name: d.name.clone(),
+            started_from: out.started_from.filter(|_| out.step == LayoutStep::Warm),
+            layout: out.step,
+            layout_ms: out.ms,
+            constraints: out.laid.computed.constraints.len(),
+            realized,
+            computed: Some(out.laid.computed),
+            outputs: outputs.into_iter().map(|(_, o)| o).collect(),
+            warnings,
+            notes,
+            stages,
+            pending,
+        })
+    }
+
+    /// Parse: the input files into a dataset.
+    fn parse(
+        &mut self,
+        d: &DatasetConfig,
+        files: &[InputFile],
+        key: Fingerprint,
+        cx: &mut Cx<'_>,
+    ) -> Result<Arc<Dataset>, BuildError> {
+        self.slots.parsed.get_or(key, cx, Stage::Parse, "inputs unchanged", || {
+            let dataset = pipeline::parse_inputs(d, files)?;
+            let note = format!("{} nodes", dataset.len());
+            Ok(Made::Ran(Arc::new(dataset), note))
+        })
+    }
+
+    /// Prepare and constraints for a run (none for a plain treemap, and no
+    /// constraints when the plan needs none: `plain`, issue 34). Constraints
+    /// computed now go to `pending`, for the state folder's cache.
+    pub(super) fn similar(
+        &mut self,
+        d: Option<&DatasetConfig>,
+        source: Fingerprint,
+        dataset: &Arc<Dataset>,
+        planned: &Plan,
+        cx: &mut Cx<'_>,
+        pending: &mut Pending,
+    ) -> Prepared {
+        let Some(kind) = planned.kind else {
+            return Prepared::Plain(Arc::clone(dataset));
+        };
+        let prepared = self.prepare(source, dataset, kind, cx);
+        let constraints = if planned.constraints {
+            self.constraints(d, dataset, &prepared, kind, cx, pending)
+        } else {
+            cx.record(Stage::Constraints, false, Instant::now(), "none needed (plain)");
+            Arc::new(Vec::new())
+        };
+        Prepared::Similar(prepared, constraints.as_ref().clone())
+    }
+
+    /// Prepare: virtual nodes and aggregated vectors (paper §4).
+    fn prepare(
+        &mut self,
+        source: Fingerprint,
+        dataset: &Dataset,
+        kind: SimilarityKind,
+        cx: &mut Cx<'_>,
+    ) -> Arc<Dataset> {
+        let key = prepared(source, kind);
+        let made = self.slots.prepared.get_or(key, cx, Stage::Prepare, "dataset unchanged", || {
+            let prepared = prepare(dataset);
+            let note = format!("{} nodes", prepared.len());
+            Ok::<_, std::convert::Infallible>(Made::Ran(Arc::new(prepared), note))
+        });
+        match made {
+            Ok(prepared) => prepared,
+            Err(never) => match never {},
+        }
+    }
+
+    /// Constraints (method-reference §3): from memory, else from the state
+    /// folder's cache (for a configured dataset `d`), else computed.
+    fn constraints(
+        &mut self,
+        d: Option<&DatasetConfig>,
+        dataset: &Dataset,
+        prepared: &Arc<Dataset>,
+        kind: SimilarityKind,
+        cx: &mut Cx<'_>,
+        pending: &mut Pending,
+    ) -> Arc<Vec<Constraint>> {
+        let key = similarity(dataset, kind);
+        let cache = cx.cache;
+        let made = self.slots.constraints.get_or(key, cx, Stage::Constraints, "similarity unchanged", || {
+            if let Some(cached) = d
+                .filter(|_| cache)
+                .and_then(|d| state::constraints::read(d, key, prepared))
+            {
+                let note = format!("{} from the cache", cached.len());
+                return Ok::<_, std::convert::Infallible>(Made::Loaded(Arc::new(cached), note));
+            }
+            let constraints = Arc::new(build_constraints(prepared, kind));
+            pending.constraints = Some((key, Arc::clone(prepared), Arc::clone(&constraints)));
+            let note = format!("{} constraints", constraints.len());
+            Ok(Made::Ran(constraints, note))
+        });
+        match made {
+            Ok(constraints) => constraints,
+            Err(never) => match never {},
+        }
+    }
+
+    /// The layout in memory, made from the same inputs and settings: the
+    /// stages before it are not run. It is stored again when the state
+    /// folder moved since (a `state_dir:` edit, another set of outputs), so
+    /// that the new folder holds the layout its manifest vouches for.
+    fn same(&mut self, d: &DatasetConfig, cx: &mut Cx<'_>, pending: &mut Pending) -> LayoutOut {
+        for stage in [Stage::Prepare, Stage::Constraints, Stage::Layout] {
+            cx.record(stage, false, Instant::now(), "in memory");
+        }
+        let (_, laid) = self.slots.layout.last().expect("decided Same: a layout in memory");
+        if self.stored_at != state::layout_path(d) {
+            pending.layout = Some((state::layout::text(&laid.computed), laid.state));
+        }
+        LayoutOut {
+            laid: laid.clone(),
+            step: LayoutStep::Reused,
+            ms: 0.0,
+            started_from: None,
+        }
+    }
+
+    /// Layout: a run from the previous layout [`start::decide`] chose.
+    #[allow(clippy::too_many_arguments)]
+    fn lay_out_from(
+        &mut self,
+        job: &Job<'_>,
+        key: LayoutKey,
+        chosen: Chosen,
+        (input, planned, zero): (Prepared, Plan, Arc<ZeroItems>),
+        cx: &mut Cx<'_>,
+        pending: &mut Pending,
+        notes: &mut Vec<String>,
+    ) -> Result<LayoutOut, BuildError> {
+        let mut request = job.request.clone();
+        request.previous = chosen.previous;
+        let started_from = request.previous.clone();
+        let t = Instant::now();
+        let computed =
+            lay_out_planned(input, planned, &request, zero).map_err(|e| layout_error(job.dataset, e))?;
+        let ms = ms_since(t);
+        let report = &computed.report;
+        let step = match &computed.start {
+            Start::Warm { .. } if report.iterations == 0 && report.reused == report.diagrams => {
+                LayoutStep::Reused
+            }
+            Start::Warm { .. } => LayoutStep::Warm,
+            Start::Refused(why) => {
+                notes.push(format!("previous layout not used ({why}); laid out cold"));
+                LayoutStep::Cold(why.to_string())
+            }
+            _ => LayoutStep::Cold(chosen.cold_because.unwrap_or("no previous layout").to_string()),
+        };
+        let note = match &step {
+            LayoutStep::Reused => "every diagram as stored, no tick".to_string(),
+            LayoutStep::Warm => format!("warm, {} ticks", report.iterations),
+            LayoutStep::Cold(why) => format!("cold: {why}"),
+            LayoutStep::UpToDate => String::new(),
+        };
+        cx.record(Stage::Layout, step != LayoutStep::Reused, t, note);
+        let text = state::layout::text(&computed);
+        let state = Fingerprint::of_bytes(text.as_bytes());
+        if chosen.stored != Some(state) {
+            pending.layout = Some((text, state));
+        }
+        let laid = Laid {
+            state,
+            computed: Arc::new(computed),
+        };
+        // The layout it replaces becomes history when it differs.
+        if let Some((_, last)) = self.slots.layout.take().filter(|(_, l)| l.state != state) {
+            self.past.push_back((last.state, last.computed));
+        }
+        while self.past.len() > self.history {
+            self.past.pop_front();
+        }
+        self.slots.layout.set(key, laid.clone());
+        Ok(LayoutOut {
+            laid,
+            step,
+            ms,
+            started_from,
+        })
+    }
+
+    /// Render: each output whose file does not hold its bytes already.
+    fn render(
+        &self,
+        job: &Job<'_>,
+        key: LayoutKey,
+        laid: &Laid,
+        manifest: &Manifest,
+        disk: &[Option<OnDisk>],
+        cx: &mut Cx<'_>,
+    ) -> Result<Vec<(OutputRecord, OutputBuild)>, BuildError> {
+        let d = job.dataset;
+        let mut svg_text = None;
+        // The past layouts are one more input of the HTML page's render,
+        // keyed by their stored layouts' fingerprints (as the current one
+        // is): a page is rendered again when its history changed, and the
+        // other outputs, which do not show it, are not.
+        let past: Vec<Arc<Computed>> = self.past.iter().map(|(_, c)| Arc::clone(c)).collect();
+        let past_states: Vec<Fingerprint> = self.past.iter().map(|(s, _)| *s).collect();
+        let mut outputs = Vec::with_capacity(d.outputs.len());
+        for (out, disk) in d.outputs.iter().zip(disk) {
+            let render_key = output_key(key, laid.state, &job.style, out, &past_states);
+            let t = Instant::now();
+            let built = match self.known(d, manifest, out, render_key, *disk) {
+                Some(built) => {
+                    cx.record(Stage::Render, false, t, "file up to date");
+                    built
+                }
+                None => {
+                    let bytes = pipeline::render_output(&laid.computed, &job.style, out, &past, &mut svg_text)?;
+                    cx.record(Stage::Render, true, t, out.kind().name());
+                    OutputBuild::made(out.path.clone(), bytes, *disk)
+                }
+            };
+            let record = OutputRecord {
+                path: manifest::relative(d, &out.path),
+                render: render_key,
+                bytes: built.fingerprint,
+            };
+            outputs.push((record, built));
+        }
+        Ok(outputs)
+    }
+
+    /// The output as its file holds it, when the manifest vouches that the
+    /// file holds what `render_key` renders.
+    fn known(
+        &self,
+        d: &DatasetConfig,
+        manifest: &Manifest,
+        out: &OutputConfig,
+        render_key: Fingerprint,
+        disk: Option<OnDisk>,
+    ) -> Option<OutputBuild> {
+        let record = manifest
+            .output(d, &out.path)
+            .filter(|r| self.options.cache && r.render == render_key)?;
+        let disk = disk.filter(|f| f.fingerprint == record.bytes)?;
+        Some(OutputBuild::on_disk(out.path.clone(), disk))
+    }
+
+    /// Every output as its file holds it, when the manifest records these
+    /// inputs and settings and vouches for every file: the facts of the
+    /// "nothing changed" decision.
+    fn current_outputs(
+        &self,
+        job: &Job<'_>,
+        manifest: &Manifest,
+        key: LayoutKey,
+        disk: &[Option<OnDisk>],
+    ) -> Option<Vec<OutputBuild>> {
+        let d = job.dataset;
+        let record = manifest
+            .layout
+            .as_ref()
+            .filter(|r| r.inputs == Some(key.inputs) && r.settings == key.settings)?;
+        let past: Vec<Fingerprint> = self.past.iter().map(|(s, _)| *s).collect();
+        d.outputs
+            .iter()
+            .zip(disk)
+            .map(|(out, disk)| {
+                let render_key = output_key(key, record.state, &job.style, out, &past);
+                self.known(d, manifest, out, render_key, *disk)
+            })
+            .collect()
+    }
+}
+
+/// A layout error of dataset `d`.
+pub(super) fn layout_error(d: &DatasetConfig, source: LayoutError) -> BuildError {
+    BuildError::Layout {
+        dataset: d.name.clone(),
+        source,
+    }
+}
+
+/// Read and parse: the input bytes by role and everything that decides how
+/// they are read (format, field mapping, limits, an exec command). Not the
+/// paths: a moved file with the same bytes gives the same dataset.
+pub fn inputs(d: &DatasetConfig, files: &[InputFile]) -> Fingerprint {
+    let mut f = Fingerprinter::new("inputs");
+    f.str(&d.format).value(&d.fields).value(&d.command);
+    for file in files {
+        f.str(&file.role).bytes(&file.bytes);
+    }
+    f.finish()
+}
+
+/// What is drawn of the parsed inputs: the inputs' key and whether items of
+/// weight 0 are hidden (`layout.zero_weights`), which decides the nodes
+/// that are prepared. The source of the prepared dataset's key in a build.
+pub fn drawn_key(inputs: Fingerprint, zero_weights: ZeroWeights) -> Fingerprint {
+    Fingerprinter::new("drawn")
+        .fingerprint(inputs)
+        .str(zero_weights.name())
+        .finish()
+}
+
+/// Prepare: the dataset it starts from (its `source` key: [`drawn_key`] in
+/// a build, [`dataset`] for one given in memory) and the similarity.
+pub fn prepared(source: Fingerprint, kind: SimilarityKind) -> Fingerprint {
+    Fingerprinter::new("prepared")
+        .fingerprint(source)
+        .value(&kind)
+        .finish()
+}
+
+/// Constraints: what the constraints of a dataset depend on, and nothing
+/// else: the measure, and per node (in order) its id, parent, vector and
+/// relations. Weights, labels and colours are left out, so a weight edit
+/// keeps the constraints (vectors of inner nodes are plain means of their
+/// children's, never weighted: `neighborhood::prepare`).
+pub fn similarity(dataset: &Dataset, kind: SimilarityKind) -> Fingerprint {
+    Fingerprinter::new("similarity")
+        .value(&kind)
+        .fingerprint(similarity_of_nodes(dataset))
+        .finish()
+}
+
+/// The per-node part of [`similarity`].
+fn similarity_of_nodes(dataset: &Dataset) -> Fingerprint {
+    let mut f = Fingerprinter::new("nodes");
+    f.u64(dataset.len() as u64);
+    for node in dataset.nodes() {
+        f.str(&node.id)
+            .u64(node.parent.map_or(u64::MAX, |p| p as u64));
+        match &node.features {
+            Some(Features::Dense(values)) => {
+                f.u64(values.len() as u64);
+                for &v in values.iter() {
+                    f.f64(v);
+                }
+            }
+            Some(Features::Sparse(sparse)) => {
+                // Marked apart from a dense vector of the same length.
+                f.u64(u64::MAX - 1).u64(sparse.len() as u64);
+                f.u64(sparse.indices().len() as u64);
+                for (k, v) in sparse.entries() {
+                    f.u64(u64::from(k)).f64(v);
+                }
+            }
+            None => {
+                f.u64(u64::MAX);
+            }
+        }
+        f.u64(node.relations.len() as u64);
+        for &r in &node.relations {
+            f.u64(r as u64);
+        }
+    }
+    f.finish()
+}
+
+/// A dataset given in memory (`layout`, `eval`): all of it (what the
+/// similarity key covers, and weights, labels, colours, virtual flags and
+/// the similarity hint), for the memo of its prepared form.
+pub fn dataset(dataset: &Dataset) -> Fingerprint {
+    let mut f = Fingerprinter::new("dataset");
+    f.value(&dataset.similarity_hint());
+    for node in dataset.nodes() {
+        f.str(&node.label)
+            .f64(node.weight.unwrap_or(f64::NAN))
+            .f64(node.value)
+            .value(&node.color)
+            .u64(u64::from(node.is_virtual));
+    }
+    f.fingerprint(similarity_of_nodes(dataset));
+    f.finish()
+}
+
+/// Render: one output's bytes depend on the renderers themselves (a
+/// fingerprint of their sources, made at compile time: outputs of another
+/// version are made again), the layout (the inputs and settings
+/// it was made from and the stored layout's bytes, which hold every cell and
+/// constraint), the style (unless its kind shows none), the output's kind
+/// and scale, and the past layouts of a kind that shows them (their stored
+/// layouts' fingerprints, oldest first).
+pub fn output_key(
+    key: LayoutKey,
+    layout: Fingerprint,
+    style: &Style,
+    output: &OutputConfig,
+    past: &[Fingerprint],
+) -> Fingerprint {
+    let kind = output.kind();
+    let mut f = Fingerprinter::new("render");
+    f.str(env!("NPTREEMAP_RENDER_SOURCE"))
+        .fingerprint(key.inputs)
+        .fingerprint(key.settings)
+        .fingerprint(layout)
+        .value(&kind)
+        .f64(output.scale);
+    if kind.styled() {
+        f.value(style);
+    }
+    if kind.shows_history() && !past.is_empty() {
+        f.str("history");
+        for state in past {
+            f.fingerprint(*state);
+        }
+    }
+    f.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nptreemap_formats::{DatasetBuilder, NodeSpec};
+
+    fn data(weight: f64, features: Vec<f64>) -> Dataset {
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("r"));
+        b.add(NodeSpec::new("a").parent("r").weight(weight).features(features));
+        b.add(NodeSpec::new("b").parent("r").weight(1.0).features(vec![1.0, 0.0]));
+        b.build().expect("valid")
+    }
+
+    #[test]
+    fn the_similarity_key_ignores_weights_only() {
+        let k = |d: &Dataset| similarity(d, SimilarityKind::Cosine);
+        let base = data(1.0, vec![0.0, 1.0]);
+        assert_eq!(k(&base), k(&data(7.0, vec![0.0, 1.0])));
+        assert_ne!(k(&base), k(&data(1.0, vec![1.0, 1.0])));
+        assert_ne!(k(&base), similarity(&base, SimilarityKind::Jaccard));
+    }
+}

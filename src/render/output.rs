@@ -1,0 +1,124 @@
+//! The kinds of output, one home for each: its names in a config and a
+//! path, its content type in the preview server, whether the style and the
+//! page's history shape it (its render key), and its renderer. The build's
+//! stage graph, the pipeline and the server all ask an [`OutputKind`].
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::{html_page_with_history, picture, Style};
+use crate::layout::Computed;
+
+/// Kinds of output.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum OutputKind {
+    /// A picture as SVG.
+    Svg,
+    /// A picture as PNG.
+    Png,
+    /// The layout JSON.
+    Json,
+    /// An interactive HTML page.
+    Html,
+}
+
+/// Why an output could not be rendered.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OutputError {
+    /// The PNG could not be made.
+    #[cfg(feature = "png")]
+    #[error(transparent)]
+    Png(#[from] super::PngError),
+    /// The kind needs a Cargo feature this build was compiled without.
+    #[error("{what} needs nptreemap built with the `{feature}` feature")]
+    Unsupported {
+        /// What it asks for (`PNG output`).
+        what: &'static str,
+        /// The feature that provides it.
+        feature: &'static str,
+    },
+}
+
+impl OutputKind {
+    /// The kind a path's extension names (`svg`, `png`, `json`, `html` or
+    /// `htm`, any case).
+    pub fn of_path(path: &Path) -> Option<OutputKind> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "svg" => Some(OutputKind::Svg),
+            "png" => Some(OutputKind::Png),
+            "json" => Some(OutputKind::Json),
+            "html" | "htm" => Some(OutputKind::Html),
+            _ => None,
+        }
+    }
+
+    /// Its name in a config (`kind:`) and in `-v` lines.
+    pub fn name(self) -> &'static str {
+        match self {
+            OutputKind::Svg => "svg",
+            OutputKind::Png => "png",
+            OutputKind::Json => "json",
+            OutputKind::Html => "html",
+        }
+    }
+
+    /// The content type the preview server answers it with.
+    pub fn content_type(self) -> &'static str {
+        match self {
+            OutputKind::Svg => "image/svg+xml",
+            OutputKind::Png => "image/png",
+            OutputKind::Json => "application/json",
+            OutputKind::Html => "text/html; charset=utf-8",
+        }
+    }
+
+    /// Whether the picture's style shapes it (the layout JSON has none).
+    pub fn styled(self) -> bool {
+        self != OutputKind::Json
+    }
+
+    /// Whether it carries the past layouts (`history:`), which are then one
+    /// more input of its render.
+    pub fn shows_history(self) -> bool {
+        self == OutputKind::Html
+    }
+
+    /// Its bytes for a finished layout. `past` are the layouts before it,
+    /// oldest first (used when it [shows history](OutputKind::shows_history));
+    /// `svg_text` keeps the picture's SVG text between the outputs of one
+    /// layout (the SVG and the PNG draw the same picture).
+    pub fn render(
+        self,
+        computed: &Computed,
+        style: &Style,
+        scale: f64,
+        past: &[std::sync::Arc<Computed>],
+        svg_text: &mut Option<String>,
+    ) -> Result<Vec<u8>, OutputError> {
+        Ok(match self {
+            OutputKind::Svg => svg_text
+                .get_or_insert_with(|| picture(computed, style))
+                .clone()
+                .into_bytes(),
+            #[cfg(feature = "png")]
+            OutputKind::Png => {
+                let text = svg_text.get_or_insert_with(|| picture(computed, style));
+                super::png(text, scale)?
+            }
+            #[cfg(not(feature = "png"))]
+            OutputKind::Png => {
+                let _ = (svg_text, scale);
+                return Err(OutputError::Unsupported {
+                    what: "PNG output",
+                    feature: "png",
+                });
+            }
+            OutputKind::Json => crate::layout_json::document(computed).into_bytes(),
+            OutputKind::Html => html_page_with_history(computed, style, past).into_bytes(),
+        })
+    }
+}
