@@ -426,6 +426,7 @@ mod tests {
             ("layout", "min_weight_ratio", "0.01", Layout),
             ("layout", "prototype", "true", Layout),
             ("layout", "frames", "2", Layout),
+            ("layout", "zero_weights", "floor", Layout),
             ("render", "title", "T", Render),
             ("render", "legend", "false", Render),
             ("render", "legend_order", "data", Render),
