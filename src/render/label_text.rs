@@ -251,12 +251,15 @@ fn after_prefix<'a>(label: &'a str, prefix: &str) -> Option<&'a str> {
 
 /// The default: `label` without its group's name in front (as
 /// [`after_prefix`]), or its last segment when the segments before it end
-/// with the group's name (`sympy.stats.rv` in a group named `stats`).
+/// with the group's name (`sympy.stats.rv` in a group named `stats`) or the
+/// last segment is the group's name (a package's own module, `xml.dom` in
+/// `dom`).
 fn own_segment<'a>(label: &'a str, group: &str) -> Option<&'a str> {
     after_prefix(label, group).or_else(|| {
         SEPARATORS.iter().find_map(|sep| {
             let (head, last) = label.rsplit_once(sep)?;
-            let repeats = head == group || head.ends_with(&format!("{sep}{group}"));
+            let repeats =
+                head == group || head.ends_with(&format!("{sep}{group}")) || last == group;
             (repeats && !group.is_empty() && !last.is_empty()).then_some(last)
         })
     })
@@ -342,6 +345,8 @@ mod tests {
         assert_eq!(after_prefix("sympystats", "sympy"), None);
         assert_eq!(own_segment("sympy.stats.rv", "stats"), Some("rv"));
         assert_eq!(own_segment("sympy.mystats.rv", "stats"), None);
+        assert_eq!(own_segment("xml.dom", "dom"), Some("dom"));
+        assert_eq!(own_segment("dom", "dom"), None);
         assert_eq!(own_segment("a::b::C", "a::b"), Some("C"));
     }
 
