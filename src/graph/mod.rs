@@ -453,7 +453,14 @@ impl DatasetGraph {
                 .filter(|r| cache && r.render == key && disk.map(|f| f.fingerprint) == Some(r.bytes));
             let built = match known {
                 Some(record) => {
-                    stages.record(name, Stage::Render, false, ms_since(t), "file up to date");
+                    stages.record_output(
+                        name,
+                        Stage::Render,
+                        shown(d, &out.path),
+                        false,
+                        ms_since(t),
+                        "file up to date",
+                    );
                     OutputBuild {
                         path: out.path.clone(),
                         bytes: None,
@@ -471,7 +478,14 @@ impl DatasetGraph {
                     } else {
                         pipeline::render_output(&computed, &job.style, out, &mut svg_text)?
                     };
-                    stages.record(name, Stage::Render, true, ms_since(t), kind_name(out));
+                    stages.record_output(
+                        name,
+                        Stage::Render,
+                        shown(d, &out.path),
+                        true,
+                        ms_since(t),
+                        kind_name(out),
+                    );
                     OutputBuild {
                         path,
                         fingerprint: Fingerprint::of_bytes(&bytes),
@@ -556,8 +570,9 @@ impl DatasetGraph {
         for stage in [Stage::Parse, Stage::Prepare, Stage::Constraints, Stage::Layout] {
             stages.record(name, stage, false, 0.0, "nothing changed");
         }
-        for _ in &outputs {
-            stages.record(name, Stage::Render, false, 0.0, "nothing changed");
+        for o in &outputs {
+            let output = shown(d, &o.path);
+            stages.record_output(name, Stage::Render, output, false, 0.0, "nothing changed");
         }
         let files: Vec<(String, PathBuf)> =
             d.files.iter().map(|(r, p)| (r.clone(), p.clone())).collect();
@@ -752,7 +767,10 @@ impl DatasetGraph {
         for o in &build.outputs {
             let wrote = written.written.contains(&o.path);
             let note = if wrote { "written" } else { "file unchanged" };
-            build.stages.record(&d.name, Stage::Write, wrote, ms, note);
+            let output = shown(d, &o.path);
+            build
+                .stages
+                .record_output(&d.name, Stage::Write, output, wrote, ms, note);
         }
         if !self.options.cache {
             return written;
@@ -825,6 +843,15 @@ fn cold_because(cold: bool, cache: bool) -> Option<&'static str> {
     } else {
         None
     }
+}
+
+/// An output's path as `-v` names it: relative to the config's folder, as
+/// the config wrote it.
+fn shown(d: &DatasetConfig, path: &Path) -> String {
+    path.strip_prefix(&d.base)
+        .unwrap_or(path)
+        .display()
+        .to_string()
 }
 
 fn kind_name(out: &OutputConfig) -> String {

@@ -574,3 +574,35 @@ fn log_lines_carry_colour_only_on_a_terminal_without_no_color() {
         "colour despite NO_COLOR: {plain:?}"
     );
 }
+
+#[test]
+fn verbose_lines_name_the_dataset_the_stage_and_the_output() {
+    let config = support::example("countries", "verbose_lines");
+    let dir = config.parent().expect("folder").to_path_buf();
+    // A first build writes, a second one reuses: both name every output.
+    for _ in 0..2 {
+        let out = run_in(&dir, &["build", "-v", "nptreemap.yaml"]);
+        ok(&out);
+        let log = String::from_utf8_lossy(&out.stderr);
+        assert!(!log.contains("nptreemap::"), "a module path: {log}");
+        for stage in ["render", "write"] {
+            for output in [
+                "out/countries.svg",
+                "out/countries.png",
+                "out/countries.json",
+            ] {
+                let lines = log
+                    .lines()
+                    .filter(|l| l.contains(&format!("countries: {stage} {output} ")))
+                    .count();
+                assert_eq!(lines, 1, "{stage} {output}:\n{log}");
+            }
+            let unnamed = log
+                .lines()
+                .filter(|l| l.contains(&format!("countries: {stage} ")))
+                .filter(|l| !l.contains(&format!("countries: {stage} out/")))
+                .count();
+            assert_eq!(unnamed, 0, "{log}");
+        }
+    }
+}
