@@ -846,12 +846,20 @@ fn cold_because(cold: bool, cache: bool) -> Option<&'static str> {
 }
 
 /// An output's path as `-v` names it: relative to the config's folder, as
-/// the config wrote it.
+/// the config wrote it, control characters escaped (a newline in a name
+/// must not forge a log line).
 fn shown(d: &DatasetConfig, path: &Path) -> String {
-    path.strip_prefix(&d.base)
-        .unwrap_or(path)
-        .display()
-        .to_string()
+    let text = path.strip_prefix(&d.base).unwrap_or(path).display().to_string();
+    text.chars()
+        .flat_map(|c| {
+            let escaped: Vec<char> = if c.is_control() {
+                c.escape_default().collect()
+            } else {
+                vec![c]
+            };
+            escaped
+        })
+        .collect()
 }
 
 fn kind_name(out: &OutputConfig) -> String {
