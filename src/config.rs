@@ -12,8 +12,8 @@ use crate::layout::{Canvas, Method, NeighborParams, Outline, Params, Request, Ze
 use crate::neighborhood::SimilarityKind;
 use crate::render::overlay::OverlayStyle;
 use crate::render::{
-    OutputKind,
-    Border, ColorBy, ColorScale, LabelStyle, LegendOrder, PageFields, PaletteKind, Rgb, Style,
+    Border, ColorBy, ColorScale, LabelStyle, LabelText, LegendOrder, OutputKind, PageFields,
+    PaletteKind, Rgb, Style,
     SvgStyle,
 };
 use nptreemap_formats::{Carry, FormatOptions, Limits};
@@ -171,6 +171,17 @@ pub struct LabelsConfig {
     /// Display names for ids or labels (`AS: Asia`), in the legend's `names` order.
     #[serde(deserialize_with = "ordered_names")]
     pub names: Vec<(String, String)>,
+    /// What a label says: `auto`, `label`, `id`, `segment`, `relative` or a
+    /// template over columns (`"{name} {version}"`). Default: auto.
+    #[serde(deserialize_with = "label_text")]
+    pub text: LabelText,
+}
+
+/// `render.labels.text`, refused at its line when unknown or malformed.
+fn label_text<'de, D: Deserializer<'de>>(d: D) -> Result<LabelText, D::Error> {
+    let text = String::deserialize(d)?;
+    LabelText::parse(&text)
+        .map_err(|e| serde::de::Error::custom(format_args!("labels.text: {e}")))
 }
 
 impl Default for LabelsConfig {
@@ -184,6 +195,7 @@ impl Default for LabelsConfig {
             unit: l.unit,
             groups: l.groups,
             names: Vec::new(),
+            text: l.text,
         }
     }
 }
@@ -199,6 +211,7 @@ impl LabelsConfig {
             groups: self.groups,
             names: self.names.iter().cloned().collect(),
             names_order: self.names.iter().map(|(k, _)| k.clone()).collect(),
+            text: self.text.clone(),
         }
     }
 }
@@ -474,15 +487,17 @@ fn key_lines(text: &str, key: &str) -> Vec<usize> {
 }
 
 /// The columns a dataset's pictures need carried into the model: its
-/// `page` fields and link, and `render.color_by`, each once, each with what
-/// asked for it (config line, when found) for the reader's error.
+/// `page` fields and link, `render.color_by` and the columns of a
+/// `render.labels.text` template, each once, each with what asked for it
+/// (config line, when found) for the reader's error.
 fn carried(
     d: &DatasetConfig,
     i: usize,
     page_line: Option<usize>,
     render: &RenderConfig,
-    color_line: Option<usize>,
+    lines: (Option<usize>, Option<usize>),
 ) -> Vec<Carry> {
+    let (color_line, text_line) = lines;
     let at = |line: Option<usize>| line.map_or(String::new(), |l| format!(", config line {l}"));
     let mut out: Vec<Carry> = Vec::new();
     let mut add = |column: &str, asked_by: String| {
@@ -501,6 +516,9 @@ fn carried(
     }
     if let Some(c) = &render.color_by {
         add(c, format!("render.color_by{}", at(color_line)));
+    }
+    for c in render.labels.text.columns() {
+        add(c, format!("render.labels.text{}", at(text_line)));
     }
     out
 }
@@ -810,6 +828,7 @@ impl Config {
         // (no other section has such a key).
         let mut page_lines = key_lines(text, "page").into_iter();
         let color_line = key_lines(text, "color_by").first().copied();
+        let text_line = key_lines(text, "text").first().copied();
         for (i, d) in datasets.iter_mut().enumerate() {
             let page_line = if d.page == PageConfig::default() {
                 None
@@ -824,7 +843,7 @@ impl Config {
                     });
                 }
             }
-            d.fields.carry = carried(d, i, page_line, &raw.render, color_line);
+            d.fields.carry = carried(d, i, page_line, &raw.render, (color_line, text_line));
             d.fields.limits = raw.limits.readers();
             d.max_adapter_mb = raw.limits.max_adapter_mb();
             d.state_dir = state_dir.clone();

@@ -143,8 +143,13 @@ pub fn main() -> ExitCode {
     };
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    // Lines that read like cargo's: the level and the message (which names
+    // the dataset, the stage and the output), no module path; the status
+    // lines carry their own time.
     tracing_subscriber::fmt()
         .with_env_filter(filter)
+        .with_target(false)
+        .without_time()
         .with_writer(std::io::stderr)
         .with_ansi(colour())
         .init();

@@ -1,4 +1,4 @@
-//! `nptreemap config --defaults`: prints `config/default.yaml`, every config
+//! `nptreemap config [--defaults]`: prints `config/default.yaml`, every config
 //! key with its default and what it does, built into the binary so that a
 //! `cargo install` user, who has no copy of the repository, can read it.
 
@@ -11,13 +11,16 @@ use crate::config::DEFAULT_YAML;
 pub(crate) struct ConfigArgs {
     /// Print every config key with its default and what it does (a config
     /// that builds nothing: `nptreemap config --defaults > nptreemap.yaml`,
-    /// then add datasets).
-    #[arg(long, required = true)]
+    /// then add datasets). The same as `nptreemap config` alone, the only
+    /// thing it prints for now.
+    #[arg(long)]
     defaults: bool,
 }
 
 /// Prints what `args` asks for.
 pub(crate) fn run(args: &ConfigArgs) -> anyhow::Result<()> {
-    debug_assert!(args.defaults);
+    // `--defaults` or nothing: there is nothing else to print yet, and a
+    // bare `nptreemap config` is no mistake worth an error.
+    let _ = args.defaults;
     super::write_stdout(DEFAULT_YAML.as_bytes())
 }

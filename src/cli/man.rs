@@ -137,12 +137,78 @@ fn built(mut cli: clap::Command) -> clap::Command {
     cli
 }
 
+/// The SYNOPSIS section: as clap_mangen writes it, but an option that
+/// takes a value shows it (`[--config <FILE>]`, clap's own usage line), where
+/// clap_mangen's shows the bare flag.
+fn synopsis(cmd: &clap::Command) -> Roff {
+    let name = cmd.get_bin_name().unwrap_or_else(|| cmd.get_name());
+    let mut line = vec![bold(name), roman(" ")];
+    let mut opts: Vec<&clap::Arg> = cmd
+        .get_arguments()
+        .filter(|a| !a.is_hide_set() && !a.is_positional())
+        .collect();
+    // clap_mangen's order: the options with a short name first, by it.
+    opts.sort_by_key(|a| (a.get_short().is_none(), a.get_short(), a.get_long()));
+    let marks = |a: &clap::Arg| {
+        if a.is_required_set() {
+            ("", "")
+        } else {
+            ("[", "]")
+        }
+    };
+    for opt in opts {
+        let (lhs, rhs) = marks(opt);
+        line.push(roman(lhs));
+        match (opt.get_short(), opt.get_long()) {
+            (Some(short), Some(long)) => {
+                line.push(bold(format!("-{short}")));
+                line.push(roman("|"));
+                line.push(bold(format!("--{long}")));
+            }
+            (Some(short), None) => line.push(bold(format!("-{short}"))),
+            (None, Some(long)) => line.push(bold(format!("--{long}"))),
+            (None, None) => continue,
+        }
+        let takes = opt.get_num_args().is_some_and(|n| n.takes_values());
+        if takes {
+            let value = opt
+                .get_value_names()
+                .map_or_else(|| opt.get_id().as_str().to_uppercase(), |v| v.join(" "));
+            let optional = opt.get_num_args().is_some_and(|n| n.min_values() == 0);
+            line.push(roman(" "));
+            line.push(italic(if optional {
+                format!("[<{value}>]")
+            } else {
+                format!("<{value}>")
+            }));
+        }
+        line.push(roman(rhs));
+        if matches!(opt.get_action(), clap::ArgAction::Count) {
+            line.push(roman("..."));
+        }
+        line.push(roman(" "));
+    }
+    for arg in cmd.get_positionals().filter(|a| !a.is_hide_set()) {
+        let (lhs, rhs) = marks(arg);
+        let value = arg
+            .get_value_names()
+            .map_or_else(|| arg.get_id().as_str().to_string(), |v| v.join(" "));
+        line.extend([roman(lhs), italic(value), roman(rhs), roman(" ")]);
+    }
+    if cmd.has_subcommands() {
+        line.push(italic("SUBCOMMAND"));
+    }
+    let mut roff = Roff::new();
+    roff.control("SH", ["SYNOPSIS"]).text(line);
+    roff
+}
+
 /// The sections every page opens with: title, NAME, SYNOPSIS, DESCRIPTION,
 /// OPTIONS.
-fn head(man: &Man, out: &mut Vec<u8>) -> std::io::Result<()> {
+fn head(man: &Man, cmd: &clap::Command, out: &mut Vec<u8>) -> std::io::Result<()> {
     man.render_title(out)?;
     man.render_name_section(out)?;
-    man.render_synopsis_section(out)?;
+    synopsis(cmd).to_writer(out)?;
     man.render_description_section(out)?;
     man.render_options_section(out)
 }
@@ -155,7 +221,7 @@ pub(crate) fn man(args: &ManArgs, cli: clap::Command) -> anyhow::Result<()> {
     match &args.subcommand {
         None => {
             let man = Man::new(cli.clone());
-            head(&man, &mut out)?;
+            head(&man, &cli, &mut out)?;
             man.render_subcommands_section(&mut out)?;
             let mut roff = Roff::new();
             roff.control("PP", []).text([
@@ -183,7 +249,7 @@ pub(crate) fn man(args: &ManArgs, cli: clap::Command) -> anyhow::Result<()> {
                 })?;
             let version = cli.get_version().unwrap_or_default();
             let man = Man::new(sub.clone()).source(format!("nptreemap {version}"));
-            head(&man, &mut out)?;
+            head(&man, sub, &mut out)?;
             let mut roff = Roff::new();
             exit_status(&mut roff);
             roff.control("SH", ["SEE ALSO"]);

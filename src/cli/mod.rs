@@ -10,6 +10,8 @@ mod app;
 pub use app::main;
 
 pub(crate) mod bench;
+#[cfg(feature = "serve")]
+mod browser;
 pub(crate) mod build;
 mod config_file;
 pub(crate) mod defaults;

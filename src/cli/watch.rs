@@ -39,6 +39,11 @@ pub(crate) struct WatchArgs {
     #[cfg(feature = "serve")]
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "")]
     serve: Option<String>,
+    /// With --serve: open the default browser on the first page (a line,
+    /// not a failure, where the system has no browser to open).
+    #[cfg(feature = "serve")]
+    #[arg(long, requires = "serve")]
+    open: bool,
 }
 
 /// How long a stop signal waits for the daemon to stop by itself (it checks
@@ -63,6 +68,9 @@ pub(crate) fn run(args: &WatchArgs) -> anyhow::Result<()> {
                 }
             })?;
             super::say(preview.first_line());
+            if args.open {
+                super::browser::open(&preview.first_page());
+            }
             Some(preview)
         }
         None => None,

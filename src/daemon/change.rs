@@ -475,6 +475,7 @@ mod tests {
             ("render.labels", "unit", "kg", Render),
             ("render.labels", "groups", "false", Render),
             ("render.labels", "names", "{x: X}", Render),
+            ("render.labels", "text", "segment", Render),
             ("limits", "max_nodes", "100", Layout),
             ("limits", "max_depth", "5", Layout),
             ("limits", "max_dimensions", "5", Layout),

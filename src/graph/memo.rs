@@ -32,6 +32,19 @@ pub struct Cx<'a> {
 }
 
 impl Cx<'_> {
+    /// Records a stage of one output (render), named as `-v` shows it.
+    pub fn record_output(
+        &mut self,
+        stage: Stage,
+        output: String,
+        ran: bool,
+        since: Instant,
+        note: impl Into<String>,
+    ) {
+        self.stages
+            .record_output(self.name, stage, output, ran, ms_since(since), note);
+    }
+
     /// Records a stage that ran (`ran`) or was reused, timed from `since`.
     pub fn record(&mut self, stage: Stage, ran: bool, since: Instant, note: impl Into<String>) {
         self.stages

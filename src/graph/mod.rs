@@ -312,8 +312,9 @@ impl DatasetGraph {
         for stage in [Stage::Parse, Stage::Prepare, Stage::Constraints, Stage::Layout] {
             stages.record(name, stage, false, 0.0, "nothing changed");
         }
-        for _ in &outputs {
-            stages.record(name, Stage::Render, false, 0.0, "nothing changed");
+        for o in &outputs {
+            let output = shown(d, &o.path);
+            stages.record_output(name, Stage::Render, output, false, 0.0, "nothing changed");
         }
         let warnings = record
             .warnings
@@ -428,7 +429,10 @@ impl DatasetGraph {
         for o in &build.outputs {
             let wrote = written.written.contains(&o.path);
             let note = if wrote { "written" } else { "file unchanged" };
-            build.stages.record(&d.name, Stage::Write, wrote, ms, note);
+            let output = shown(d, &o.path);
+            build
+                .stages
+                .record_output(&d.name, Stage::Write, output, wrote, ms, note);
         }
         if !self.options.cache {
             return written;
@@ -490,4 +494,21 @@ impl DatasetGraph {
         self.stored_at = state::layout_path(d);
         Ok(())
     }
+}
+
+/// An output's path as `-v` names it: relative to the config's folder, as
+/// the config wrote it, control characters escaped (a newline in a name
+/// must not forge a log line).
+pub(crate) fn shown(d: &DatasetConfig, path: &Path) -> String {
+    let text = path.strip_prefix(&d.base).unwrap_or(path).display().to_string();
+    text.chars()
+        .flat_map(|c| {
+            let escaped: Vec<char> = if c.is_control() {
+                c.escape_default().collect()
+            } else {
+                vec![c]
+            };
+            escaped
+        })
+        .collect()
 }

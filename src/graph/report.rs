@@ -50,6 +50,8 @@ pub struct StageRun {
     pub ms: f64,
     /// What it did or why it was reused, in a few words.
     pub note: String,
+    /// The output it was for (render and write), as the config names it.
+    pub output: Option<String>,
 }
 
 /// The stages of one dataset's build, in order.
@@ -69,11 +71,37 @@ impl StageReport {
         ms: f64,
         note: impl Into<String>,
     ) {
+        self.push(dataset, stage, None, ran, ms, note.into());
+    }
+
+    /// Records a stage of one output (render, write), naming it.
+    pub fn record_output(
+        &mut self,
+        dataset: &str,
+        stage: Stage,
+        output: String,
+        ran: bool,
+        ms: f64,
+        note: impl Into<String>,
+    ) {
+        self.push(dataset, stage, Some(output), ran, ms, note.into());
+    }
+
+    fn push(
+        &mut self,
+        dataset: &str,
+        stage: Stage,
+        output: Option<String>,
+        ran: bool,
+        ms: f64,
+        note: String,
+    ) {
         let run = StageRun {
             stage,
             ran,
             ms,
-            note: note.into(),
+            note,
+            output,
         };
         tracing::info!("{dataset}: {run}");
         self.runs.push(run);
@@ -101,7 +129,11 @@ impl StageReport {
 impl fmt::Display for StageRun {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let how = if self.ran { "ran" } else { "reused" };
-        write!(f, "{} {how} in {:.1} ms", self.stage.name(), self.ms)?;
+        write!(f, "{}", self.stage.name())?;
+        if let Some(output) = &self.output {
+            write!(f, " {output}")?;
+        }
+        write!(f, " {how} in {:.1} ms", self.ms)?;
         if !self.note.is_empty() {
             write!(f, " ({})", self.note)?;
         }

@@ -363,12 +363,12 @@ impl DatasetGraph {
             let t = Instant::now();
             let built = match self.known(d, manifest, out, render_key, *disk) {
                 Some(built) => {
-                    cx.record(Stage::Render, false, t, "file up to date");
+                    cx.record_output(Stage::Render, super::shown(d, &out.path), false, t, "file up to date");
                     built
                 }
                 None => {
                     let bytes = pipeline::render_output(&laid.computed, &job.style, out, &past, &mut svg_text)?;
-                    cx.record(Stage::Render, true, t, out.kind().name());
+                    cx.record_output(Stage::Render, super::shown(d, &out.path), true, t, out.kind().name());
                     OutputBuild::made(out.path.clone(), bytes, *disk)
                 }
             };

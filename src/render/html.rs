@@ -13,7 +13,8 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use super::labels::{display_name, format_value};
+use super::label_text::display_name;
+use super::labels::format_value;
 use super::legend::LegendItem;
 use super::palette::TABLEAU10;
 use super::picture::{colors, compose, fills, legend_items, Style};
@@ -456,7 +457,7 @@ pub fn html_page_with_history(
     let nodes = (0..count)
         .map(|i| {
             let node = dataset.node(i);
-            let label = display_name(dataset, i, names);
+            let label = display_name(dataset, i, names, &style.cells.labels.text);
             let leaf = node.children.is_empty();
             HtmlNode {
                 id: node.id.clone(),
@@ -527,7 +528,7 @@ pub fn html_page_with_history(
     let heading = style
         .title
         .as_deref()
-        .map(super::labels::clean)
+        .map(super::label_text::clean)
         .filter(|t| !t.is_empty());
     let title = heading
         .clone()

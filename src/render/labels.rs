@@ -11,6 +11,7 @@ use std::collections::BTreeMap;
 
 use nptreemap_formats::Dataset;
 
+use super::label_text::{display_name, LabelText};
 use super::text::{ascent_em, descent_em, width_em};
 use crate::geom::{cross, ConvexPolygon, Point};
 use crate::layout::Layout;
@@ -37,6 +38,9 @@ pub struct LabelStyle {
     pub names: BTreeMap<String, String>,
     /// The keys of `names` in the config's order (the legend's `names` order).
     pub names_order: Vec<String>,
+    /// What the labels say (`render.labels.text`): by default a path-like
+    /// label without its group's name in front.
+    pub text: LabelText,
 }
 
 impl Default for LabelStyle {
@@ -50,35 +54,9 @@ impl Default for LabelStyle {
             groups: true,
             names: BTreeMap::new(),
             names_order: Vec::new(),
+            text: LabelText::default(),
         }
     }
-}
-
-/// The name shown for node `i`: its entry in `names` (by id, then by label),
-/// else its label, with control characters removed and runs of white space
-/// made one space (as SVG renderers show text), trimmed.
-pub fn display_name(dataset: &Dataset, i: usize, names: &BTreeMap<String, String>) -> String {
-    let node = dataset.node(i);
-    let raw = names
-        .get(&node.id)
-        .or_else(|| names.get(&node.label))
-        .unwrap_or(&node.label);
-    clean(raw)
-}
-
-/// `text` with control characters dropped and white space collapsed.
-pub(crate) fn clean(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for word in text
-        .split(|c: char| c.is_whitespace())
-        .filter(|w| !w.is_empty())
-    {
-        if !out.is_empty() {
-            out.push(' ');
-        }
-        out.extend(word.chars().filter(|c| !c.is_control()));
-    }
-    out.trim().to_owned()
 }
 
 /// An axis-aligned box, canvas units.
@@ -604,7 +582,7 @@ pub fn quads_overlap(a: &[Point; 4], b: &[Point; 4]) -> bool {
 pub fn place_groups(
     dataset: &Dataset,
     layout: &Layout,
-    names: &BTreeMap<String, String>,
+    style: &LabelStyle,
     leaves: &[Placed],
     u: f64,
 ) -> Vec<Placed> {
@@ -620,7 +598,7 @@ pub fn place_groups(
     // every label and every name placed before it, else the largest clear
     // level spot in the cell, else the name is left to the legend.
     let place = |i: usize, max: f64, out: &mut Vec<Placed>| {
-        let text = display_name(dataset, i, names);
+        let text = display_name(dataset, i, &style.names, &style.text);
         if text.is_empty() {
             return;
         }
@@ -777,7 +755,7 @@ mod tests {
             Some(("google-".into(), "cloud-cli".into()))
         );
         assert_eq!(wrap("nobreak"), None);
-        assert_eq!(clean("  a \n\t b\u{1} "), "a b");
+        assert_eq!(crate::render::label_text::clean("  a \n\t b\u{1} "), "a b");
     }
 
     #[test]

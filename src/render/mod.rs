@@ -9,6 +9,8 @@
 pub mod color_by;
 /// Interactive HTML page: the SVG with inline hover script, style and node data.
 pub mod html;
+/// Which text a node's label shows (`render.labels.text`).
+pub mod label_text;
 /// Leaf labels fitted into their cells and group names across their groups.
 pub mod labels;
 /// The legend band: top-level groups and the overlay's glyphs.
@@ -36,6 +38,7 @@ pub use color_by::{ColorBy, ColorScale};
 pub use html::{
     html, html_page, html_page_with_history, HtmlData, HtmlEmpty, HtmlFrame, HtmlLayout, HtmlNode,
 };
+pub use label_text::LabelText;
 pub use labels::LabelStyle;
 pub use output::{OutputError, OutputKind};
 pub use palette::{PaletteKind, Rgb};

@@ -10,7 +10,8 @@
 use nptreemap_formats::Dataset;
 
 use super::color_by::{self, Applied, ColorBy};
-use super::labels::{display_name, format_value, place_groups, Placed};
+use super::label_text::display_name;
+use super::labels::{format_value, place_groups, Placed};
 use super::legend::{legend, LegendItem};
 use super::overlay::{marks_svg, place_markers, place_tabs, tabs_svg, Link, OverlayStyle};
 use super::palette::{luminance, Rgb, WHITE};
@@ -281,7 +282,7 @@ pub(crate) fn compose_noted(
     let (colors, applied) = fills(dataset, adjacent, style);
     let labels = leaf_labels(dataset, layout, &style.cells.labels);
     let groups = if style.cells.labels.groups {
-        place_groups(dataset, layout, &style.cells.labels.names, &labels, u)
+        place_groups(dataset, layout, &style.cells.labels, &labels, u)
     } else {
         Vec::new()
     };
@@ -321,7 +322,7 @@ pub(crate) fn compose_noted(
     let title = style
         .title
         .as_deref()
-        .map(super::labels::clean)
+        .map(super::label_text::clean)
         .filter(|t| !t.is_empty())
         .map(|t| title_lines(&t, (cw - 2.0 * PAD * u) / title_size))
         .filter(|lines| !lines.is_empty());
@@ -607,13 +608,13 @@ pub(crate) fn legend_items(
     }
     let labels: Vec<String> = groups
         .iter()
-        .map(|&g| display_name(dataset, g, names))
+        .map(|&g| display_name(dataset, g, names, &style.cells.labels.text))
         .collect();
     for (k, &g) in groups.iter().enumerate() {
         let twice = labels.iter().filter(|l| **l == labels[k]).count() > 1;
         let id = &dataset.node(g).id;
         let label = if twice && *id != labels[k] {
-            format!("{} ({})", labels[k], super::labels::clean(id))
+            format!("{} ({})", labels[k], super::label_text::clean(id))
         } else {
             labels[k].clone()
         };

@@ -7,7 +7,8 @@
 
 use nptreemap_formats::Dataset;
 
-use super::labels::{display_name, format_value, place_leaf, LabelStyle, Placed};
+use super::label_text::display_name;
+use super::labels::{format_value, place_leaf, LabelStyle, Placed};
 use super::palette::{self, PaletteKind, Rgb, WHITE};
 use crate::geom::ConvexPolygon;
 use crate::layout::Layout;
@@ -268,7 +269,7 @@ pub(crate) fn leaf_labels(dataset: &Dataset, layout: &Layout, style: &LabelStyle
     (0..count)
         .filter(|&i| dataset.is_leaf(i) && is_drawn(dataset, i))
         .filter_map(|i| {
-            let text = display_name(dataset, i, &style.names);
+            let text = display_name(dataset, i, &style.names, &style.text);
             let value = style
                 .value
                 .then(|| format_value(dataset.node(i).value, &style.unit));

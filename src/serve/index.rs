@@ -42,11 +42,11 @@ pub(crate) fn index(routes: &Routes, title: &str) -> String {
         let mut urls = urls.clone();
         urls.sort_by_key(|u| !u.ends_with(".html"));
         for url in &urls {
-            let file = url.rsplit('/').next().unwrap_or(url);
+            // The output's path, as the config names it.
             out.push_str(&format!(
                 " <a href=\"{}\">{}</a>",
                 escape_html(&encode(url)),
-                escape_html(file)
+                escape_html(url.trim_start_matches('/'))
             ));
         }
         if urls.is_empty() {

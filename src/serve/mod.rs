@@ -118,6 +118,9 @@ impl ServeError {
 pub struct Preview {
     addr: SocketAddr,
     hub: Hub,
+    /// The URL path of the first page (`--open`'s): the first HTML output,
+    /// else the index.
+    first: String,
 }
 
 impl Preview {
@@ -125,6 +128,20 @@ impl Preview {
     /// other machines can reach it.
     pub fn first_line(&self) -> String {
         format!("serving http://{}/ ({})", self.addr, reach(self.addr.ip()))
+    }
+
+    /// The URL `--open` opens: the first dataset's page (the index when no
+    /// output is a page), on a loopback address when the server listens on
+    /// every address.
+    pub fn first_page(&self) -> String {
+        let mut addr = self.addr;
+        if addr.ip().is_unspecified() {
+            addr.set_ip(match addr.ip() {
+                IpAddr::V4(_) => IpAddr::V4(Ipv4Addr::LOCALHOST),
+                IpAddr::V6(_) => IpAddr::V6(std::net::Ipv6Addr::LOCALHOST),
+            });
+        }
+        format!("http://{addr}{}", paths::encode(&self.first))
     }
 
     /// Hands a daemon report to the open pages; never waits for them.
@@ -262,8 +279,10 @@ pub fn start(addr: &str, config_path: &Path) -> Result<Preview, ServeError> {
         .build()
         .map_err(failed)?;
     let hub = Hub::new(&nonce()[..16]);
+    let routes = Routes::new(config_path);
+    let first = routes.first_page();
     let shared = Arc::new(Shared {
-        routes: Mutex::new(Routes::new(config_path)),
+        routes: Mutex::new(routes),
         hub: hub.clone(),
         title: config_path
             .file_name()
@@ -275,7 +294,11 @@ pub fn start(addr: &str, config_path: &Path) -> Result<Preview, ServeError> {
         .name("np-serve".to_string())
         .spawn(move || runtime.block_on(conn::accept(listener, shared)))
         .map_err(failed)?;
-    Ok(Preview { addr: local, hub })
+    Ok(Preview {
+        addr: local,
+        hub,
+        first,
+    })
 }
 
 /// What the connections share.
@@ -387,10 +410,15 @@ fn route(target: &str, shared: &Shared) -> Routed {
             let page = index::index(&routes, &shared.title);
             return Routed::Ready(ok(page, OutputKind::Html.content_type(), "none"));
         }
-        routes.find(target).cloned()
+        match routes.find(target) {
+            Some(route) => Ok(route.clone()),
+            None => Err(routes.moved(target).map(str::to_string)),
+        }
     };
-    let Some(route) = route else {
-        return Routed::Ready(plain(404, "not found"));
+    let route = match route {
+        Ok(route) => route,
+        Err(Some(now)) => return Routed::Ready(moved(&now)),
+        Err(None) => return Routed::Ready(plain(404, "not found")),
     };
     // The key before the file: a page's key is never newer than its bytes.
     let key = shared.hub.key(&route.dataset);
@@ -481,6 +509,14 @@ fn ok(body: impl Into<bytes::Bytes>, kind: &str, nonce: &str) -> Answer {
 pub(crate) fn plain(status: u16, text: &str) -> Answer {
     let mut r = ok(text.to_string(), "text/plain; charset=utf-8", "none");
     *r.status_mut() = StatusCode::from_u16(status).unwrap_or(StatusCode::INTERNAL_SERVER_ERROR);
+    r
+}
+
+/// A permanent redirect (308: the method and body are kept) to `path`, an
+/// output's URL path now that it is served where it lies.
+fn moved(path: &str) -> Answer {
+    let mut r = plain(308, &format!("moved to {path}"));
+    insert(&mut r, "Location", &paths::encode(path));
     r
 }
 

@@ -1,6 +1,9 @@
 //! Which file a request path names, if any: the preview's path safety. Owns
-//! the route table (every output of the config under `/<dataset>/<file
-//! name>`, nothing else), the strict decoding of a request path, and the
+//! the route table (every output of the config at its path relative to the
+//! config's folder, `/out/grid.html` for `out/grid.html`, so the preview
+//! mirrors the files; an output outside that folder under `/<dataset>/<file
+//! name>`, where every output was served before, which now redirects;
+//! nothing else), the strict decoding of a request path, and the
 //! check that the file found is still inside its output folder (a symlink
 //! placed there pointing out of it is refused). There is no directory
 //! listing and no path arithmetic: a decoded path is looked up as a whole in
@@ -34,6 +37,9 @@ pub(crate) struct Routes {
     pub(crate) by_path: BTreeMap<String, Route>,
     /// Dataset names in config order, each with its URL paths.
     pub(crate) datasets: Vec<(String, Vec<String>)>,
+    /// The URL paths outputs were served at before (`/<dataset>/<file
+    /// name>`), to the path they are served at now.
+    pub(crate) moved: BTreeMap<String, String>,
 }
 
 impl Routes {
@@ -65,15 +71,18 @@ impl Routes {
     fn set(&mut self, config: &Config) {
         self.by_path.clear();
         self.datasets.clear();
+        self.moved.clear();
+        let mut old_urls: Vec<(String, String)> = Vec::new();
         for d in &config.datasets {
             let mut urls = Vec::new();
             for out in &d.outputs {
                 let (Some(kind), Some(name)) = (out.kind, out.path.file_name()) else {
                     continue;
                 };
-                let url = format!("/{}/{}", d.name, name.to_string_lossy());
-                // Two outputs of one dataset with one file name (in two
-                // folders): the first is served.
+                let old = format!("/{}/{}", d.name, name.to_string_lossy());
+                let url = mirrored(&d.base, &out.path).unwrap_or_else(|| old.clone());
+                // Two outputs at one URL (an output outside the config's
+                // folder named like another): the first is served.
                 if self.by_path.contains_key(&url) {
                     continue;
                 }
@@ -85,16 +94,57 @@ impl Routes {
                         kind,
                     },
                 );
+                if old != url {
+                    old_urls.push((old, url.clone()));
+                }
                 urls.push(url);
             }
             self.datasets.push((d.name.clone(), urls));
         }
+        // An old URL that is now some output's own path stays that output.
+        for (old, url) in old_urls {
+            if !self.by_path.contains_key(&old) {
+                self.moved.entry(old).or_insert(url);
+            }
+        }
+    }
+
+    /// The URL path of the first HTML output in config order, else `/`.
+    pub(crate) fn first_page(&self) -> String {
+        self.datasets
+            .iter()
+            .flat_map(|(_, urls)| urls)
+            .find(|u| self.by_path.get(*u).is_some_and(|r| r.kind == OutputKind::Html))
+            .cloned()
+            .unwrap_or_else(|| "/".to_string())
+    }
+
+    /// Where an output served at `target` before is now (`/grid/grid.html`
+    /// to `/out/grid.html`), for a permanent redirect.
+    pub(crate) fn moved(&self, target: &str) -> Option<&str> {
+        self.moved.get(&decode(target)?).map(String::as_str)
     }
 
     /// The route a raw request target (path and query, as sent) names.
     pub(crate) fn find(&self, target: &str) -> Option<&Route> {
         self.by_path.get(&decode(target)?)
     }
+}
+
+/// The URL path of `file` relative to the config's folder `base`
+/// (`/out/grid.html`), when it lies inside it along plain names (no `..`).
+fn mirrored(base: &Path, file: &Path) -> Option<String> {
+    let rel = file.strip_prefix(base).ok()?;
+    let mut url = String::new();
+    for part in rel.components() {
+        let std::path::Component::Normal(name) = part else {
+            return None;
+        };
+        url.push('/');
+        url.push_str(name.to_str()?);
+    }
+    // Whatever `decode` refuses could never be asked for.
+    (!url.is_empty() && decode(&encode(&url)).as_deref() == Some(url.as_str())).then_some(url)
 }
 
 /// The path of a request target, percent-decoded, or `None` for anything
@@ -187,21 +237,35 @@ mod tests {
         let config = dir.path().join("c.yaml");
         std::fs::write(
             &config,
-            "datasets:\n  - name: d\n    format: hierarchy-json\n    files: {hierarchy: h.json}\n    outputs: [out/d.html, out/d.svg]\n",
+            "datasets:\n  - name: d\n    format: hierarchy-json\n    files: {hierarchy: h.json}\n    \
+             outputs: [out/d.html, out/d.svg, ../elsewhere/e.png, top.json]\n",
         )
         .expect("write");
         let routes = Routes::new(&config);
+        // At their paths in the config's folder; one outside it where all
+        // were served before.
         assert_eq!(
             routes.datasets,
             vec![(
                 "d".to_string(),
-                vec!["/d/d.html".to_string(), "/d/d.svg".to_string()]
+                vec![
+                    "/out/d.html".to_string(),
+                    "/out/d.svg".to_string(),
+                    "/d/e.png".to_string(),
+                    "/top.json".to_string()
+                ]
             )]
         );
-        assert!(routes.find("/d/d.html").is_some());
+        assert!(routes.find("/out/d.html").is_some());
         assert!(routes.find("/d/h.json").is_none());
-        assert!(routes.find("/d/../c.yaml").is_none());
-        assert!(routes.find("/d/%64.html").is_some(), "an escaped letter is the letter");
+        assert!(routes.find("/out/../c.yaml").is_none());
+        assert!(routes.find("/out/%64.html").is_some(), "an escaped letter is the letter");
+        // The old URLs redirect; nothing else does.
+        assert_eq!(routes.moved("/d/d.html"), Some("/out/d.html"));
+        assert_eq!(routes.moved("/d/top.json"), Some("/top.json"));
+        assert_eq!(routes.moved("/d/e.png"), None, "still served there");
+        assert_eq!(routes.moved("/d/c.yaml"), None);
+        assert_eq!(routes.moved("/d/../d/d.html"), None);
     }
 
     #[cfg(unix)]

@@ -437,7 +437,24 @@ fn every_man_page_the_main_page_lists_can_be_generated() {
             "nptreemap man {sub}:\n{page}"
         );
         assert!(sections(&page).iter().any(|s| s == "SYNOPSIS"), "{page}");
+        // An option that takes a value shows it in the synopsis.
+        let synopsis = page
+            .split(".SH SYNOPSIS")
+            .nth(1)
+            .and_then(|rest| rest.split(".SH").next())
+            .expect("synopsis");
+        if synopsis.contains("\\-\\-config\\fR") {
+            assert!(
+                synopsis.contains("\\-\\-config\\fR \\fI<FILE>\\fR"),
+                "nptreemap man {sub}: {synopsis}"
+            );
+        }
+        if synopsis.contains("\\-\\-jobs") {
+            assert!(synopsis.contains("\\fI<N>\\fR"), "{synopsis}");
+        }
     }
+    let build = ok(&run_in(&dir, &["man", "build"]));
+    assert!(build.contains("\\fI<FILE>\\fR"), "{build}");
     let unknown = run_in(&dir, &["man", "biuld"]);
     assert_eq!(unknown.status.code(), Some(2));
 }
@@ -490,6 +507,8 @@ fn completions_offer_the_values_of_enum_flags() {
 fn config_defaults_prints_the_documented_defaults() {
     let dir = support::temp_dir("config_defaults");
     let printed = ok(&run_in(&dir, &["config", "--defaults"]));
+    // `nptreemap config` alone is no error: it prints the same.
+    assert_eq!(ok(&run_in(&dir, &["config"])), printed);
     let file =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/default.yaml"))
             .expect("config/default.yaml");
@@ -554,4 +573,36 @@ fn log_lines_carry_colour_only_on_a_terminal_without_no_color() {
         !plain.contains('\u{1b}'),
         "colour despite NO_COLOR: {plain:?}"
     );
+}
+
+#[test]
+fn verbose_lines_name_the_dataset_the_stage_and_the_output() {
+    let config = support::example("countries", "verbose_lines");
+    let dir = config.parent().expect("folder").to_path_buf();
+    // A first build writes, a second one reuses: both name every output.
+    for _ in 0..2 {
+        let out = run_in(&dir, &["build", "-v", "nptreemap.yaml"]);
+        ok(&out);
+        let log = String::from_utf8_lossy(&out.stderr);
+        assert!(!log.contains("nptreemap::"), "a module path: {log}");
+        for stage in ["render", "write"] {
+            for output in [
+                "out/countries.svg",
+                "out/countries.png",
+                "out/countries.json",
+            ] {
+                let lines = log
+                    .lines()
+                    .filter(|l| l.contains(&format!("countries: {stage} {output} ")))
+                    .count();
+                assert_eq!(lines, 1, "{stage} {output}:\n{log}");
+            }
+            let unnamed = log
+                .lines()
+                .filter(|l| l.contains(&format!("countries: {stage} ")))
+                .filter(|l| !l.contains(&format!("countries: {stage} out/")))
+                .count();
+            assert_eq!(unnamed, 0, "{log}");
+        }
+    }
 }

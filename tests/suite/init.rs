@@ -386,3 +386,139 @@ fn file_names_with_a_newline_or_a_colon_make_a_config_that_builds() {
     ok(&out);
     assert!(dir.join("out").read_dir().expect("out").count() >= 2);
 }
+
+/// `nptreemap init ARGS -o nptreemap.yaml` in `dir`, which must succeed;
+/// returns the config written, parsed, and its text.
+fn init_config(dir: &Path, args: &[&str]) -> (nptreemap::config::Config, String) {
+    let mut all = vec!["init"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["-o", "nptreemap.yaml", "--force"]);
+    ok(&run_in(dir, &all));
+    let path = dir.join("nptreemap.yaml");
+    let text = std::fs::read_to_string(&path).expect("config");
+    let config = nptreemap::config::Config::from_path(&path).expect("the config parses");
+    (config, text)
+}
+
+/// Rows shaped like `dpkg-query`'s: a unique name, a section that repeats,
+/// a version that mostly does not, and a free-text summary.
+fn packages_table() -> String {
+    let mut s = String::from("name,section,size,version,summary\n");
+    for i in 0..40 {
+        s.push_str(&format!(
+            "pkg{i},{},{},{}.{}-1,\"tools and libraries for the {i}th thing this package does\"\n",
+            ["libs", "admin", "utils", "net"][i % 4],
+            100 + i * 37,
+            i % 7,
+            i % 4,
+        ));
+    }
+    s
+}
+
+#[test]
+fn init_takes_no_group_from_free_text_or_versions() {
+    let dir = support::temp_dir("init_packages");
+    std::fs::write(dir.join("packages.csv"), packages_table()).expect("nodes");
+    let pairs: String = (1..40).map(|i| format!("pkg{i},pkg{}\n", i / 2)).collect();
+    std::fs::write(dir.join("depends.csv"), format!("a,b\n{pairs}")).expect("pairs");
+    let (config, text) = init_config(&dir, &["packages.csv", "depends.csv"]);
+    let fields = &config.datasets[0].fields;
+    assert_eq!(fields.groups, ["section"], "{text}");
+    assert_eq!(fields.id.as_deref(), Some("name"));
+    assert_eq!(fields.weight.as_deref(), Some("size"));
+    // Each column left out says why.
+    assert!(
+        text.contains("not a grouping: summary (free text"),
+        "{text}"
+    );
+    assert!(text.contains("not a grouping: version ("), "{text}");
+    assert!(!text.contains("label: version"), "{text}");
+    // Short text is offered for the tooltip; the summary is a line of it.
+    assert!(text.contains("#     - summary"), "{text}");
+}
+
+/// Crates: an id, a name that repeats across versions, a category, a
+/// repository URL and dependencies as a set.
+fn crates_table() -> String {
+    let mut s = String::from("id,name,version,category,url,deps\n");
+    for i in 0..30 {
+        let name = format!("crate{}", i % 26);
+        let version = format!("{}.0.{i}", i % 3);
+        s.push_str(&format!(
+            "{name}-{version},{name},{version},{},https://github.com/o/{name},dep{}|dep{}\n",
+            ["parsing", "encoding", "os"][i % 3],
+            i % 5,
+            i % 4
+        ));
+    }
+    s
+}
+
+#[test]
+fn init_makes_a_repeating_label_unique_and_offers_a_url_as_the_link() {
+    let dir = support::temp_dir("init_crates");
+    std::fs::write(dir.join("crates.csv"), crates_table()).expect("nodes");
+    let (config, text) = init_config(&dir, &["crates.csv"]);
+    let d = &config.datasets[0];
+    assert_eq!(d.fields.groups, ["category"], "{text}");
+    assert_eq!(d.fields.label.as_deref(), Some("name"));
+    assert_eq!(
+        config.render.labels.text,
+        nptreemap::render::LabelText::parse("{name} {version}").expect("template"),
+        "{text}"
+    );
+    assert!(
+        text.contains("label name is not unique (26 distinct values in 30 rows)"),
+        "{text}"
+    );
+    assert!(text.contains("not a grouping: url (links"), "{text}");
+    assert!(text.contains("#   link: url"), "{text}");
+    // Built, every label is its own.
+    support::build(&dir.join("nptreemap.yaml"));
+    let svg = std::fs::read_to_string(dir.join("out/crates.svg")).expect("svg");
+    assert!(
+        svg.contains("crate1 0.0.27") || svg.contains("crate1 1.0.1"),
+        "labels"
+    );
+}
+
+#[test]
+fn init_on_module_tables_groups_by_package_and_labels_by_segment() {
+    let dir = support::temp_dir("init_modules");
+    // Shaped like the standard library's modules and a site-packages
+    // folder's: dotted ids, the package repeating.
+    let mut nodes = String::from("module,package,size\n");
+    let mut pairs = String::from("a,b\n");
+    for (p, package) in ["email", "xml.etree", "json", "http", "urllib"]
+        .iter()
+        .enumerate()
+    {
+        for m in 0..6 {
+            nodes.push_str(&format!("{package}.m{m},{package},{}\n", 100 + 13 * m + p));
+            if m > 0 {
+                pairs.push_str(&format!("{package}.m{m},{package}.m0\n"));
+            }
+        }
+    }
+    std::fs::write(dir.join("modules.csv"), nodes).expect("nodes");
+    std::fs::write(dir.join("imports.csv"), pairs).expect("pairs");
+    let (config, text) = init_config(&dir, &["modules.csv", "imports.csv"]);
+    let fields = &config.datasets[0].fields;
+    assert_eq!(fields.id.as_deref(), Some("module"), "{text}");
+    assert_eq!(fields.groups, ["package"], "{text}");
+    support::build(&dir.join("nptreemap.yaml"));
+    let svg = std::fs::read_to_string(dir.join("out/modules.svg")).expect("svg");
+    // Cells keep the whole name in their tooltip (`<title>`); labels do not.
+    let texts: Vec<&str> = svg
+        .split("<text")
+        .skip(1)
+        .filter_map(|t| t.split("</text>").next())
+        .collect();
+    assert!(texts.iter().any(|t| t.ends_with(">m0")), "{texts:?}");
+    assert!(
+        !texts.iter().any(|t| t.contains("xml.etree.m")),
+        "a label repeats its package: {texts:?}"
+    );
+    assert!(svg.contains("<title>xml.etree.m0</title>"));
+}

@@ -19,6 +19,7 @@ mod exec;
 mod fuzz;
 mod incremental;
 mod init;
+mod label_text;
 mod labels;
 mod legibility;
 mod light_outputs;

@@ -12,6 +12,7 @@ mod hardening;
 mod history;
 mod live;
 mod memory;
+mod mirror;
 mod restart;
 
 use std::io::{BufRead, BufReader, Read, Write};
@@ -94,11 +95,22 @@ pub(crate) struct Served {
 
 impl Served {
     pub(crate) fn start(config: &Path, addr: Option<&str>) -> Served {
+        Served::start_with(config, addr, |_| {})
+    }
+
+    /// As [`Served::start`], with the command adjusted by `adjust` (more
+    /// arguments, its environment).
+    pub(crate) fn start_with(
+        config: &Path,
+        addr: Option<&str>,
+        adjust: impl FnOnce(&mut std::process::Command),
+    ) -> Served {
         let mut cmd = support::bin();
         cmd.arg("watch").arg(config).arg("--serve");
         if let Some(addr) = addr {
             cmd.arg(addr);
         }
+        adjust(&mut cmd);
         let mut child = cmd
             .stdout(Stdio::piped())
             .stderr(std::fs::File::create(config.with_extension("log")).expect("log"))
@@ -187,7 +199,7 @@ impl Drop for Served {
 }
 
 /// One answer: status code, header lines (lower-cased names), body.
-struct Reply {
+pub(crate) struct Reply {
     status: u16,
     headers: Vec<(String, String)>,
     body: Vec<u8>,
@@ -248,7 +260,7 @@ fn parse_reply(raw: &[u8]) -> Reply {
     }
 }
 
-fn get(addr: SocketAddr, target: &str) -> Reply {
+pub(crate) fn get(addr: SocketAddr, target: &str) -> Reply {
     request(addr, "GET", target)
 }
 
@@ -269,9 +281,9 @@ fn the_preview_serves_outputs_and_nothing_else() {
 
     let index = get(addr, "/");
     assert_eq!(index.status, 200);
-    assert!(index.text().contains("grid") && index.text().contains("href=\"/grid/grid.html\""));
+    assert!(index.text().contains("grid") && index.text().contains("href=\"/out/grid.html\""));
 
-    let page = get(addr, "/grid/grid.html");
+    let page = get(addr, "/out/grid.html");
     assert_eq!(page.status, 200);
     assert!(page
         .header("content-type")
@@ -294,8 +306,8 @@ fn the_preview_serves_outputs_and_nothing_else() {
     // The page on disk stays the plain one.
     let on_disk = std::fs::read_to_string(dir.join("out/grid.html")).expect("page");
     assert!(!on_disk.contains("/_np/live.js"));
-    assert_eq!(request(addr, "HEAD", "/grid/grid.html").status, 200);
-    assert_eq!(get(addr, "/grid/grid.svg").status, 200);
+    assert_eq!(request(addr, "HEAD", "/out/grid.html").status, 200);
+    assert_eq!(get(addr, "/out/grid.svg").status, 200);
     assert_eq!(get(addr, "/_np/live.js").status, 200);
 
     // Nothing outside the outputs, however spelled.
@@ -304,13 +316,13 @@ fn the_preview_serves_outputs_and_nothing_else() {
     let tries = [
         "/../secret.txt".to_string(),
         "/grid/../../secret.txt".to_string(),
-        "/grid/../grid/grid.html".to_string(),
+        "/grid/../out/grid.html".to_string(),
         "/%2e%2e/secret.txt".to_string(),
         "/grid/%2e%2e/%2e%2e/secret.txt".to_string(),
         "/grid/%2E%2E%2Fsecret.txt".to_string(),
         "/grid/..%5c..%5csecret.txt".to_string(),
         "/grid\\..\\secret.txt".to_string(),
-        "/grid/grid.html%00.svg".to_string(),
+        "/out/grid.html%00.svg".to_string(),
         format!("/{}", secret_abs.trim_start_matches('/')),
         secret_abs.clone(),
         format!("/{secret_abs}"),
@@ -333,13 +345,13 @@ fn the_preview_serves_outputs_and_nothing_else() {
     let svg = dir.join("out/grid.svg");
     std::fs::remove_file(&svg).expect("remove svg");
     std::os::unix::fs::symlink(dir.join("secret.txt"), &svg).expect("symlink");
-    let reply = get(addr, "/grid/grid.svg");
+    let reply = get(addr, "/out/grid.svg");
     assert_eq!(reply.status, 404);
     assert!(!reply.text().contains("SECRET"));
 
     // Only GET and HEAD.
     for method in ["POST", "PUT", "DELETE", "OPTIONS"] {
-        let reply = request(addr, method, "/grid/grid.html");
+        let reply = request(addr, method, "/out/grid.html");
         assert_eq!(reply.status, 405, "{method}");
         assert_eq!(reply.header("allow"), Some("GET, HEAD"), "{method}");
     }

@@ -151,6 +151,12 @@ pub(super) struct Fields {
     pub(super) weight: Option<String>,
     pub(super) groups: Vec<String>,
     pub(super) genres: Option<String>,
+    /// `render.labels.text` where the label column repeats: a template that
+    /// makes it unique (`{name} {version}`).
+    pub(super) label_text: Option<String>,
+    /// Why a column was not taken where a reader might expect it (a
+    /// repeating label, free text or links that are no grouping).
+    pub(super) notes: Vec<String>,
 }
 
 /// Columns named on the command line, replacing init's guesses.
@@ -245,6 +251,7 @@ pub(super) fn fields(
     given: &Overrides,
 ) -> Result<Fields, UsageError> {
     let column = |flag: &str, name: &str| named_column(t, path, flag, name);
+    let mut notes: Vec<String> = Vec::new();
     let genres = match &given.genres {
         Some(name) => Some(column("--genres", name)?),
         None => (0..t.columns.len())
@@ -265,12 +272,19 @@ pub(super) fn fields(
             .filter(|&i| i != id && Some(i) != genres)
             .or_else(|| {
                 // The first short text column that is (nearly) unique per row.
-                (0..t.columns.len()).filter(|&i| free(i)).find(|&i| {
-                    let c = &t.columns[i];
-                    c.filled == t.rows()
-                        && c.distinct * 10 >= t.rows() * 9
-                        && c.mean_chars <= LABEL_CHARS
-                })
+                // Not a version: it tells rows apart, it does not name them.
+                let versions = |i: usize| {
+                    let name = &t.columns[i].name;
+                    VERSION_NAMES.iter().any(|v| name.eq_ignore_ascii_case(v))
+                };
+                (0..t.columns.len())
+                    .filter(|&i| free(i) && !versions(i))
+                    .find(|&i| {
+                        let c = &t.columns[i];
+                        c.filled == t.rows()
+                            && c.distinct * 10 >= t.rows() * 9
+                            && c.mean_chars <= LABEL_CHARS
+                    })
             }),
     };
     let weight = match &given.weight {
@@ -307,6 +321,13 @@ pub(super) fn fields(
             // first; at most two levels.
             let mut groups: Vec<usize> = (0..t.columns.len())
                 .filter(|&i| free(i) && Some(i) != label)
+                .filter(|&i| match no_grouping(t, i) {
+                    Some(why) => {
+                        notes.push(format!("not a grouping: {} ({why})", t.columns[i].name));
+                        false
+                    }
+                    None => true,
+                })
                 .filter(|&i| (2..t.rows()).contains(&t.columns[i].distinct))
                 .filter(|&i| !is_index(t, i, id))
                 .collect();
@@ -315,6 +336,10 @@ pub(super) fn fields(
             groups
         }
     };
+    let (label, label_text) = match label {
+        Some(l) if given.label.is_none() => unique_label(t, l, id, &mut notes),
+        other => (other, None),
+    };
     let name = |i: usize| t.columns[i].name.clone();
     Ok(Fields {
         id: name(id),
@@ -322,7 +347,101 @@ pub(super) fn fields(
         weight: weight.map(name),
         groups: groups.into_iter().map(name).collect(),
         genres: genres.map(name),
+        label_text,
+        notes,
     })
+}
+
+/// Why text column `i` is no grouping, if it is not: its values are mostly
+/// distinct (a grouping of one or two rows a group says nothing), long free
+/// text, or links.
+fn no_grouping(t: &Profile<'_>, i: usize) -> Option<String> {
+    let c = &t.columns[i];
+    if is_links(t, i) {
+        return Some("links; offered as the page's link".to_string());
+    }
+    if c.mean_chars > LABEL_CHARS {
+        return Some(format!(
+            "free text, {:.0} characters a row on average",
+            c.mean_chars
+        ));
+    }
+    (c.distinct * 2 > c.filled).then(|| {
+        format!(
+            "{} distinct values in {} rows: mostly one row a group",
+            c.distinct, c.filled
+        )
+    })
+}
+
+/// Share of a column's filled cells that must be `http(s)://` URLs for it
+/// to count as links whatever its name.
+const LINK_SHARE: f64 = 0.8;
+
+/// Column `i` holds links: named so (`url`, `homepage`, ...), or mostly
+/// `http://` and `https://` URLs.
+fn is_links(t: &Profile<'_>, i: usize) -> bool {
+    let c = &t.columns[i];
+    if c.filled == 0 {
+        return false;
+    }
+    let named = LINK_NAMES.iter().any(|n| c.name.eq_ignore_ascii_case(n));
+    let urls = t
+        .cells(i)
+        .filter(|v| v.starts_with("http://") || v.starts_with("https://"))
+        .count();
+    named || urls as f64 >= LINK_SHARE * c.filled as f64
+}
+
+/// Names of a column that tells rows of one name apart, first choices.
+const VERSION_NAMES: [&str; 4] = ["version", "vers", "release", "tag"];
+
+/// The label column `l` if its values are unique; else a template that is
+/// (`{name} {version}`: with a column that tells the rows of one name apart,
+/// a version first), or no label (the ids, unique, are shown), with a note
+/// saying which and why.
+fn unique_label(
+    t: &Profile<'_>,
+    l: usize,
+    id: usize,
+    notes: &mut Vec<String>,
+) -> (Option<usize>, Option<String>) {
+    let c = &t.columns[l];
+    if c.distinct >= t.rows() {
+        return (Some(l), None);
+    }
+    let repeats = format!(
+        "label {} is not unique ({} distinct values in {} rows)",
+        c.name,
+        c.distinct,
+        t.rows()
+    );
+    let tells_apart = |v: usize| {
+        v != l
+            && v != id
+            && t.columns[v].filled == t.rows()
+            && t.columns[v].mean_chars <= LABEL_CHARS
+            && t.table
+                .rows
+                .iter()
+                .map(|r| (cell(r, l), cell(r, v)))
+                .collect::<BTreeSet<_>>()
+                .len()
+                == t.rows()
+    };
+    let by_name = VERSION_NAMES.iter().filter_map(|n| t.table.column(n));
+    let by_shape = (0..t.columns.len()).filter(|&v| !is_links(t, v));
+    match by_name.chain(by_shape).find(|&v| tells_apart(v)) {
+        Some(v) => {
+            let text = format!("{{{}}} {{{}}}", c.name, t.columns[v].name);
+            notes.push(format!("{repeats}: labels read {text}"));
+            (Some(l), Some(text))
+        }
+        None => {
+            notes.push(format!("{repeats}: labels show the id"));
+            (None, None)
+        }
+    }
 }
 
 /// Columns a reader may want in the HTML page (issue 24 item 4), offered
@@ -339,6 +458,10 @@ pub(super) struct PageOffer {
 /// Most tooltip fields offered.
 const OFFERED: usize = 4;
 
+/// Longest mean cell length of a column offered for the tooltip: a line of
+/// it (a one-line summary, not a description).
+const FIELD_CHARS: f64 = 80.0;
+
 /// Names of a column of links.
 const LINK_NAMES: [&str; 6] = ["url", "link", "href", "homepage", "website", "homepage_url"];
 
@@ -351,22 +474,27 @@ pub(super) fn page_offer(t: &Profile<'_>, id: usize, f: &Fields) -> PageOffer {
             || f.groups.iter().any(|g| g == name)
             || f.genres.as_deref() == Some(name)
     };
-    let link = t
-        .columns
-        .iter()
-        .find(|c| c.filled > 0 && LINK_NAMES.iter().any(|n| c.name.eq_ignore_ascii_case(n)))
-        .map(|c| c.name.clone())
+    let link = (0..t.columns.len())
+        .find(|&i| is_links(t, i))
+        .map(|i| t.columns[i].name.clone())
         .filter(|name| !used(name));
-    let free: Vec<&Column> = t
-        .columns
-        .iter()
-        .filter(|c| c.filled > 0 && !used(&c.name) && Some(&c.name) != link.as_ref())
-        .collect();
-    let fields = free
-        .iter()
-        .filter(|c| !c.numeric && 5 * c.distinct >= 4 * c.filled)
+    // Short text the mapping leaves unused that says something of its own
+    // row (a version, a summary line): not numbers, not links, nothing
+    // longer than a line of a tooltip.
+    let fields = (0..t.columns.len())
+        .filter(|&i| {
+            let c = &t.columns[i];
+            c.filled > 0
+                && !used(&c.name)
+                && !c.numeric
+                && !is_links(t, i)
+                && c.mean_chars <= FIELD_CHARS
+                // Mostly distinct: a column of few repeated values is a
+                // grouping the reader left out.
+                && 5 * c.distinct >= 4 * c.filled
+        })
         .take(OFFERED)
-        .map(|c| c.name.clone())
+        .map(|i| t.columns[i].name.clone())
         .collect();
     PageOffer { fields, link }
 }

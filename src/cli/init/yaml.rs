@@ -131,6 +131,15 @@ pub(super) fn config_text(plan: &Plan) -> Result<String, serde_yaml::Error> {
         &1,
         Some("the same seed gives the same picture"),
     )?;
+    if let Some(text) = &plan.fields.label_text {
+        w.text.push_str("render:\n  labels:\n");
+        w.at(
+            "    ",
+            "text",
+            text,
+            Some("the label column repeats: this is unique per row"),
+        )?;
+    }
     w.text.push_str("datasets:\n");
     let (item, d) = ("  - ", "    ");
     w.entry((item, d), "name", &plan.name, None)?;
@@ -164,6 +173,9 @@ pub(super) fn config_text(plan: &Plan) -> Result<String, serde_yaml::Error> {
         );
     } else {
         w.at(f, "groups", &fields.groups, Some("outermost first"))?;
+    }
+    for note in &fields.notes {
+        w.comment(f, note);
     }
     if let Some(genres) = fields
         .genres
@@ -225,6 +237,8 @@ mod tests {
                 weight: None,
                 groups: vec![column.to_owned(), "b".to_owned()],
                 genres: Some(column.to_owned()),
+                label_text: None,
+                notes: Vec::new(),
             },
             strength: None,
             outputs: vec![format!("out/{name}.svg")],

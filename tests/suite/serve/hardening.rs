@@ -91,7 +91,7 @@ fn a_rebinding_host_is_refused() {
     served.expect(&["grid", "wrote"]);
     let addr = served.addr;
     let port = addr.port();
-    for target in ["/", "/grid/grid.html", "/grid/grid.svg", "/_np/events"] {
+    for target in ["/", "/out/grid.html", "/out/grid.svg", "/_np/events"] {
         for host in [
             format!("evil.example:{port}"),
             "evil.example".to_string(),
@@ -120,7 +120,7 @@ fn a_rebinding_host_is_refused() {
     // A request target in absolute form names its host itself.
     let reply = get_as(
         addr,
-        &format!("http://evil.example:{port}/grid/grid.html"),
+        &format!("http://evil.example:{port}/out/grid.html"),
         Some(&addr.to_string()),
     );
     assert!(matches!(reply.status, 421 | 403 | 404), "{}", reply.status);
@@ -132,7 +132,7 @@ fn a_rebinding_host_is_refused() {
         format!("LocalHost:{port}"),
         format!("[::1]:{port}"),
     ] {
-        let reply = get_as(addr, "/grid/grid.svg", Some(&host));
+        let reply = get_as(addr, "/out/grid.svg", Some(&host));
         assert_eq!(reply.status, 200, "Host {host}: {}", reply.text());
     }
     answers(&mut served, "rebinding Hosts");
@@ -287,7 +287,7 @@ fn readers_that_never_read_hold_only_their_own_connections() {
     let pid = served.child.id();
     let fds = open_fds(pid);
     let stuck: Vec<TcpStream> = (0..4)
-        .map(|_| stuck_reader(served.addr, "/grid/grid.svg"))
+        .map(|_| stuck_reader(served.addr, "/out/grid.svg"))
         .collect();
     // Every stuck request has its connection (and its answer under way).
     let started = Instant::now();
@@ -299,7 +299,7 @@ fn readers_that_never_read_hold_only_their_own_connections() {
         std::thread::sleep(Duration::from_millis(20));
     }
     answers(&mut served, "four stuck readers of a 12 MB output");
-    let reply = get(served.addr, "/grid/grid.html");
+    let reply = get(served.addr, "/out/grid.html");
     assert_eq!(reply.status, 200);
     // The server gives up on them once their writes stall: their sockets
     // close (waited for as the daemon's open descriptors falling back).

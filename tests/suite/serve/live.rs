@@ -127,7 +127,7 @@ fn a_served_page_follows_edits_without_reloading() {
         "Page.addScriptToEvaluateOnNewDocument",
         json!({ "source": PROBE }),
     );
-    browser.open(&served.url("/grid/grid.html"));
+    browser.open(&served.url("/out/grid.html"));
     browser.wait_for(
         "the event stream to open",
         "document.querySelector('.np-live-status').textContent",

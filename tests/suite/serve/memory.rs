@@ -91,7 +91,7 @@ fn a_live_page_keeps_one_map_and_each_layout_once_however_many_edits() {
         "Emulation.setEmulatedMedia",
         json!({"features": [{"name": "prefers-reduced-motion", "value": "reduce"}]}),
     );
-    browser.open(&served.url("/grid/grid.html"));
+    browser.open(&served.url("/out/grid.html"));
     wait_true(
         &mut browser,
         "the event stream to open",

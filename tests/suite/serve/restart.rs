@@ -40,7 +40,7 @@ fn an_open_page_catches_up_after_the_daemon_restarts() {
     let addr = served.addr;
     let mut browser = Browser::launch(&chromium, &dir, BUDGET);
     browser.call("Page.enable", json!({}));
-    browser.open(&served.url("/grid/grid.html"));
+    browser.open(&served.url("/out/grid.html"));
     wait_true(
         &mut browser,
         "the event stream to open",
