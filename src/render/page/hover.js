@@ -31,6 +31,21 @@ var tip = part("tooltip");
 var current = -1;
 // The leaf (or found group) drawn on the layer, -1 when none.
 export function hovered() { return current; }
+// After a zoom the cell under a pointer that has not moved is another one,
+// and the browser says the pointer is over it: the hover stays off until
+// the pointer moves (main.js asks `hushed` before drawing a hover).
+var hush = { on: false, x: NaN, y: NaN };
+export function hushHover() { hush.on = true; }
+// Whether a pointer event at (x, y) is to be passed over: the hover is
+// hushed and the pointer is where it was at the zoom. Any other position
+// ends the hush; a position is remembered while not hushed.
+export function hushed(x, y) {
+  if (hush.on && Math.abs(x - hush.x) < 1 && Math.abs(y - hush.y) < 1) { return true; }
+  hush.on = false;
+  hush.x = x;
+  hush.y = y;
+  return false;
+}
 
 // Tabs by the leaves they join, found on first use (a page that is only
 // looked at never pays for them).

@@ -11,7 +11,7 @@ import {
   N, NS, cells, centroid, data, globally, ids, index, isLeaf, leafOf, map, nodeOf, part, partners, pathLabels, retire, root,
   svg, weights
 } from "./model.js";
-import { clear, highlight, hovered, place, placeAt } from "./hover.js";
+import { clear, highlight, hovered, hushed, place, placeAt } from "./hover.js";
 import { forgetUnitPx } from "./lod.js";
 import { isOutside, isZoomed, refitLabels, view, zoomDeepest, zoomInto, zoomOut, zoomToAtOnce } from "./zoom.js";
 import { searchBox } from "./search.js";
@@ -22,11 +22,16 @@ var pointer = "mouse";
 var tapped = -1;
 
 map.addEventListener("pointerdown", function (e) { pointer = e.pointerType || "mouse"; });
+// Where the pointer is, for the hover's hush after a zoom (hover.js): every
+// pointer event on the page tells it.
+["pointerdown", "pointermove"].forEach(function (type) {
+  globally(document, type, function (e) { if (!map.contains(e.target)) { hushed(e.clientX, e.clientY); } });
+});
 // Pointer events, not mouse events: the mouse events a browser sends after
 // a tap must not count as hovering (they would turn the first tap into a
 // zoom).
 map.addEventListener("pointerover", function (e) {
-  if (e.pointerType === "touch") { return; }
+  if (e.pointerType === "touch" || hushed(e.clientX, e.clientY)) { return; }
   pointer = e.pointerType || "mouse";
   var i = leafOf(e.target);
   if (i === hovered()) { return; }
@@ -35,7 +40,11 @@ map.addEventListener("pointerover", function (e) {
   place(e.clientX, e.clientY);
 });
 map.addEventListener("pointermove", function (e) {
-  if (e.pointerType !== "touch" && hovered() >= 0) { place(e.clientX, e.clientY); }
+  if (e.pointerType === "touch" || hushed(e.clientX, e.clientY)) { return; }
+  // The first move after a zoom's hush: the cell under the pointer now.
+  var i = leafOf(e.target);
+  if (i >= 0 && i !== hovered()) { highlight(i, false); }
+  if (hovered() >= 0) { place(e.clientX, e.clientY); }
 });
 map.addEventListener("pointerleave", function (e) {
   if (e.pointerType !== "touch") { clear(); }

@@ -9,7 +9,7 @@
 // for the zoomed extent once the zoom ends, the breadcrumb names the way
 // back and its "up" button (Escape, Backspace) goes one level up.
 import { N, NS, ancestors, cells, centroid, data, full, ids, isLeaf, labels, leafCells, parents, part, root, svg, within } from "./model.js";
-import { clear, highlight, hovered, over } from "./hover.js";
+import { clear, highlight, hovered, hushHover, over } from "./hover.js";
 import {
   LINE_EM, LS, MIN_PX, PAD_EM, dropZoomLabels, fitSize, labelShown, placeZoomLabels, shortestText, textWidth, unitPx
 } from "./lod.js";
@@ -112,6 +112,7 @@ export function zoomTo(g, leaf) {
   var wasCurrent = hovered(), ring = over.querySelector(".np-ring-outer") !== null;
   setViewTo(g, leaf, box);
   clear();
+  hushHover();
   dropZoomLabels();
   setOutside(g);
   leafCells.forEach(function (i) {
