@@ -7,7 +7,9 @@
 // focus ring. So a hover repaints that small layer only, whatever the size of
 // the map, and tabs, labels and markers of the other cells are dimmed with
 // them.
-import { EMPTY, NS, cells, data, ids, index, isLeaf, map, near, part, partners, pathLabels, root, svg, weights } from "./model.js";
+import {
+  EMPTY, NS, cells, data, ids, index, isLeaf, labels, map, near, parents, part, partners, pathLabels, root, svg, weights
+} from "./model.js";
 import { labelFor } from "./lod.js";
 
 export const over = svg.cloneNode(false);
