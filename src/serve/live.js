@@ -67,7 +67,7 @@ document.body.classList.add("np-live-docked");
 document.documentElement.setAttribute("data-np-live", "");
 // The map fits itself to the window on a resize (page/main.js): the
 // panel's width changes what is left for it.
-panel.addEventListener("toggle", function () { window.dispatchEvent(new Event("resize")); });
+panel.addEventListener("toggle", function () { window.dispatchEvent(new window.Event("resize")); });
 
 var banner = document.createElement("div");
 banner.className = "np-live-error";

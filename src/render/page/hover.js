@@ -36,7 +36,7 @@ export function hovered() { return current; }
 // After a zoom the cell under a pointer that has not moved is another one,
 // and the browser says the pointer is over it: the hover stays off until
 // the pointer moves (main.js asks `hushed` before drawing a hover).
-var hush = { on: false, x: NaN, y: NaN };
+var hush = { on: false, x: -1e9, y: -1e9 };
 export function hushHover() { hush.on = true; }
 // Whether a pointer event at (x, y) is to be passed over: the hover is
 // hushed and the pointer is where it was at the zoom. Any other position

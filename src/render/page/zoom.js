@@ -15,6 +15,15 @@ import {
 } from "./lod.js";
 
 var crumbs = part("crumbs");
+// The one-level-up control, beside the breadcrumb while zoomed.
+var up = document.createElement("button");
+up.type = "button";
+up.className = "np-up";
+up.textContent = "\u2191 Up";
+up.title = "Up one level (Backspace)";
+up.setAttribute("aria-label", "Up one level");
+up.hidden = true;
+crumbs.parentNode.insertBefore(up, crumbs);
 // The view: a group, and optionally a leaf of it shown larger still. Only
 // this file changes it (main.js reads it).
 export const view = { node: 0, leaf: -1, box: full };
@@ -160,16 +169,7 @@ export function zoomOut() {
 
 function drawCrumbs() {
   while (crumbs.firstChild) { crumbs.removeChild(crumbs.firstChild); }
-  if (isZoomed()) {
-    var up = document.createElement("button");
-    up.type = "button";
-    up.className = "np-up";
-    up.textContent = "\u2191 Up";
-    up.title = "Up one level (Backspace)";
-    up.setAttribute("aria-label", "Up one level");
-    up.addEventListener("click", zoomOut);
-    crumbs.appendChild(up);
-  }
+  up.hidden = !isZoomed();
   var path = ancestors(view.node);
   if (view.leaf >= 0) { path.push(view.leaf); }
   path.forEach(function (k, n) {
@@ -189,6 +189,7 @@ function drawCrumbs() {
     crumbs.appendChild(b);
   });
 }
+up.addEventListener("click", function () { zoomOut(); });
 
 // Whether group g is worth a zoom step from the current view.
 function gain(g) {
