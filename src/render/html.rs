@@ -232,71 +232,88 @@ fn page_key(svg: &str, data: &str) -> String {
 /// Groups shown in the legend before the rest fold away behind a button.
 const LEGEND_SHOWN: usize = 12;
 
-/// The legend as an HTML list: the glyph keys and the group swatches, the
-/// groups past [`LEGEND_SHOWN`] in a disclosure.
+/// One legend entry as a list item; a group's swatch carries the group's
+/// id, for the page's script to highlight and zoom to.
+fn legend_entry(item: &LegendItem) -> String {
+    let glyph = match item {
+        LegendItem::Swatch { color, .. } => {
+            format!("<span class=\"np-swatch\" style=\"background:{color}\"></span>")
+        }
+        LegendItem::Tab => "<svg class=\"np-glyph\" viewBox=\"0 0 20 20\" aria-hidden=\"true\">\
+            <rect width=\"10\" height=\"20\" fill=\"#9c9c9c\"/><rect x=\"10\" width=\"10\" height=\"20\" fill=\"#cfcfcf\"/>\
+            <polygon points=\"9.6,6.8 15.2,4.8 15.2,15.2 9.6,13.2\" fill=\"#9c9c9c\" stroke=\"#fff\" stroke-width=\"1.2\"/></svg>"
+            .to_owned(),
+        LegendItem::Unlinked => "<svg class=\"np-glyph\" viewBox=\"0 0 20 20\" aria-hidden=\"true\">\
+            <circle cx=\"10\" cy=\"10\" r=\"8\" fill=\"#fff\" stroke=\"#d62728\" stroke-width=\"2.4\"/></svg>"
+            .to_owned(),
+        LegendItem::Scale {
+            field,
+            low,
+            high,
+            stops,
+        } => {
+            // The bar between its two ends, as CSS (no ids to collide
+            // between two maps in one document).
+            let css: Vec<String> = stops.iter().map(|c| c.to_string()).collect();
+            return format!(
+                "<li class=\"np-legend-item np-legend-scale\"><span class=\"np-legend-text\">{}: {}</span>\
+                 <span class=\"np-scale-bar\" style=\"background:linear-gradient(to right,{})\"></span>\
+                 <span class=\"np-legend-text\">{}</span></li>\n",
+                escape(field),
+                escape(low),
+                css.join(","),
+                escape(high)
+            );
+        }
+        _ => String::new(),
+    };
+    let group = match item {
+        LegendItem::Swatch {
+            group: Some(id), ..
+        } => format!(" data-id=\"{}\"", escape(id)),
+        _ => String::new(),
+    };
+    format!(
+        "<li class=\"np-legend-item\"{group}>{glyph}<span class=\"np-legend-text\">{}</span></li>\n",
+        escape(&item.text())
+    )
+}
+
+/// The legend as an HTML list: the glyph keys and the first
+/// [`LEGEND_SHOWN`] group swatches; past them, a disclosure that opens the
+/// full list of groups, with a box to filter it (issue 33).
 fn legend_html(items: &[LegendItem], key: &str) -> String {
     if items.is_empty() {
         return String::new();
     }
-    let entry = |item: &LegendItem| -> String {
-        let glyph = match item {
-            LegendItem::Swatch { color, .. } => {
-                format!("<span class=\"np-swatch\" style=\"background:{color}\"></span>")
-            }
-            LegendItem::Tab => "<svg class=\"np-glyph\" viewBox=\"0 0 20 20\" aria-hidden=\"true\">\
-                <rect width=\"10\" height=\"20\" fill=\"#9c9c9c\"/><rect x=\"10\" width=\"10\" height=\"20\" fill=\"#cfcfcf\"/>\
-                <polygon points=\"9.6,6.8 15.2,4.8 15.2,15.2 9.6,13.2\" fill=\"#9c9c9c\" stroke=\"#fff\" stroke-width=\"1.2\"/></svg>"
-                .to_owned(),
-            LegendItem::Unlinked => "<svg class=\"np-glyph\" viewBox=\"0 0 20 20\" aria-hidden=\"true\">\
-                <circle cx=\"10\" cy=\"10\" r=\"8\" fill=\"#fff\" stroke=\"#d62728\" stroke-width=\"2.4\"/></svg>"
-                .to_owned(),
-            LegendItem::Scale {
-                field,
-                low,
-                high,
-                stops,
-            } => {
-                // The bar between its two ends, as CSS (no ids to collide
-                // between two maps in one document).
-                let css: Vec<String> = stops.iter().map(|c| c.to_string()).collect();
-                return format!(
-                    "<li class=\"np-legend-item np-legend-scale\"><span class=\"np-legend-text\">{}: {}</span>\
-                     <span class=\"np-scale-bar\" style=\"background:linear-gradient(to right,{})\"></span>\
-                     <span class=\"np-legend-text\">{}</span></li>\n",
-                    escape(field),
-                    escape(low),
-                    css.join(","),
-                    escape(high)
-                );
-            }
-            _ => String::new(),
-        };
-        format!(
-            "<li class=\"np-legend-item\">{glyph}<span class=\"np-legend-text\">{}</span></li>\n",
-            escape(&item.text())
-        )
-    };
     let groups = items
         .iter()
         .filter(|i| matches!(i, LegendItem::Swatch { .. }))
         .count();
+    let fold = groups > LEGEND_SHOWN + 1;
     let mut out = format!("<ul class=\"np-legend\" id=\"{key}-legend\" aria-label=\"Legend\">\n");
     let mut shown_groups = 0;
-    let mut rest = String::new();
+    let mut all = String::new();
     for item in items {
         if matches!(item, LegendItem::Swatch { .. }) {
             shown_groups += 1;
-            if shown_groups > LEGEND_SHOWN && groups > LEGEND_SHOWN + 1 {
-                rest.push_str(&entry(item));
-                continue;
+            if fold {
+                all.push_str(&legend_entry(item));
+                if shown_groups > LEGEND_SHOWN {
+                    continue;
+                }
             }
         }
-        out.push_str(&entry(item));
+        out.push_str(&legend_entry(item));
     }
-    if !rest.is_empty() {
+    if fold {
         let more = LegendItem::More(groups - LEGEND_SHOWN).text();
         out.push_str(&format!(
-            "<li class=\"np-legend-more\"><details><summary>{}</summary>\n<ul class=\"np-legend\">\n{rest}</ul></details></li>\n",
+            "<li class=\"np-legend-more\"><details><summary>{}</summary>\n<div class=\"np-legend-all\">\
+             <input type=\"search\" class=\"np-legend-filter\" id=\"{key}-legend-filter\" placeholder=\"Filter {groups} groups\" \
+             aria-label=\"Filter the groups\" autocomplete=\"off\" spellcheck=\"false\">\n\
+             <ul class=\"np-legend np-legend-list\" aria-label=\"All {groups} groups\">\n{all}</ul>\
+             <p class=\"np-legend-none\" hidden>No group matches.</p></div></details></li>\n",
             escape(&more)
         ));
     }

@@ -19,6 +19,9 @@ pub enum LegendItem {
         color: Rgb,
         /// The group's label (any text; escaped).
         label: String,
+        /// The group's node id, when the swatch stands for one (the page's
+        /// legend hover-highlights and zooms to it).
+        group: Option<String>,
     },
     /// The interlocking tab drawn on shared edges of constrained neighbours.
     Tab,
@@ -298,6 +301,7 @@ mod tests {
         LegendItem::Swatch {
             color: Rgb::new(1, 2, 3),
             label: label.to_string(),
+            group: None,
         }
     }
 

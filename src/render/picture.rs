@@ -561,6 +561,7 @@ pub(crate) fn legend_items(
             items.push(LegendItem::Swatch {
                 color: color_by::MISSING,
                 label: format!("no {} value", a.field),
+                group: None,
             });
         }
         return items;
@@ -621,6 +622,7 @@ pub(crate) fn legend_items(
         items.push(LegendItem::Swatch {
             color: colors[g].unwrap_or(super::palette::TABLEAU10[0]),
             label,
+            group: Some(id.clone()),
         });
     }
     items

@@ -11,7 +11,8 @@
 // last good picture until the next good one, or until the config reloads. A
 // small panel gives the last update's stability figures (as `eval --previous`
 // defines them: leaf centroid displacement as a share of the canvas diagonal,
-// mean and largest; realised constraints kept). The morph is
+// mean and largest; realised constraints kept), docked beside the map and
+// folded by a click. The morph is
 // src/render/page/history.js's, imported (both bundled by
 // src/render/page/bundle.rs into the one script src/serve/mod.rs serves).
 //
@@ -46,19 +47,27 @@ function container() { return document.querySelector(".nptreemap"); }
 function pictureOf(c) { return c ? c.querySelector(".np-map > svg:not(.np-hover)") : null; }
 
 // ---- the panel: status, figures ----
-var panel = document.createElement("div");
+// Docked beside the map (under it on a narrow window; live.css), never over
+// it or the tooltip; a click on its status line folds the figures away.
+var panel = document.createElement("details");
 panel.className = "np-live-panel";
-panel.setAttribute("role", "status");
-var statusLine = document.createElement("div");
+panel.open = true;
+var statusLine = document.createElement("summary");
 statusLine.className = "np-live-status";
+statusLine.setAttribute("role", "status");
 statusLine.textContent = "live: connecting";
 var figuresLine = document.createElement("div");
 figuresLine.className = "np-live-figures";
+figuresLine.setAttribute("aria-live", "polite");
 figuresLine.textContent = "no update yet";
 panel.appendChild(statusLine);
 panel.appendChild(figuresLine);
 document.body.appendChild(panel);
+document.body.classList.add("np-live-docked");
 document.documentElement.setAttribute("data-np-live", "");
+// The map fits itself to the window on a resize (page/main.js): the
+// panel's width changes what is left for it.
+panel.addEventListener("toggle", function () { window.dispatchEvent(new window.Event("resize")); });
 
 var banner = document.createElement("div");
 banner.className = "np-live-error";

@@ -7,12 +7,14 @@
 //! zoom and its labels, the search, touch, the focus ring, the HTML legend on
 //! a phone, and that the page loads nothing from the network and logs no
 //! error (`explore.rs` holds the exploring checks of issue 24, `reach.rs`
-//! the three-zoom reach of a leaf's label on a bigger map).
+//! the three-zoom reach of a leaf's label on a bigger map, `drill.rs` the
+//! legend's full list, the drill-down and the phone's header of issue 33).
 //!
 //! Without Chromium the test reports itself skipped, unless
 //! `NPTREEMAP_REQUIRE_BROWSER=1` (set by CI) makes that a failure.
 
 pub(crate) mod cdp;
+mod drill;
 mod explore;
 mod fields;
 mod reach;
@@ -313,6 +315,11 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
     explore::legend_is_readable_on_a_phone(&mut browser, &countries.url);
     explore::focus_ring_differs_from_partners(&mut browser, &countries);
     explore::hover_dims_the_tabs_on_screen(&mut browser, &countries);
+    // Issue 33: the legend's full list, the drill-down, the phone's header.
+    let (drill_url, drill_html) = drill::drill_map(&dir);
+    drill::legend_lists_filters_and_zooms(&mut browser, &drill_url, &drill_html);
+    drill::drill_down_and_up(&mut browser, &drill_url);
+    drill::map_near_the_top_on_a_phone(&mut browser, &drill_url);
     // Issue 24 items 4 and 5: the reader's own columns and colours.
     let fields_html = fields::fields_map(&dir);
     fields::tooltip_shows_the_configured_fields(&mut browser, &fields_html);

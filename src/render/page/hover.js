@@ -7,7 +7,9 @@
 // focus ring. So a hover repaints that small layer only, whatever the size of
 // the map, and tabs, labels and markers of the other cells are dimmed with
 // them.
-import { EMPTY, NS, cells, data, ids, index, isLeaf, labels, map, near, parents, part, partners, pathLabels, root, svg, weights } from "./model.js";
+import {
+  EMPTY, NS, cells, data, ids, index, isLeaf, labels, map, near, parents, part, partners, pathLabels, root, svg, weights
+} from "./model.js";
 import { labelFor } from "./lod.js";
 
 export const over = svg.cloneNode(false);
@@ -31,6 +33,21 @@ var tip = part("tooltip");
 var current = -1;
 // The leaf (or found group) drawn on the layer, -1 when none.
 export function hovered() { return current; }
+// After a zoom the cell under a pointer that has not moved is another one,
+// and the browser says the pointer is over it: the hover stays off until
+// the pointer moves (main.js asks `hushed` before drawing a hover).
+var hush = { on: false, x: -1e9, y: -1e9 };
+export function hushHover() { hush.on = true; }
+// Whether a pointer event at (x, y) is to be passed over: the hover is
+// hushed and the pointer is where it was at the zoom. Any other position
+// ends the hush; a position is remembered while not hushed.
+export function hushed(x, y) {
+  if (hush.on && Math.abs(x - hush.x) < 1 && Math.abs(y - hush.y) < 1) { return true; }
+  hush.on = false;
+  hush.x = x;
+  hush.y = y;
+  return false;
+}
 
 // Tabs by the leaves they join, found on first use (a page that is only
 // looked at never pays for them).

@@ -3,9 +3,10 @@
 // the view shows part of the map z times larger, every leaf in view gets the
 // label the picture would give it at that scale, by the picture's rules: the
 // largest size at which the text fits in the cell around its centroid, shown
-// when it reaches the picture's minimum size on screen (cut with an ellipsis
-// after at least four characters when the whole text does not), never above
-// the picture's maximum. The group names of the two levels below the view are
+// when it reaches the picture's minimum size on screen (on two lines at a
+// word or path break when one line does not fit, cut with an ellipsis after
+// at least four characters only when neither does), never above the
+// picture's maximum. Placed again after every zoom and resize. The group names of the two levels below the view are
 // drawn large and light. Text widths are measured by the browser in the
 // labels' own font. Labels stay SVG text, so the browser's find (Ctrl-F) sees
 // them.
@@ -94,7 +95,23 @@ export function shortestText(i) {
   return chars.length <= 5 ? labels[i] : chars.slice(0, 4).join("").replace(/\s+$/, "") + "\u2026";
 }
 
-// What leaf i shows at zoom z: { text, size, x, y } or null.
+// The two lines of `text` broken at a space or after a path separator
+// (`.`, `/`, `:`, `-`, `_`) nearest its middle, or null when it has none.
+function twoLines(text) {
+  var chars = Array.from(text), best = -1, bestGap = Infinity;
+  for (var k = 1; k < chars.length - 1; k++) {
+    var at = chars[k] === " " ? k : (/[.\/:\-_]/.test(chars[k - 1]) ? k : -1);
+    if (at < 0) { continue; }
+    var gap = Math.abs(chars.length / 2 - at);
+    if (gap < bestGap) { bestGap = gap; best = at; }
+  }
+  if (best < 0) { return null; }
+  var a = chars.slice(0, best).join("").replace(/\s+$/, ""), b = chars.slice(best).join("").replace(/^\s+/, "");
+  return a && b ? [a, b] : null;
+}
+
+// What leaf i shows at zoom z: { text, size, x, y } (text an array of two
+// lines when broken) or null.
 function fitLeaf(i, z, range) {
   if (!LS) { return null; }
   var text = labels[i];
@@ -102,6 +119,11 @@ function fitLeaf(i, z, range) {
   var c = centroid(i);
   var r = range || sizeRange(z), min = r[0], max = r[1];
   var size = fitSize(i, c[0], c[1], textWidth(text) + 2 * PAD_EM, LINE_EM + PAD_EM);
+  var lines = size < min ? twoLines(text) : null;
+  if (lines) {
+    var two = fitSize(i, c[0], c[1], Math.max(textWidth(lines[0]), textWidth(lines[1])) + 2 * PAD_EM, 2 * LINE_EM + PAD_EM);
+    if (two >= min) { return { text: lines, size: Math.min(two, max), x: c[0], y: c[1] }; }
+  }
   if (size < min) {
     // The longest prefix of at least four characters that fits with "…".
     var chars = Array.from(text), lo = 4, hi = chars.length - 1, found = null;
@@ -127,13 +149,25 @@ export function labelShown(i, z) {
   return !!staticLabel(i);
 }
 
+// A label centred on (x, y): one line, or two (an array) a line apart.
 function textAt(x, y, size, text, halo) {
   var t = document.createElementNS(NS, "text");
   t.setAttribute("x", x.toFixed(2));
-  t.setAttribute("y", (y + 0.35 * size).toFixed(2));
   t.setAttribute("font-size", size.toFixed(2));
   if (halo) { t.setAttribute("stroke-width", (0.2 * size).toFixed(2)); }
-  t.textContent = text;
+  if (typeof text === "string") {
+    t.setAttribute("y", (y + 0.35 * size).toFixed(2));
+    t.textContent = text;
+    return t;
+  }
+  t.setAttribute("y", (y - 0.25 * size).toFixed(2));
+  text.forEach(function (line, k) {
+    var s = document.createElementNS(NS, "tspan");
+    s.setAttribute("x", x.toFixed(2));
+    if (k > 0) { s.setAttribute("dy", LINE_EM + "em"); }
+    s.textContent = line;
+    t.appendChild(s);
+  });
   return t;
 }
 

@@ -1,28 +1,37 @@
 // The page's events and start: the entry module of the page's script.
 // Bundled by src/render/page/bundle.rs; what it imports runs before it. Mouse
 // and pen hover, keyboard focus, touch (a first tap shows the tooltip, a
-// second tap on the same cell zooms), clicks and keys for the zoom, the
-// optimisation slider, the unrealised-links toggle, the picture's size within
-// the window, and the mark `nptreemap-ready` once everything answers.
+// second tap on the same cell zooms), clicks and keys for the zoom (a click
+// one level down; shift-, alt- or double click to the deepest group under
+// the pointer; Escape or Backspace one level up), the optimisation slider,
+// the unrealised-links toggle, the picture's size within the window (and the
+// zoom's labels fitted again to it), and the mark `nptreemap-ready` once
+// everything answers.
 import {
   N, NS, cells, centroid, data, globally, ids, index, isLeaf, leafOf, map, nodeOf, part, partners, pathLabels, retire, root,
   svg, weights
 } from "./model.js";
-import { clear, highlight, hovered, place, placeAt } from "./hover.js";
+import { clear, highlight, hovered, hushed, place, placeAt } from "./hover.js";
 import { forgetUnitPx } from "./lod.js";
-import { isOutside, view, zoomInto, zoomOut, zoomToAtOnce } from "./zoom.js";
+import { isOutside, isZoomed, refitLabels, view, zoomDeepest, zoomInto, zoomOut, zoomToAtOnce } from "./zoom.js";
 import { searchBox } from "./search.js";
+import { legendControls } from "./legend.js";
 import { showLink } from "./link.js";
 
 var pointer = "mouse";
 var tapped = -1;
 
 map.addEventListener("pointerdown", function (e) { pointer = e.pointerType || "mouse"; });
+// Where the pointer is, for the hover's hush after a zoom (hover.js): every
+// pointer event on the page tells it.
+["pointerdown", "pointermove"].forEach(function (type) {
+  globally(document, type, function (e) { if (!map.contains(e.target)) { hushed(e.clientX, e.clientY); } });
+});
 // Pointer events, not mouse events: the mouse events a browser sends after
 // a tap must not count as hovering (they would turn the first tap into a
 // zoom).
 map.addEventListener("pointerover", function (e) {
-  if (e.pointerType === "touch") { return; }
+  if (e.pointerType === "touch" || hushed(e.clientX, e.clientY)) { return; }
   pointer = e.pointerType || "mouse";
   var i = leafOf(e.target);
   if (i === hovered()) { return; }
@@ -31,7 +40,11 @@ map.addEventListener("pointerover", function (e) {
   place(e.clientX, e.clientY);
 });
 map.addEventListener("pointermove", function (e) {
-  if (e.pointerType !== "touch" && hovered() >= 0) { place(e.clientX, e.clientY); }
+  if (e.pointerType === "touch" || hushed(e.clientX, e.clientY)) { return; }
+  // The first move after a zoom's hush: the cell under the pointer now.
+  var i = leafOf(e.target);
+  if (i >= 0 && i !== hovered()) { highlight(i, false); }
+  if (hovered() >= 0) { place(e.clientX, e.clientY); }
 });
 map.addEventListener("pointerleave", function (e) {
   if (e.pointerType !== "touch") { clear(); }
@@ -69,8 +82,11 @@ map.addEventListener("click", function (e) {
     return;
   }
   tapped = -1;
-  if (isLeaf(i)) { showLink(i); }
-  zoomInto(i);
+  // The second click of a double click goes on to the deepest group (the
+  // first went one level down); a third and more do nothing.
+  if (e.detail > 2) { return; }
+  if (e.detail !== 2 && isLeaf(i)) { showLink(i); }
+  if (e.shiftKey || e.altKey || e.detail === 2) { zoomDeepest(i, e.detail === 2); } else { zoomInto(i); }
 });
 // A tap elsewhere on the page ends the touch hover.
 globally(document, "click", function (e) {
@@ -81,7 +97,22 @@ map.addEventListener("keydown", function (e) {
   if ((e.key === "Enter" || e.key === " ") && i >= 0) { e.preventDefault(); showLink(i); zoomInto(i); }
 });
 root.addEventListener("keydown", function (e) {
-  if (e.key === "Escape" && (view.node !== 0 || view.leaf >= 0) && !e.defaultPrevented) { zoomOut(); }
+  if (e.key === "Escape" && isZoomed() && !e.defaultPrevented) { zoomOut(); }
+});
+// Backspace goes up one level, from anywhere in the map's container but a
+// text field, or from the page itself when this is its first map (a click
+// on the map focuses a cell, so the key usually starts inside).
+function typing(el) {
+  return !!el && (el.isContentEditable || /^(INPUT|TEXTAREA|SELECT)$/.test(el.tagName));
+}
+globally(document, "keydown", function (e) {
+  if (e.key !== "Backspace" || e.defaultPrevented || e.altKey || e.ctrlKey || e.metaKey || !isZoomed()) { return; }
+  var t = e.target;
+  var mine = root.contains(t) || ((t === document.body || t === document.documentElement) &&
+    document.querySelector(".nptreemap") === root);
+  if (!mine || typing(t)) { return; }
+  e.preventDefault();
+  zoomOut();
 });
 
 // The optimisation slider: frame k drawn over the map, the last position
@@ -153,9 +184,12 @@ root.addEventListener("keydown", function (e) {
     var room = Math.max(240, window.innerHeight - above - 16);
     map.style.maxWidth = Math.round(room * aspect) + "px";
     forgetUnitPx();
+    refitLabels();
   }
   fit();
   globally(window, "resize", fit);
+  // The legend's and the title's toggles change what stands above the map.
+  legendControls(fit);
 })();
 
 // glue: issue 25. The live preview (src/serve/live.js) replaces this map

@@ -38,6 +38,7 @@ fn sample_data(dataset: &Dataset, title: &str) -> HtmlData {
             LegendItem::Swatch {
                 color: crate::render::Rgb::new(1, 2, 3),
                 label: HOSTILE.to_owned(),
+                group: Some(HOSTILE.to_owned()),
             },
         ],
         unit: " KiB".to_owned(),
@@ -215,10 +216,20 @@ fn many_groups_fold_into_the_legend_disclosure() {
         .map(|k| LegendItem::Swatch {
             color: crate::render::Rgb::new(k, k, k),
             label: format!("group {k}"),
+            group: Some(format!("g{k}")),
         })
         .collect();
     let text = legend_html(&items, "np-00000000");
-    assert_eq!(text.matches("class=\"np-legend-item\"").count(), 20);
+    // The first twelve, then every group in the full list.
+    assert_eq!(
+        text.matches("class=\"np-legend-item\"").count(),
+        LEGEND_SHOWN + 20
+    );
+    let all = &text[text.find("np-legend-list").expect("the full list")..];
+    for k in 0..20 {
+        assert!(all.contains(&format!("data-id=\"g{k}\"")), "g{k} in {all}");
+    }
+    assert!(text.contains("class=\"np-legend-filter\""));
     assert!(text.contains(&format!("and {} more groups", 20 - LEGEND_SHOWN)));
     let shown = &text[..text.find("<details>").expect("disclosure")];
     assert_eq!(shown.matches("class=\"np-swatch\"").count(), LEGEND_SHOWN);

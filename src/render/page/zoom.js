@@ -1,17 +1,29 @@
 // The zoom: the view (a group, or a leaf's surroundings) and its breadcrumb.
 // A module of the page's script (bundled by src/render/page/bundle.rs): a
-// click (Enter on a focused cell, a breadcrumb, a search) shows a group, or a
-// leaf's surroundings, as large as the picture allows. The cells outside the
+// click (Enter on a focused cell, a breadcrumb, a search, a legend entry)
+// shows a group, or a leaf's surroundings, as large as the picture allows;
+// a click goes one level down, a shift- or alt-click or a double click
+// straight to the deepest group under the pointer. The cells outside the
 // view's group dim under one veil with a hole in its shape (one element,
-// whatever the map's size), labels are placed for the zoomed extent, the
-// breadcrumb names the way back (Escape goes one step up).
+// whatever the map's size), the hover veil is cleared, labels are placed
+// for the zoomed extent once the zoom ends, the breadcrumb names the way
+// back and its "up" button (Escape, Backspace) goes one level up.
 import { N, NS, ancestors, cells, centroid, data, full, ids, isLeaf, labels, leafCells, parents, part, root, svg, within } from "./model.js";
-import { clear, highlight, hovered, over } from "./hover.js";
+import { clear, highlight, hovered, hushHover, over } from "./hover.js";
 import {
   LINE_EM, LS, MIN_PX, PAD_EM, dropZoomLabels, fitSize, labelShown, placeZoomLabels, shortestText, textWidth, unitPx
 } from "./lod.js";
 
 var crumbs = part("crumbs");
+// The one-level-up control, beside the breadcrumb while zoomed.
+var up = document.createElement("button");
+up.type = "button";
+up.className = "np-up";
+up.textContent = "\u2191 Up";
+up.title = "Up one level (Backspace)";
+up.setAttribute("aria-label", "Up one level");
+up.hidden = true;
+crumbs.parentNode.insertBefore(up, crumbs);
 // The view: a group, and optionally a leaf of it shown larger still. Only
 // this file changes it (main.js reads it).
 export const view = { node: 0, leaf: -1, box: full };
@@ -28,6 +40,9 @@ var MIN_GAIN = 1.5;
 var MAX_ZOOM = 400;
 // Set while the live preview restores a view (no animation then).
 var instantZoom = false;
+// The running zoom animation's number: a newer zoom ends an older one, so
+// that only the last places its labels.
+var animation = 0;
 
 leafCells.forEach(function (i) { cells[i].setAttribute("tabindex", "0"); focusable[i] = 1; });
 
@@ -42,9 +57,11 @@ function animate(from, to, done) {
   // go straight to the end.
   var still = instantZoom || leafCells.length > 3000 ||
     (window.matchMedia && window.matchMedia("(prefers-reduced-motion: reduce)").matches);
+  var mine = ++animation;
   if (still) { setView(to); done(); return; }
   var start = null;
   function step(t) {
+    if (mine !== animation) { return; }
     if (start === null) { start = t; }
     var k = Math.min(1, (t - start) / 250);
     var e = k < 0.5 ? 2 * k * k : 1 - Math.pow(-2 * k + 2, 2) / 2;
@@ -99,9 +116,12 @@ export function zoomTo(g, leaf) {
   if (g < 0 || g >= N) { return; }
   var box = leaf >= 0 ? leafBox(leaf, g) : (g === 0 ? full : (data.nodes[g].zoom || full));
   var from = svg.getAttribute("viewBox").split(/[\s,]+/).map(Number);
+  // Only a keyboard focus (its ring) is drawn again after the zoom: the
+  // pointer's hover is cleared, and comes back when the pointer moves.
   var wasCurrent = hovered(), ring = over.querySelector(".np-ring-outer") !== null;
   setViewTo(g, leaf, box);
   clear();
+  hushHover();
   dropZoomLabels();
   setOutside(g);
   leafCells.forEach(function (i) {
@@ -117,7 +137,7 @@ export function zoomTo(g, leaf) {
   drawCrumbs();
   animate(from, box, function () {
     if (zoomed) { placeZoomLabels(box, zoomOf(box), g, layersBefore()); }
-    if (wasCurrent >= 0 && document.activeElement === cells[wasCurrent]) { highlight(wasCurrent, ring); }
+    if (ring && wasCurrent >= 0 && document.activeElement === cells[wasCurrent]) { highlight(wasCurrent, ring); }
     if (window.performance && performance.mark) { performance.mark("nptreemap-zoomed"); }
   });
 }
@@ -128,6 +148,15 @@ export function zoomToAtOnce(g, leaf) {
   zoomTo(g, leaf);
   instantZoom = false;
 }
+
+// The labels placed again for the current view (the picture's size on
+// screen changed).
+export function refitLabels() {
+  if (root.classList.contains("np-zoomed")) { placeZoomLabels(view.box, zoomOf(view.box), view.node, layersBefore()); }
+}
+
+// Whether the view is zoomed in (there is a level to go up to).
+export function isZoomed() { return view.node !== 0 || view.leaf >= 0; }
 
 // One step back: from a leaf to its group, from a group to the group above
 // it that is worth zooming into (or the whole map).
@@ -140,11 +169,13 @@ export function zoomOut() {
 
 function drawCrumbs() {
   while (crumbs.firstChild) { crumbs.removeChild(crumbs.firstChild); }
+  up.hidden = !isZoomed();
   var path = ancestors(view.node);
   if (view.leaf >= 0) { path.push(view.leaf); }
   path.forEach(function (k, n) {
     if (n > 0) { crumbs.appendChild(document.createTextNode(" \u203a ")); }
     var b = document.createElement("button");
+    b.className = "np-crumb";
     b.type = "button";
     b.textContent = labels[k];
     b.setAttribute("data-id", ids[k]);
@@ -158,6 +189,7 @@ function drawCrumbs() {
     crumbs.appendChild(b);
   });
 }
+up.addEventListener("click", function () { zoomOut(); });
 
 // Whether group g is worth a zoom step from the current view.
 function gain(g) {
@@ -180,12 +212,30 @@ export function zoomInto(i) {
   if (isLeaf(i) && view.leaf !== i && !labelShown(i, zoomOf(view.box))) { zoomTo(view.node, i); }
 }
 
+// The deepest group worth zooming into that holds node i (a leaf's own
+// group first), or the whole map.
+function deepestGroup(i) {
+  var g = isLeaf(i) ? parents[i] : i;
+  while (g > 0 && !data.nodes[g].zoom) { g = parents[g]; }
+  return g < 0 ? 0 : g;
+}
+
+// Straight to the deepest group under the pointer (shift-, alt- or
+// double click on node i); there already, the next step towards i, unless
+// `settled` (the second click of a double click whose first one got there).
+export function zoomDeepest(i, settled) {
+  var g = deepestGroup(i);
+  if (g === view.node || !within(view.node, g)) {
+    if (!settled) { zoomInto(i); }
+    return;
+  }
+  zoomTo(g, -1);
+}
+
 // Straight to node i (the search): its deepest group worth zooming into,
 // then the leaf itself when its label would not show there.
 export function zoomStraightTo(i) {
-  var g = isLeaf(i) ? parents[i] : i;
-  while (g > 0 && !data.nodes[g].zoom) { g = parents[g]; }
-  if (g < 0) { g = 0; }
+  var g = deepestGroup(i);
   var box = g === 0 ? full : data.nodes[g].zoom;
   if (isLeaf(i) && !labelShown(i, zoomOf(box))) {
     setViewTo(g, -1, box);

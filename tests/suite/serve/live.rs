@@ -5,7 +5,8 @@
 //! figures panel fills; with `prefers-reduced-motion` no animation frame is
 //! requested; the page's own history steps back to the previous layout and
 //! ahead to the latest; a bad edit shows its file and line over the last good picture
-//! and goes away on the fix; no security-policy violation is reported; and
+//! and goes away on the fix; no security-policy violation is reported; the
+//! panel sits beside the map at 1280 x 1000, over no cell or tooltip; and
 //! SIGTERM ends the server with the page's stream open. Screenshots of a
 //! morph midway are left in the test's folder (`morph-*.png`) to look at.
 //!
@@ -316,6 +317,80 @@ fn a_served_page_follows_edits_without_reloading() {
         "no security-policy violation"
     );
 
+    panel_beside_the_map(&mut browser);
+
     // SIGTERM with the page's stream open.
     served.terminate();
+}
+
+/// Issue 33, item 5: at 1280 x 1000 the live panel is docked beside the
+/// map: over no cell, and never over the tooltip of a hovered cell, the
+/// cells nearest the panel included; a click on its status folds it.
+fn panel_beside_the_map(browser: &mut Browser) {
+    browser.call(
+        "Emulation.setDeviceMetricsOverride",
+        json!({"width": 1280, "height": 1000, "deviceScaleFactor": 1, "mobile": false}),
+    );
+    browser.settle(200);
+    const OVERLAP: &str = "(function () {
+      var pn = document.querySelector('.np-live-panel').getBoundingClientRect();
+      function meets(b) { return b.left < pn.right && pn.left < b.right && b.top < pn.bottom && pn.top < b.bottom; }
+      var svg = document.querySelector('.nptreemap .np-map > svg:not(.np-hover)');
+      var cells = Array.prototype.filter.call(svg.querySelectorAll('path[data-id]'), function (p) {
+        return meets(p.getBoundingClientRect()); }).map(function (p) { return p.getAttribute('data-id'); });
+      return { panel: [pn.left, pn.top, pn.right, pn.bottom], map: meets(svg.getBoundingClientRect()),
+               cells: cells, open: document.querySelector('.np-live-panel').open };
+    })()";
+    let docked = browser.eval(OVERLAP);
+    assert_eq!(
+        docked["cells"],
+        json!([]),
+        "the panel covers cells: {docked}"
+    );
+    assert_eq!(
+        docked["map"], false,
+        "the panel is beside the map: {docked}"
+    );
+    // Hover the cells whose centres are nearest the panel: the tooltip
+    // shows whole, on top (what the window shows at its corners is the
+    // tooltip's).
+    const NEAREST: &str = "(function () {
+      var pn = document.querySelector('.np-live-panel').getBoundingClientRect();
+      var svg = document.querySelector('.nptreemap .np-map > svg:not(.np-hover)');
+      return Array.prototype.map.call(svg.querySelectorAll('path[data-id]'), function (p) {
+        var b = p.getBoundingClientRect();
+        return [b.left + b.width / 2, b.top + b.height / 2, Math.hypot(b.left + b.width / 2 - pn.left, b.top + b.height / 2 - pn.top)];
+      }).sort(function (a, b) { return a[2] - b[2]; }).slice(0, 4);
+    })()";
+    const TIP: &str = "(function () {
+      var t = document.querySelector('.nptreemap .np-tooltip');
+      if (t.hidden) { return 'hidden'; }
+      var b = t.getBoundingClientRect();
+      t.style.pointerEvents = 'auto';
+      var seen = [[b.left + 2, b.top + 2], [b.right - 2, b.top + 2], [b.left + 2, b.bottom - 2], [b.right - 2, b.bottom - 2]]
+        .map(function (p) { var e = document.elementFromPoint(p[0], p[1]); return !!e && t.contains(e); });
+      t.style.pointerEvents = '';
+      return seen.every(Boolean) ? 'whole' : 'covered ' + JSON.stringify([b.left, b.top, b.right, b.bottom]);
+    })()";
+    let points = browser.eval(NEAREST);
+    for p in points.as_array().expect("points") {
+        let (x, y) = (p[0].as_f64().expect("x"), p[1].as_f64().expect("y"));
+        browser.mouse_move(x, y);
+        browser.wait_for("the tooltip, whole", TIP, |v| {
+            if v == "whole" {
+                Ok(())
+            } else {
+                Err(format!("{v}"))
+            }
+        });
+    }
+    browser.eval("document.querySelector('.np-live-status').click()");
+    browser.settle(200);
+    let folded = browser.eval(OVERLAP);
+    assert_eq!(folded["open"], false, "{folded}");
+    assert_eq!(folded["cells"], json!([]), "{folded}");
+    assert!(
+        folded["panel"][3].as_f64() < docked["panel"][3].as_f64(),
+        "folding makes the panel smaller: {folded} {docked}"
+    );
 }
