@@ -78,7 +78,7 @@ impl Computed {
 
     /// Every node's weight as the picture promises it, when that is not its
     /// value: with `zero_weights: floor`, an item of weight 0 is drawn at
-    /// the floor ([`treemap::drawn_weights`]); `None` when every node is
+    /// the floor (`treemap::drawn_weights`); `None` when every node is
     /// drawn at its value (nothing floored, or hidden instead).
     pub fn drawn_weights(&self) -> Option<Vec<f64>> {
         (self.zero.mode == ZeroWeights::Floor && self.zero.items > 0)

@@ -1,5 +1,5 @@
 //! Items of weight zero (issue 34 item 2): `layout.zero_weights` says what
-//! becomes of them, and [`apply`] is the pure step on a validated dataset,
+//! becomes of them, and [`apply`](crate::layout::zero::apply) is the pure step on a validated dataset,
 //! before preparation and layout, that does it. With
 //! [`ZeroWeights::Hide`] every non-root node of value 0 (an empty file; a
 //! folder of nothing but empty files) leaves the dataset and so has no cell,

@@ -1,5 +1,5 @@
 //! Which text a node's label shows (`render.labels.text`, issue 33 item 1):
-//! the one function every output asks for a node's name ([`display_name`]:
+//! the one function every output asks for a node's name ([`display_name`](crate::render::label_text::display_name):
 //! the SVG and PNG labels, group names and legend, and the page's data, whose
 //! script draws and lists what it is given). Owns the choice of text; may not
 //! measure or place it.
