@@ -319,6 +319,7 @@ fn html_page_reacts_to_a_real_mouse_in_headless_chromium() {
     let (drill_url, drill_html) = drill::drill_map(&dir);
     drill::legend_lists_filters_and_zooms(&mut browser, &drill_url, &drill_html);
     drill::drill_down_and_up(&mut browser, &drill_url);
+    drill::search_finds_a_whole_dotted_id(&mut browser, &drill_url);
     drill::map_near_the_top_on_a_phone(&mut browser, &drill_url);
     // Issue 24 items 4 and 5: the reader's own columns and colours.
     let fields_html = fields::fields_map(&dir);

@@ -12,12 +12,15 @@ import { zoomStraightTo } from "./zoom.js";
 export const searchBox = part("search-box");
 var list = part("matches");
 var MATCHES = 12;
-var lowerLabels = null, lowerPaths = null;
+var lowerLabels = null, lowerPaths = null, lowerIds = null;
 var matches = [], active = -1, found = -1;
 
 function lowerIndex() {
   if (lowerLabels) { return; }
   lowerLabels = labels.map(function (l) { return l.toLowerCase(); });
+  // The ids too: a label may show only the last segment of a path-like id
+  // (`render.labels.text`), and a reader types the whole `a.b.c`.
+  lowerIds = ids.map(function (d) { return String(d).toLowerCase(); });
   lowerPaths = new Array(N);
   for (var i = 0; i < N; i++) {
     // Breadth-first order: the parent's path is there already.
@@ -32,7 +35,8 @@ function search(q) {
   var ranks = [[], [], [], []], total = 0;
   for (var i = 1; i < N; i++) {
     var l = lowerLabels[i], r;
-    if (l === q) { r = 0; } else if (l.lastIndexOf(q, 0) === 0) { r = 1; } else if (l.indexOf(q) >= 0) { r = 2; } else if (lowerPaths[i].indexOf(q) >= 0) { r = 3; } else { continue; }
+    var d = lowerIds[i];
+    if (l === q || d === q) { r = 0; } else if (l.lastIndexOf(q, 0) === 0) { r = 1; } else if (l.indexOf(q) >= 0) { r = 2; } else if (lowerPaths[i].indexOf(q) >= 0 || d.indexOf(q) >= 0) { r = 3; } else { continue; }
     total++;
     if (ranks[r].length < MATCHES) { ranks[r].push(i); }
   }

@@ -358,3 +358,33 @@ pub(super) fn map_near_the_top_on_a_phone(browser: &mut Browser, url: &str) {
         json!({"width": VIEWPORT.0, "height": VIEWPORT.1, "deviceScaleFactor": 1, "mobile": false}),
     );
 }
+
+/// Labels of path-like ids show their last segment (`render.labels.text`,
+/// issue 33 item 1), so the search matches ids as well: typing a module's
+/// whole dotted id lists it first (it found nothing beyond the segment
+/// before).
+pub(super) fn search_finds_a_whole_dotted_id(browser: &mut Browser, url: &str) {
+    let target = "pkg03.sub1.mod2";
+    browser.open(url);
+    let label = browser.eval(&format!(
+        "window.__np_label = (function () {{ var t = document.querySelector('.np-map text[data-of=\"{target}\"]'); return t ? t.textContent : ''; }})()"
+    ));
+    assert!(
+        !label.as_str().unwrap_or("").contains("pkg03"),
+        "the label shows the segment, not the whole id: {label}"
+    );
+    browser.eval("document.querySelector('.np-search-box').focus(); 0");
+    browser.insert_text(target);
+    const FIRST: &str = r##"(function () {
+      var list = document.querySelector(".np-matches");
+      var first = list.querySelector("[role=option]");
+      return { hidden: list.hidden, first: first ? first.getAttribute("data-id") : null };
+    })()"##;
+    browser.wait_for("the dotted id's match", FIRST, |m| {
+        if m["hidden"] == false && m["first"] == target {
+            Ok(())
+        } else {
+            Err(format!("{m}"))
+        }
+    });
+}
