@@ -4,6 +4,7 @@
 //! names the YAML crate. Unknown keys are rejected with their line and column;
 //! relative paths are resolved against the config file's directory.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Deserializer};
@@ -110,6 +111,11 @@ pub struct RenderConfig {
     /// Palette of the top-level groups: `tableau` or `colorblind`. Default: tableau.
     #[serde(deserialize_with = "palette")]
     pub palette: PaletteKind,
+    /// Pinned colours of top-level groups, by the group's id or its label
+    /// (`{Europe: "#1f77b4"}`): a pinned group keeps its colour whatever the
+    /// edit, and the other groups are coloured around it. Default: none.
+    #[serde(deserialize_with = "group_colors")]
+    pub colors: BTreeMap<String, Rgb>,
     /// Canvas background colour, or `none` for transparent. Default: `#ffffff`.
     #[serde(deserialize_with = "background")]
     pub background: Option<Rgb>,
@@ -270,6 +276,20 @@ fn legend_order<'de, D: Deserializer<'de>>(d: D) -> Result<LegendOrder, D::Error
     })
 }
 
+/// `render.colors`: a map of group to colour, each colour parsed here so the
+/// error names the group.
+fn group_colors<'de, D: Deserializer<'de>>(d: D) -> Result<BTreeMap<String, Rgb>, D::Error> {
+    let text: BTreeMap<String, String> = BTreeMap::deserialize(d)?;
+    text.into_iter()
+        .map(|(group, color)| {
+            let rgb = color.parse().map_err(|e| {
+                serde::de::Error::custom(format_args!("colors: {group:?}: {e}"))
+            })?;
+            Ok((group, rgb))
+        })
+        .collect()
+}
+
 fn palette<'de, D: Deserializer<'de>>(d: D) -> Result<PaletteKind, D::Error> {
     let text = String::deserialize(d)?;
     PaletteKind::from_name(&text).ok_or_else(|| {
@@ -288,6 +308,7 @@ impl Default for RenderConfig {
             legend: style.legend,
             legend_order: style.legend_order,
             palette: cells.palette,
+            colors: BTreeMap::new(),
             background: cells.background,
             border_color: DEFAULT_BORDER_COLOR,
             border_width: 0.0,
@@ -976,6 +997,7 @@ impl Config {
                 stroke_width: r.stroke_width,
                 labels: r.labels.style(),
                 palette: r.palette,
+                group_colors: r.colors.clone(),
                 ..defaults.cells
             },
             overlay: OverlayStyle {
@@ -1189,6 +1211,10 @@ mod tests {
             (
                 "render: {palette: rainbow}\n",
                 "line 1, column 9: render: palette: unknown palette",
+            ),
+            (
+                "render: {colors: {Europe: \"#12g\"}}\n",
+                "line 1, column 9: render: colors: \"Europe\": \"#12g\" is not a colour",
             ),
         ] {
             let err = parse(text).expect_err(text).to_string();

@@ -454,6 +454,7 @@ mod tests {
             ("render", "legend", "false", Render),
             ("render", "legend_order", "data", Render),
             ("render", "palette", "colorblind", Render),
+            ("render", "colors", "{x: '#000000'}", Render),
             ("render", "background", "none", Render),
             ("render", "border_color", "'#000000'", Render),
             ("render", "border_width", "2", Render),

@@ -109,6 +109,7 @@ impl DatasetGraph {
         };
         let dataset = self.parse(d, files, key.inputs, &mut cx)?;
         let mut warnings = pipeline::warnings(files, &dataset);
+        warnings.extend(unknown_pins(&dataset, &job.style));
         let mode = job.request.params.zero_weights;
         // Items of weight 0 hidden or kept (issue 34): everything below
         // works on what is drawn.
@@ -424,6 +425,27 @@ impl DatasetGraph {
             })
             .collect()
     }
+}
+
+/// A warning per `render.colors` entry that names no top-level group: a
+/// typo must not pass as a pinned colour silently.
+fn unknown_pins(dataset: &Dataset, style: &Style) -> Vec<String> {
+    let groups = &dataset.node(dataset.root()).children;
+    let known = |key: &str| {
+        groups.iter().any(|&g| {
+            let node = dataset.node(g);
+            node.id == key || node.label == key
+        })
+    };
+    style
+        .cells
+        .group_colors
+        .keys()
+        .filter(|key| !known(key))
+        .map(|key| {
+            format!("render.colors: no top-level group has the id or label {key:?}; that colour is not used")
+        })
+        .collect()
 }
 
 /// A layout error of dataset `d`.

@@ -229,7 +229,12 @@ pub(crate) fn fills(
     adjacent: &[(usize, usize)],
     style: &Style,
 ) -> (Vec<Option<Rgb>>, Option<Applied>) {
-    let mut colors = cell_colors(dataset, adjacent, style.cells.palette);
+    let mut colors = cell_colors(
+        dataset,
+        adjacent,
+        style.cells.palette,
+        &style.cells.group_colors,
+    );
     let applied = style
         .color_by
         .as_ref()

@@ -6,6 +6,7 @@
 //! coordinates, nodes in dataset order.
 
 use nptreemap_formats::Dataset;
+use std::collections::BTreeMap;
 
 use super::label_text::display_name;
 use super::labels::{format_value, place_leaf, LabelStyle, Placed};
@@ -41,6 +42,9 @@ pub struct SvgStyle {
     pub labels: LabelStyle,
     /// The top-level groups' palette. Default: Tableau.
     pub palette: PaletteKind,
+    /// Pinned colours of top-level groups, by id or label
+    /// (`render.colors`); a node's own `color` still wins. Default: none.
+    pub group_colors: BTreeMap<String, Rgb>,
     /// CSS font-family list for labels (kept free of quotes). Default:
     /// `Helvetica, Arial, DejaVu Sans, sans-serif`, a generic stack; PNG output
     /// pins its own font.
@@ -60,6 +64,7 @@ impl Default for SvgStyle {
             stroke_width: 3.0,
             labels: LabelStyle::default(),
             palette: PaletteKind::default(),
+            group_colors: BTreeMap::new(),
             font_family: "Helvetica, Arial, DejaVu Sans, sans-serif".to_owned(),
             text_color: Rgb::new(0x1a, 0x1a, 0x1a),
         }
@@ -99,7 +104,12 @@ pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
 
     let root = dataset.node(dataset.root());
     let adjacency = layout.level_adjacency(&root.children);
-    let colors = cell_colors(dataset, adjacency.pairs(), style.palette);
+    let colors = cell_colors(
+        dataset,
+        adjacency.pairs(),
+        style.palette,
+        &style.group_colors,
+    );
     push_cells(&mut out, dataset, layout, style, &colors);
     let labels = leaf_labels(dataset, layout, &style.labels);
     push_labels(&mut out, &labels, style);
@@ -176,7 +186,8 @@ pub(crate) fn stroke_width(top: f64, depth: usize) -> f64 {
 }
 
 /// Fill colour of every node, indexed like the dataset. A node's own valid
-/// `color` always wins; otherwise the top-level groups take `palette`'s
+/// `color` always wins, then a top-level group's pinned colour (`pins`, by
+/// id, else by label); otherwise the top-level groups take `palette`'s
 /// colours, assigned in the data's order (so a weight edit recolours
 /// nothing) and so that groups sharing an edge
 /// (`adjacent`, pairs of node indices) never look alike
@@ -188,6 +199,7 @@ pub(crate) fn cell_colors(
     dataset: &Dataset,
     adjacent: &[(usize, usize)],
     palette: PaletteKind,
+    pins: &BTreeMap<String, Rgb>,
 ) -> Vec<Option<Rgb>> {
     let own = |i: usize| dataset.node(i).color;
     let mut colors: Vec<Option<Rgb>> = vec![None; dataset.len()];
@@ -214,7 +226,16 @@ pub(crate) fn cell_colors(
         .iter()
         .filter_map(|&(a, b)| Some((position(a)?, position(b)?)))
         .collect();
-    let fixed: Vec<Option<Rgb>> = groups.iter().map(|&g| own(g)).collect();
+    let pinned = |g: usize| {
+        let node = dataset.node(g);
+        pins.get(node.id.as_str())
+            .or_else(|| pins.get(node.label.as_str()))
+            .copied()
+    };
+    let fixed: Vec<Option<Rgb>> = groups
+        .iter()
+        .map(|&g| own(g).or_else(|| pinned(g)))
+        .collect();
     let top = palette::assign(
         &palette::group_palette(palette, groups.len()),
         &order,
@@ -239,6 +260,7 @@ pub(crate) fn cell_colors(
                 continue;
             }
             let derived = if p == root {
+                // `top` holds the pins too; a node's own colour is applied below.
                 top[k]
             } else {
                 palette::sibling_shade(base, k, n, main)
@@ -487,7 +509,7 @@ mod tests {
     #[test]
     fn colors_follow_the_hierarchy() {
         let (dataset, layout) = sample();
-        let colors = cell_colors(&dataset, &[], PaletteKind::Tableau);
+        let colors = cell_colors(&dataset, &[], PaletteKind::Tableau, &BTreeMap::new());
         let idx = |id: &str| dataset.nodes().iter().position(|n| n.id == id).unwrap();
         assert_eq!(colors[idx("root")], None);
         assert_eq!(colors[idx("A")], Some(palette::TABLEAU10[0]));
@@ -500,6 +522,36 @@ mod tests {
         assert_ne!(colors[idx("A2")], Some(a));
         let text = svg(&dataset, &layout, &SvgStyle::default());
         assert!(text.contains("fill=\"#ff0000\""));
+    }
+
+    #[test]
+    fn a_pinned_group_colour_holds_and_a_node_colour_still_wins() {
+        // `render.colors` pins a top-level group by id or by label; a node's
+        // own `color` is not overridden by a pin.
+        let mut builder = DatasetBuilder::new();
+        builder.add(NodeSpec::new("root"));
+        builder.add(NodeSpec::new("group:eu").parent("root").label("Europe"));
+        builder.add(NodeSpec::new("fr").parent("group:eu").weight(3.0));
+        builder.add(NodeSpec::new("de").parent("group:eu").weight(2.0));
+        let red = Rgb::new(0xff, 0, 0);
+        builder.add(NodeSpec::new("B").parent("root").weight(1.0).color(red));
+        let dataset = builder.build().expect("valid");
+        let idx = |id: &str| dataset.nodes().iter().position(|n| n.id == id).unwrap();
+        let pin = Rgb::new(0x12, 0x34, 0x56);
+        let unpinned = cell_colors(&dataset, &[], PaletteKind::Tableau, &BTreeMap::new());
+        assert_ne!(unpinned[idx("group:eu")], Some(pin));
+        for key in ["group:eu", "Europe"] {
+            let pins = BTreeMap::from([(key.to_string(), pin), ("B".to_string(), pin)]);
+            let colors = cell_colors(&dataset, &[], PaletteKind::Tableau, &pins);
+            assert_eq!(colors[idx("group:eu")], Some(pin), "pinned by {key}");
+            // The heaviest child keeps the group's colour, its sibling a shade.
+            assert_eq!(colors[idx("fr")], Some(pin));
+            assert_eq!(
+                colors[idx("de")],
+                Some(palette::sibling_shade(pin, 1, 2, 0))
+            );
+            assert_eq!(colors[idx("B")], Some(red));
+        }
     }
 
     #[test]
@@ -517,7 +569,7 @@ mod tests {
                 builder.add(NodeSpec::new(format!("{g}-leaf")).parent(&g).weight(*w));
             }
             let dataset = builder.build().expect("valid");
-            let colors = cell_colors(&dataset, &[], PaletteKind::Tableau);
+            let colors = cell_colors(&dataset, &[], PaletteKind::Tableau, &BTreeMap::new());
             (0..4)
                 .map(|k| {
                     let i = dataset.nodes().iter().position(|n| n.id == format!("g{k}"));

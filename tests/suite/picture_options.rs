@@ -195,3 +195,69 @@ fn a_title_with_a_line_break_still_gives_a_png() {
     let pixmap = resvg::tiny_skia::Pixmap::decode_png(&png).expect("valid PNG");
     assert!(pixmap.width() > 0 && pixmap.height() > 0);
 }
+
+/// `render.colors` (issue 32, item 4): a pinned group keeps its colour
+/// through a weight edit that makes it the heaviest group by far, the other
+/// groups are coloured around it, and a name no group has is a warning.
+#[test]
+fn a_pinned_colour_holds_through_an_edit_and_a_typo_is_named() {
+    let render = "  colors:\n    Europe: \"#123456\"\n    Atlantis: \"#654321\"";
+    let (dir, svg) = build("options_pinned", render, None);
+    let swatch = |svg: &str, group: &str| -> String {
+        let doc = roxmltree::Document::parse(svg).expect("SVG parses");
+        let legend = legend_groups(&doc);
+        legend
+            .iter()
+            .find(|(_, name)| name == group)
+            .unwrap_or_else(|| panic!("no {group} in {legend:?}"))
+            .0
+            .to_ascii_lowercase()
+    };
+    assert_eq!(swatch(&svg, "Europe"), "#123456");
+    let others: Vec<String> = {
+        let doc = roxmltree::Document::parse(&svg).expect("SVG parses");
+        legend_groups(&doc)
+            .into_iter()
+            .filter(|(_, n)| n != "Europe")
+            .map(|(f, _)| f)
+            .collect()
+    };
+    assert!(
+        !others.iter().any(|f| f.eq_ignore_ascii_case("#123456")),
+        "{others:?}"
+    );
+    // Every European country ×50: Europe outweighs all other continents.
+    let table = dir.join("countries.csv");
+    let text = std::fs::read_to_string(&table).expect("countries.csv");
+    let edited: Vec<String> = text
+        .lines()
+        .enumerate()
+        .map(|(k, line)| {
+            let mut f: Vec<String> = line.split(',').map(str::to_owned).collect();
+            if k > 0 && f[3] == "Europe" {
+                f[2] = format!("{}", f[2].parse::<f64>().expect("population") * 50.0);
+            }
+            f.join(",")
+        })
+        .collect();
+    std::fs::write(&table, edited.join("\n") + "\n").expect("write");
+    let config = dir.join("nptreemap.yaml");
+    let run = support::bin()
+        .arg("build")
+        .arg(&config)
+        .output()
+        .expect("run");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("render.colors: no top-level group has the id or label \"Atlantis\""),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("\"Europe\""), "{stderr}");
+    let svg = std::fs::read_to_string(dir.join("out/countries.svg")).expect("SVG");
+    assert_eq!(swatch(&svg, "Europe"), "#123456");
+}
