@@ -241,17 +241,7 @@ fn a_pinned_colour_holds_through_an_edit_and_a_typo_is_named() {
         })
         .collect();
     std::fs::write(&table, edited.join("\n") + "\n").expect("write");
-    let config = dir.join("nptreemap.yaml");
-    let run = support::bin()
-        .arg("build")
-        .arg(&config)
-        .output()
-        .expect("run");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let run = support::build(&dir.join("nptreemap.yaml"));
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(
         stderr.contains("render.colors: no top-level group has the id or label \"Atlantis\""),
