@@ -25,7 +25,7 @@ use crate::layout::zero::{self, ZeroItems};
 use crate::layout::{Computed, LayoutError, Start, ZeroWeights};
 use crate::neighborhood::{build_constraints, prepare, Constraint, SimilarityKind};
 use crate::pipeline::{self, BuildError, InputFile};
-use crate::render::Style;
+use crate::render::{self, Style};
 use crate::state::manifest::{self, LayoutRecord, Manifest, OutputRecord};
 use crate::state;
 
@@ -83,7 +83,11 @@ impl DatasetGraph {
         };
         let manifest = self.manifest_of(d);
         let disk: Vec<Option<OnDisk>> = d.outputs.iter().map(|o| super::on_disk(&o.path)).collect();
-        let current = self.current_outputs(job, &manifest, key, &disk);
+        // The group colours of the last build are kept (issue 32): they are
+        // part of the style every render key names.
+        let mut style = job.style.clone();
+        style.cells.kept = manifest.group_colors();
+        let current = self.current_outputs(job, &style, &manifest, key, &disk);
         let memory = self.slots.layout.last().map(|(k, laid)| start::Memory {
             inputs: k.inputs,
             settings: k.settings,
@@ -129,7 +133,11 @@ impl DatasetGraph {
             }
             _ => self.same(d, &mut cx, &mut pending),
         };
-        let outputs = self.render(job, key, &out.laid, &manifest, &disk, &mut cx)?;
+        // The colours this build draws with, every group's fixed: recorded,
+        // so the next build keeps them and finds its render keys unchanged.
+        let colors = render::group_colors(&out.laid.computed, &style);
+        style.cells.kept = colors.clone();
+        let outputs = self.render(job, &style, key, &out.laid, &manifest, &disk, &mut cx)?;
         let record = LayoutRecord {
             inputs: Some(key.inputs),
             settings: key.settings,
@@ -148,6 +156,7 @@ impl DatasetGraph {
             format: manifest::FORMAT.to_string(),
             layout: Some(record),
             outputs: records,
+            colors: colors.iter().map(|(id, c)| (id.clone(), c.to_hex())).collect(),
         });
         Ok(DatasetBuild {
             name: d.name.clone(),
@@ -341,9 +350,11 @@ impl DatasetGraph {
     }
 
     /// Render: each output whose file does not hold its bytes already.
+    #[allow(clippy::too_many_arguments)]
     fn render(
         &self,
         job: &Job<'_>,
+        style: &Style,
         key: LayoutKey,
         laid: &Laid,
         manifest: &Manifest,
@@ -360,7 +371,7 @@ impl DatasetGraph {
         let past_states: Vec<Fingerprint> = self.past.iter().map(|(s, _)| *s).collect();
         let mut outputs = Vec::with_capacity(d.outputs.len());
         for (out, disk) in d.outputs.iter().zip(disk) {
-            let render_key = output_key(key, laid.state, &job.style, out, &past_states);
+            let render_key = output_key(key, laid.state, style, out, &past_states);
             let t = Instant::now();
             let built = match self.known(d, manifest, out, render_key, *disk) {
                 Some(built) => {
@@ -368,7 +379,7 @@ impl DatasetGraph {
                     built
                 }
                 None => {
-                    let bytes = pipeline::render_output(&laid.computed, &job.style, out, &past, &mut svg_text)?;
+                    let bytes = pipeline::render_output(&laid.computed, style, out, &past, &mut svg_text)?;
                     cx.record_output(Stage::Render, super::shown(d, &out.path), true, t, out.kind().name());
                     OutputBuild::made(out.path.clone(), bytes, *disk)
                 }
@@ -406,6 +417,7 @@ impl DatasetGraph {
     fn current_outputs(
         &self,
         job: &Job<'_>,
+        style: &Style,
         manifest: &Manifest,
         key: LayoutKey,
         disk: &[Option<OnDisk>],
@@ -420,7 +432,7 @@ impl DatasetGraph {
             .iter()
             .zip(disk)
             .map(|(out, disk)| {
-                let render_key = output_key(key, record.state, &job.style, out, &past);
+                let render_key = output_key(key, record.state, style, out, &past);
                 self.known(d, manifest, out, render_key, *disk)
             })
             .collect()

@@ -42,7 +42,7 @@ pub use label_text::LabelText;
 pub use labels::LabelStyle;
 pub use output::{OutputError, OutputKind};
 pub use palette::{PaletteKind, Rgb};
-pub use picture::{picture, Border, LegendOrder, PageFields, Style};
+pub use picture::{group_colors, picture, Border, LegendOrder, PageFields, Style};
 #[cfg(feature = "png")]
 pub use png::{png, PngError};
 pub use svg::{svg, SvgStyle};

@@ -108,6 +108,21 @@ pub fn group_palette(kind: PaletteKind, groups: usize) -> Vec<Rgb> {
     }
 }
 
+/// Every colour `kind` can give one of up to `groups` groups, whatever
+/// their number: a group keeps a colour of the last build while it is
+/// among these, so adding or removing groups (Tableau 10 → 20 → generated)
+/// recolours none, while a change of `render.palette` does.
+pub fn family(kind: PaletteKind, groups: usize) -> std::collections::HashSet<Rgb> {
+    match kind {
+        PaletteKind::Colorblind => OKABE_ITO.into_iter().collect(),
+        PaletteKind::Tableau => TABLEAU10
+            .into_iter()
+            .chain(TABLEAU20)
+            .chain(generated(groups))
+            .collect(),
+    }
+}
+
 /// Rings of the generated palette: per ring, three lightness levels cycled
 /// with the hue and a chroma. Mid-tones throughout, on which dark labels with
 /// a white halo read and whose lighter child shades stay off white. The

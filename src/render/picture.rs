@@ -7,6 +7,8 @@
 //! the `viewBox` above and below the canvas, so a cell's path is the same text
 //! with or without a title.
 
+use std::collections::BTreeMap;
+
 use nptreemap_formats::Dataset;
 
 use super::color_by::{self, Applied, ColorBy};
@@ -234,12 +236,34 @@ pub(crate) fn fills(
         adjacent,
         style.cells.palette,
         &style.cells.group_colors,
+        &style.cells.kept,
     );
     let applied = style
         .color_by
         .as_ref()
         .and_then(|by| color_by::apply(dataset, &mut colors, by));
     (colors, applied)
+}
+
+/// The colour each top-level group is drawn with under `style`, by group
+/// id: what a build records so that the next one keeps it
+/// (`SvgStyle::kept`). Drawing again with these as `kept` gives the same
+/// colours: every one is fixed then.
+pub fn group_colors(computed: &Computed, style: &Style) -> BTreeMap<String, Rgb> {
+    let dataset = &computed.dataset;
+    let pairs = computed.adjacency().get(1).map_or(&[][..], |a| a.pairs());
+    let (colors, _) = fills(dataset, pairs, style);
+    dataset
+        .node(dataset.root())
+        .children
+        .iter()
+        .filter_map(|&g| {
+            Some((
+                dataset.node(g).id.clone(),
+                colors.get(g).copied().flatten()?,
+            ))
+        })
+        .collect()
 }
 
 /// The SVG picture of a finished computation: the treemap with, when there are

@@ -45,6 +45,11 @@ pub struct SvgStyle {
     /// Pinned colours of top-level groups, by id or label
     /// (`render.colors`); a node's own `color` still wins. Default: none.
     pub group_colors: BTreeMap<String, Rgb>,
+    /// Colours of top-level groups kept from the last build, by id (the
+    /// state manifest's `colors`): a group keeps its colour while the
+    /// palette still holds it; pins and a node's own colour win. Default:
+    /// none.
+    pub kept: BTreeMap<String, Rgb>,
     /// CSS font-family list for labels (kept free of quotes). Default:
     /// `Helvetica, Arial, DejaVu Sans, sans-serif`, a generic stack; PNG output
     /// pins its own font.
@@ -65,6 +70,7 @@ impl Default for SvgStyle {
             labels: LabelStyle::default(),
             palette: PaletteKind::default(),
             group_colors: BTreeMap::new(),
+            kept: BTreeMap::new(),
             font_family: "Helvetica, Arial, DejaVu Sans, sans-serif".to_owned(),
             text_color: Rgb::new(0x1a, 0x1a, 0x1a),
         }
@@ -109,6 +115,7 @@ pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
         adjacency.pairs(),
         style.palette,
         &style.group_colors,
+        &style.kept,
     );
     push_cells(&mut out, dataset, layout, style, &colors);
     let labels = leaf_labels(dataset, layout, &style.labels);
@@ -187,7 +194,8 @@ pub(crate) fn stroke_width(top: f64, depth: usize) -> f64 {
 
 /// Fill colour of every node, indexed like the dataset. A node's own valid
 /// `color` always wins, then a top-level group's pinned colour (`pins`, by
-/// id, else by label); otherwise the top-level groups take `palette`'s
+/// id, else by label), then its colour of the last build (`kept`, by id,
+/// while `palette` can still give it); otherwise the top-level groups take `palette`'s
 /// colours, assigned in the data's order (so a weight edit recolours
 /// nothing) and so that groups sharing an edge
 /// (`adjacent`, pairs of node indices) never look alike
@@ -200,6 +208,7 @@ pub(crate) fn cell_colors(
     adjacent: &[(usize, usize)],
     palette: PaletteKind,
     pins: &BTreeMap<String, Rgb>,
+    kept: &BTreeMap<String, Rgb>,
 ) -> Vec<Option<Rgb>> {
     let own = |i: usize| dataset.node(i).color;
     let mut colors: Vec<Option<Rgb>> = vec![None; dataset.len()];
@@ -232,9 +241,23 @@ pub(crate) fn cell_colors(
             .or_else(|| pins.get(node.label.as_str()))
             .copied()
     };
+    // A kept colour stays even where a changed contact now puts it beside
+    // a like one: a picture that stays put is the point of keeping it
+    // (issue 32), and new groups still keep away from their neighbours.
+    // One no longer in the palette (`render.palette` changed) is dropped.
+    let family = if kept.is_empty() {
+        Default::default()
+    } else {
+        palette::family(palette, groups.len().max(kept.len()))
+    };
+    let remembered = |g: usize| {
+        kept.get(dataset.node(g).id.as_str())
+            .copied()
+            .filter(|c| family.contains(c))
+    };
     let fixed: Vec<Option<Rgb>> = groups
         .iter()
-        .map(|&g| own(g).or_else(|| pinned(g)))
+        .map(|&g| own(g).or_else(|| pinned(g)).or_else(|| remembered(g)))
         .collect();
     let top = palette::assign(
         &palette::group_palette(palette, groups.len()),
@@ -506,10 +529,21 @@ mod tests {
         assert_eq!(count(&svg(&dataset, &layout, &off), "<text"), 0);
     }
 
+    /// Every node's colour in Tableau, nothing pinned or kept, no contacts.
+    fn fresh_tableau(dataset: &Dataset) -> Vec<Option<Rgb>> {
+        cell_colors(
+            dataset,
+            &[],
+            PaletteKind::Tableau,
+            &BTreeMap::new(),
+            &BTreeMap::new(),
+        )
+    }
+
     #[test]
     fn colors_follow_the_hierarchy() {
         let (dataset, layout) = sample();
-        let colors = cell_colors(&dataset, &[], PaletteKind::Tableau, &BTreeMap::new());
+        let colors = fresh_tableau(&dataset);
         let idx = |id: &str| dataset.nodes().iter().position(|n| n.id == id).unwrap();
         assert_eq!(colors[idx("root")], None);
         assert_eq!(colors[idx("A")], Some(palette::TABLEAU10[0]));
@@ -538,11 +572,11 @@ mod tests {
         let dataset = builder.build().expect("valid");
         let idx = |id: &str| dataset.nodes().iter().position(|n| n.id == id).unwrap();
         let pin = Rgb::new(0x12, 0x34, 0x56);
-        let unpinned = cell_colors(&dataset, &[], PaletteKind::Tableau, &BTreeMap::new());
+        let unpinned = fresh_tableau(&dataset);
         assert_ne!(unpinned[idx("group:eu")], Some(pin));
         for key in ["group:eu", "Europe"] {
             let pins = BTreeMap::from([(key.to_string(), pin), ("B".to_string(), pin)]);
-            let colors = cell_colors(&dataset, &[], PaletteKind::Tableau, &pins);
+            let colors = cell_colors(&dataset, &[], PaletteKind::Tableau, &pins, &BTreeMap::new());
             assert_eq!(colors[idx("group:eu")], Some(pin), "pinned by {key}");
             // The heaviest child keeps the group's colour, its sibling a shade.
             assert_eq!(colors[idx("fr")], Some(pin));
@@ -551,6 +585,40 @@ mod tests {
                 Some(palette::sibling_shade(pin, 1, 2, 0))
             );
             assert_eq!(colors[idx("B")], Some(red));
+        }
+    }
+
+    #[test]
+    fn kept_colours_hold_while_the_palette_has_them_and_pins_win() {
+        let mut builder = DatasetBuilder::new();
+        builder.add(NodeSpec::new("root"));
+        for g in ["g0", "g1", "g2"] {
+            builder.add(NodeSpec::new(g).parent("root"));
+            builder.add(NodeSpec::new(format!("{g}-leaf")).parent(g).weight(1.0));
+        }
+        let dataset = builder.build().expect("valid");
+        let idx = |id: &str| dataset.nodes().iter().position(|n| n.id == id).unwrap();
+        let none = BTreeMap::new();
+        let fresh = cell_colors(&dataset, &[], PaletteKind::Tableau, &none, &none);
+        // g0 kept the colour fresh colouring gives g2, and the reverse.
+        let t = |id: &str| fresh[idx(id)].expect("coloured");
+        let kept = BTreeMap::from([("g0".to_string(), t("g2")), ("g2".to_string(), t("g0"))]);
+        let colors = cell_colors(&dataset, &[], PaletteKind::Tableau, &none, &kept);
+        assert_eq!(colors[idx("g0")], Some(t("g2")));
+        assert_eq!(colors[idx("g2")], Some(t("g0")));
+        // The group not kept takes a colour not in use.
+        let g1 = colors[idx("g1")].expect("coloured");
+        assert!(g1 != t("g0") && g1 != t("g2"), "{g1}");
+        // A pin wins over a kept colour.
+        let pin = Rgb::new(1, 2, 3);
+        let pins = BTreeMap::from([("g0".to_string(), pin)]);
+        let pinned = cell_colors(&dataset, &[], PaletteKind::Tableau, &pins, &kept);
+        assert_eq!(pinned[idx("g0")], Some(pin));
+        // Another palette: the Tableau colours kept are dropped.
+        let blind = cell_colors(&dataset, &[], PaletteKind::Colorblind, &none, &kept);
+        for g in ["g0", "g1", "g2"] {
+            let c = blind[idx(g)].expect("coloured");
+            assert!(palette::OKABE_ITO.contains(&c), "{g}: {c}");
         }
     }
 
@@ -569,7 +637,7 @@ mod tests {
                 builder.add(NodeSpec::new(format!("{g}-leaf")).parent(&g).weight(*w));
             }
             let dataset = builder.build().expect("valid");
-            let colors = cell_colors(&dataset, &[], PaletteKind::Tableau, &BTreeMap::new());
+            let colors = fresh_tableau(&dataset);
             (0..4)
                 .map(|k| {
                     let i = dataset.nodes().iter().position(|n| n.id == format!("g{k}"));

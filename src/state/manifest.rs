@@ -9,6 +9,7 @@
 //! plus 150 per output. One that is missing, unreadable or of another
 //! format reads as empty: the build then recomputes and writes it anew.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
@@ -34,6 +35,12 @@ pub struct Manifest {
     pub layout: Option<LayoutRecord>,
     /// Every output last written, in config order.
     pub outputs: Vec<OutputRecord>,
+    /// The colour every top-level group was drawn with (`#rrggbb`, by group
+    /// id): the next build keeps them, so no edit recolours a group
+    /// (`render::group_colors`). Committed with the rest: a fresh clone
+    /// draws the groups in the colours of the committed pictures.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub colors: BTreeMap<String, String>,
 }
 
 /// What the stored layout was made from.
@@ -71,6 +78,15 @@ pub struct OutputRecord {
 }
 
 impl Manifest {
+    /// The recorded group colours that parse (an entry edited into
+    /// something else is left out: that group is coloured afresh).
+    pub fn group_colors(&self) -> BTreeMap<String, crate::render::Rgb> {
+        self.colors
+            .iter()
+            .filter_map(|(id, c)| Some((id.clone(), c.parse().ok()?)))
+            .collect()
+    }
+
     /// The record of the output at `path`, if any.
     pub fn output(&self, d: &DatasetConfig, path: &Path) -> Option<&OutputRecord> {
         let name = relative(d, path);
@@ -169,9 +185,16 @@ mod tests {
                 render: f,
                 bytes: f,
             }],
+            colors: BTreeMap::from([
+                ("group:a".into(), "#4e79a7".into()),
+                ("group:b".into(), "not a colour".into()),
+            ]),
         };
         let text = serde_json::to_string(&m).expect("json");
         assert_eq!(serde_json::from_str::<Manifest>(&text).expect("back"), m);
+        // A colour edited into something else is left out, not an error.
+        let kept = m.group_colors();
+        assert_eq!(kept.keys().collect::<Vec<_>>(), ["group:a"]);
         assert!(m.output(&d, Path::new("docs/out/a.svg")).is_some());
     }
 }

@@ -10,6 +10,7 @@ mod browser;
 mod build;
 mod cli_conventions;
 mod cli_errors;
+mod colors;
 mod copies;
 mod crash;
 mod degenerate;
