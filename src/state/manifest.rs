@@ -80,7 +80,7 @@ pub struct OutputRecord {
 impl Manifest {
     /// The recorded group colours that parse (an entry edited into
     /// something else is left out: that group is coloured afresh).
-    pub fn group_colors(&self) -> BTreeMap<String, crate::render::Rgb> {
+    pub fn group_colors(&self) -> BTreeMap<String, nptreemap_formats::Rgb> {
         self.colors
             .iter()
             .filter_map(|(id, c)| Some((id.clone(), c.parse().ok()?)))
