@@ -86,7 +86,10 @@ impl DatasetGraph {
         // The group colours of the last build are kept (issue 32): they are
         // part of the style every render key names.
         let mut style = job.style.clone();
-        style.cells.kept = manifest.group_colors();
+        style.cells.kept = render::Kept {
+            groups: manifest.group_colors(),
+            main: manifest.shades.clone(),
+        };
         let current = self.current_outputs(job, &style, &manifest, key, &disk);
         let memory = self.slots.layout.last().map(|(k, laid)| start::Memory {
             inputs: k.inputs,
@@ -156,7 +159,8 @@ impl DatasetGraph {
             format: manifest::FORMAT.to_string(),
             layout: Some(record),
             outputs: records,
-            colors: colors.iter().map(|(id, c)| (id.clone(), c.to_hex())).collect(),
+            colors: colors.groups.iter().map(|(id, c)| (id.clone(), c.to_hex())).collect(),
+            shades: colors.main.clone(),
         });
         Ok(DatasetBuild {
             name: d.name.clone(),

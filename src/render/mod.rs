@@ -45,7 +45,7 @@ pub use palette::{PaletteKind, Rgb};
 pub use picture::{group_colors, picture, Border, LegendOrder, PageFields, Style};
 #[cfg(feature = "png")]
 pub use png::{png, PngError};
-pub use svg::{svg, SvgStyle};
+pub use svg::{svg, Kept, SvgStyle};
 
 /// The layout JSON (`nptreemap-layout/1`) of a finished computation, beside the
 /// pictures: [`crate::layout_json::document`], which also reads it back.

@@ -7,8 +7,6 @@
 //! the `viewBox` above and below the canvas, so a cell's path is the same text
 //! with or without a title.
 
-use std::collections::BTreeMap;
-
 use nptreemap_formats::Dataset;
 
 use super::color_by::{self, Applied, ColorBy};
@@ -18,8 +16,8 @@ use super::legend::{legend, LegendItem};
 use super::overlay::{marks_svg, place_markers, place_tabs, tabs_svg, Link, OverlayStyle};
 use super::palette::{luminance, Rgb, WHITE};
 use super::svg::{
-    cell_colors, escape, leaf_labels, num, push_cells, push_labels, push_text, stroke_width,
-    SvgStyle,
+    cell_colors, escape, leaf_labels, main_child, num, push_cells, push_labels, push_text,
+    stroke_width, Kept, SvgStyle,
 };
 use super::text::width_em;
 use crate::geom::Point;
@@ -245,15 +243,16 @@ pub(crate) fn fills(
     (colors, applied)
 }
 
-/// The colour each top-level group is drawn with under `style`, by group
-/// id: what a build records so that the next one keeps it
-/// (`SvgStyle::kept`). Drawing again with these as `kept` gives the same
-/// colours: every one is fixed then.
-pub fn group_colors(computed: &Computed, style: &Style) -> BTreeMap<String, Rgb> {
+/// The colours a picture is drawn with under `style`, as the next build
+/// keeps them ([`Kept`]): each top-level group's colour, by id, and per
+/// parent of two or more children the child that wears its colour. Drawing
+/// again with these as `SvgStyle::kept` gives the same colours: every one
+/// is fixed then.
+pub fn group_colors(computed: &Computed, style: &Style) -> Kept {
     let dataset = &computed.dataset;
     let pairs = computed.adjacency().get(1).map_or(&[][..], |a| a.pairs());
     let (colors, _) = fills(dataset, pairs, style);
-    dataset
+    let groups = dataset
         .node(dataset.root())
         .children
         .iter()
@@ -263,7 +262,16 @@ pub fn group_colors(computed: &Computed, style: &Style) -> BTreeMap<String, Rgb>
                 colors.get(g).copied().flatten()?,
             ))
         })
-        .collect()
+        .collect();
+    let main = (0..dataset.len())
+        .filter(|&p| dataset.node(p).children.len() >= 2)
+        .map(|p| {
+            let node = dataset.node(p);
+            let k = main_child(dataset, p, &style.cells.kept.main);
+            (node.id.clone(), dataset.node(node.children[k]).id.clone())
+        })
+        .collect();
+    Kept { groups, main }
 }
 
 /// The SVG picture of a finished computation: the treemap with, when there are

@@ -45,11 +45,11 @@ pub struct SvgStyle {
     /// Pinned colours of top-level groups, by id or label
     /// (`render.colors`); a node's own `color` still wins. Default: none.
     pub group_colors: BTreeMap<String, Rgb>,
-    /// Colours of top-level groups kept from the last build, by id (the
-    /// state manifest's `colors`): a group keeps its colour while the
-    /// palette still holds it; pins and a node's own colour win. Default:
-    /// none.
-    pub kept: BTreeMap<String, Rgb>,
+    /// The colours kept from the last build (the state manifest's): a
+    /// group keeps its colour while the palette still holds it, and a
+    /// parent's colour stays on the same child; pins and a node's own
+    /// colour win. Default: none.
+    pub kept: Kept,
     /// CSS font-family list for labels (kept free of quotes). Default:
     /// `Helvetica, Arial, DejaVu Sans, sans-serif`, a generic stack; PNG output
     /// pins its own font.
@@ -70,11 +70,23 @@ impl Default for SvgStyle {
             labels: LabelStyle::default(),
             palette: PaletteKind::default(),
             group_colors: BTreeMap::new(),
-            kept: BTreeMap::new(),
+            kept: Kept::default(),
             font_family: "Helvetica, Arial, DejaVu Sans, sans-serif".to_owned(),
             text_color: Rgb::new(0x1a, 0x1a, 0x1a),
         }
     }
+}
+
+/// What a build keeps of the last one's colours (issue 32), so that no
+/// edit recolours the picture: each top-level group's colour, and per
+/// parent the child that wears the parent's colour (its siblings' shades
+/// are counted from it, so a new heaviest child would shift them all).
+#[derive(serde::Serialize, Clone, Debug, Default, PartialEq)]
+pub struct Kept {
+    /// Colour of each top-level group, by group id.
+    pub groups: BTreeMap<String, Rgb>,
+    /// The child (by id) that wears its parent's colour, by parent id.
+    pub main: BTreeMap<String, String>,
 }
 
 /// How the label group opens (its attributes follow); its class lets tests
@@ -208,7 +220,7 @@ pub(crate) fn cell_colors(
     adjacent: &[(usize, usize)],
     palette: PaletteKind,
     pins: &BTreeMap<String, Rgb>,
-    kept: &BTreeMap<String, Rgb>,
+    kept: &Kept,
 ) -> Vec<Option<Rgb>> {
     let own = |i: usize| dataset.node(i).color;
     let mut colors: Vec<Option<Rgb>> = vec![None; dataset.len()];
@@ -245,13 +257,14 @@ pub(crate) fn cell_colors(
     // a like one: a picture that stays put is the point of keeping it
     // (issue 32), and new groups still keep away from their neighbours.
     // One no longer in the palette (`render.palette` changed) is dropped.
-    let family = if kept.is_empty() {
+    let family = if kept.groups.is_empty() {
         Default::default()
     } else {
-        palette::family(palette, groups.len().max(kept.len()))
+        palette::family(palette, groups.len().max(kept.groups.len()))
     };
     let remembered = |g: usize| {
-        kept.get(dataset.node(g).id.as_str())
+        kept.groups
+            .get(dataset.node(g).id.as_str())
             .copied()
             .filter(|c| family.contains(c))
     };
@@ -270,14 +283,7 @@ pub(crate) fn cell_colors(
     for (p, parent) in dataset.nodes().iter().enumerate() {
         let n = parent.children.len();
         let base = colors[p].unwrap_or(palette::TABLEAU10[0]);
-        // The heaviest child (the first on ties) keeps the parent's colour,
-        // so the legend's swatch is the colour of a cell.
-        let main = (0..n)
-            .max_by(|&a, &b| {
-                let value = |k: usize| dataset.node(parent.children[k]).value;
-                value(a).total_cmp(&value(b)).then(b.cmp(&a))
-            })
-            .unwrap_or(0);
+        let main = main_child(dataset, p, &kept.main);
         for (k, &c) in parent.children.iter().enumerate() {
             if c >= colors.len() {
                 continue;
@@ -292,6 +298,25 @@ pub(crate) fn cell_colors(
         }
     }
     colors
+}
+
+/// Which child of node `p` (its position among the children) wears `p`'s
+/// colour: the one `kept` names while it is still a child, else the
+/// heaviest (the first on ties), so that the legend's swatch is the colour
+/// of a cell.
+pub(crate) fn main_child(dataset: &Dataset, p: usize, kept: &BTreeMap<String, String>) -> usize {
+    let parent = dataset.node(p);
+    let children = &parent.children;
+    kept.get(parent.id.as_str())
+        .and_then(|id| children.iter().position(|&c| dataset.node(c).id == *id))
+        .unwrap_or_else(|| {
+            (0..children.len())
+                .max_by(|&a, &b| {
+                    let value = |k: usize| dataset.node(children[k]).value;
+                    value(a).total_cmp(&value(b)).then(b.cmp(&a))
+                })
+                .unwrap_or(0)
+        })
 }
 
 /// Appends `M x,y L x,y … Z` with two-decimal coordinates.
@@ -536,7 +561,7 @@ mod tests {
             &[],
             PaletteKind::Tableau,
             &BTreeMap::new(),
-            &BTreeMap::new(),
+            &Kept::default(),
         )
     }
 
@@ -554,6 +579,14 @@ mod tests {
         assert_eq!(colors[idx("A1")], Some(a));
         assert_eq!(colors[idx("A2")], Some(palette::sibling_shade(a, 1, 3, 0)));
         assert_ne!(colors[idx("A2")], Some(a));
+        // A kept main child wears the parent's colour though it is lighter.
+        let kept = Kept {
+            groups: BTreeMap::new(),
+            main: BTreeMap::from([("A".to_string(), "A2".to_string())]),
+        };
+        let shaded = cell_colors(&dataset, &[], PaletteKind::Tableau, &BTreeMap::new(), &kept);
+        assert_eq!(shaded[idx("A2")], Some(a));
+        assert_ne!(shaded[idx("A1")], Some(a));
         let text = svg(&dataset, &layout, &SvgStyle::default());
         assert!(text.contains("fill=\"#ff0000\""));
     }
@@ -576,7 +609,7 @@ mod tests {
         assert_ne!(unpinned[idx("group:eu")], Some(pin));
         for key in ["group:eu", "Europe"] {
             let pins = BTreeMap::from([(key.to_string(), pin), ("B".to_string(), pin)]);
-            let colors = cell_colors(&dataset, &[], PaletteKind::Tableau, &pins, &BTreeMap::new());
+            let colors = cell_colors(&dataset, &[], PaletteKind::Tableau, &pins, &Kept::default());
             assert_eq!(colors[idx("group:eu")], Some(pin), "pinned by {key}");
             // The heaviest child keeps the group's colour, its sibling a shade.
             assert_eq!(colors[idx("fr")], Some(pin));
@@ -599,10 +632,13 @@ mod tests {
         let dataset = builder.build().expect("valid");
         let idx = |id: &str| dataset.nodes().iter().position(|n| n.id == id).unwrap();
         let none = BTreeMap::new();
-        let fresh = cell_colors(&dataset, &[], PaletteKind::Tableau, &none, &none);
+        let fresh = cell_colors(&dataset, &[], PaletteKind::Tableau, &none, &Kept::default());
         // g0 kept the colour fresh colouring gives g2, and the reverse.
         let t = |id: &str| fresh[idx(id)].expect("coloured");
-        let kept = BTreeMap::from([("g0".to_string(), t("g2")), ("g2".to_string(), t("g0"))]);
+        let kept = Kept {
+            groups: BTreeMap::from([("g0".to_string(), t("g2")), ("g2".to_string(), t("g0"))]),
+            main: BTreeMap::new(),
+        };
         let colors = cell_colors(&dataset, &[], PaletteKind::Tableau, &none, &kept);
         assert_eq!(colors[idx("g0")], Some(t("g2")));
         assert_eq!(colors[idx("g2")], Some(t("g0")));

@@ -41,6 +41,10 @@ pub struct Manifest {
     /// draws the groups in the colours of the committed pictures.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub colors: BTreeMap<String, String>,
+    /// Per parent (by id), the child that wore the parent's colour, so the
+    /// next build shades the siblings from the same child.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub shades: BTreeMap<String, String>,
 }
 
 /// What the stored layout was made from.
@@ -189,6 +193,7 @@ mod tests {
                 ("group:a".into(), "#4e79a7".into()),
                 ("group:b".into(), "not a colour".into()),
             ]),
+            shades: BTreeMap::from([("group:a".into(), "a1".into())]),
         };
         let text = serde_json::to_string(&m).expect("json");
         assert_eq!(serde_json::from_str::<Manifest>(&text).expect("back"), m);

@@ -18,8 +18,9 @@
 //!   write the bytes a cold build wrote.
 //! - `<name>.manifest.json`, the manifest ([`manifest`]): fingerprints of the
 //!   inputs and layout settings the stored layout was made from and of every
-//!   output's bytes and render settings, and the colour each top-level group
-//!   was drawn with (kept by the next build). A build or `build --check` whose
+//!   output's bytes and render settings, and the colours the picture was
+//!   drawn with (each top-level group's, and per parent the child that
+//!   wears its colour; kept by the next build). A build or `build --check` whose
 //!   inputs, settings and outputs match it is done after reading and hashing
 //!   them. Small (about 150 bytes per output), deterministic, committed.
 //! - `cache/<name>.constraints.bin` ([`constraints`]): the constraints of

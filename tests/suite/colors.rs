@@ -2,8 +2,9 @@
 //! make for the purpose, `tests/data/real/debian-packages` (707 packages
 //! in 28 sections, more groups than Tableau 20 has colours): an edit that
 //! makes a mid-ranked section the heaviest by far changes no cell's fill,
-//! its revert gives back every fill, and a build after a build is up to
-//! date (the colours recorded are the colours drawn).
+//! its revert gives back every fill, a package that outgrows the rest of
+//! its section shifts no sibling's shade, and a build after a build is up
+//! to date (the colours recorded are the colours drawn).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -38,6 +39,15 @@ fn fills(dir: &Path) -> BTreeMap<String, String> {
             let fill = n.attribute("fill").filter(|f| f.starts_with('#'))?;
             Some((n.attribute("data-id")?.to_owned(), fill.to_owned()))
         })
+        .collect()
+}
+
+/// The ids whose fill differs between two pictures.
+fn changed(before: &BTreeMap<String, String>, after: &BTreeMap<String, String>) -> Vec<String> {
+    before
+        .keys()
+        .filter(|id| after.get(*id) != before.get(*id))
+        .cloned()
         .collect()
 }
 
@@ -102,15 +112,11 @@ fn an_edit_that_reorders_the_groups_changes_no_fill_and_its_revert_gives_them_ba
     );
     std::fs::write(&table, &edited).expect("edit");
     support::build(&config);
-    let after = fills(&dir);
-    let changed: Vec<&String> = before
-        .keys()
-        .filter(|id| after.get(*id) != before.get(*id))
-        .collect();
+    let moved = changed(&before, &fills(&dir));
     assert!(
-        changed.is_empty(),
-        "{} of {} fills changed: {changed:?}",
-        changed.len(),
+        moved.is_empty(),
+        "{} of {} fills changed: {moved:?}",
+        moved.len(),
         before.len()
     );
 
@@ -118,6 +124,43 @@ fn an_edit_that_reorders_the_groups_changes_no_fill_and_its_revert_gives_them_ba
     std::fs::write(&table, &original).expect("revert");
     support::build(&config);
     assert_eq!(fills(&dir), before);
+
+    // The lightest package of a section outgrows its heaviest: the child
+    // that wears the section's colour stays, so no sibling's shade moves.
+    let (rows, section, size) = sections(&original);
+    let parse = |row: &String| -> (String, f64) {
+        let f: Vec<&str> = row.split(',').collect();
+        (f[section].to_owned(), f[size].parse().expect("size"))
+    };
+    let crowded = order
+        .iter()
+        .map(|(name, _)| name)
+        .find(|name| rows.iter().filter(|r| parse(r).0 == **name).count() >= 4)
+        .expect("a section of four packages or more");
+    let members: Vec<usize> = (0..rows.len())
+        .filter(|&k| parse(&rows[k]).0 == *crowded)
+        .collect();
+    let lightest = *members
+        .iter()
+        .min_by(|&&a, &&b| parse(&rows[a]).1.total_cmp(&parse(&rows[b]).1))
+        .expect("members");
+    let heaviest = members
+        .iter()
+        .map(|&k| parse(&rows[k]).1)
+        .fold(0.0, f64::max);
+    let mut grown = original.lines().next().expect("header").to_owned() + "\n";
+    for (k, row) in rows.iter().enumerate() {
+        let mut f: Vec<String> = row.split(',').map(str::to_owned).collect();
+        if k == lightest {
+            f[size] = format!("{}", 2.0 * heaviest);
+        }
+        grown.push_str(&f.join(","));
+        grown.push('\n');
+    }
+    std::fs::write(&table, &grown).expect("grow one package");
+    support::build(&config);
+    let moved = changed(&before, &fills(&dir));
+    assert!(moved.is_empty(), "{crowded}: {moved:?} changed");
 
     // The colours recorded are those drawn: nothing is stale.
     let check = support::bin()
