@@ -7,6 +7,10 @@
 
 /// Colour by a numeric field: the scales and the values.
 pub mod color_by;
+/// CIELAB and the CIEDE2000 colour difference.
+pub mod color_difference;
+/// The Tableau palette past twenty groups: colours picked farthest apart.
+pub mod distinct;
 /// Interactive HTML page: the SVG with inline hover script, style and node data.
 pub mod html;
 /// Which text a node's label shows (`render.labels.text`).

@@ -11,6 +11,9 @@
 
 pub use nptreemap_formats::Rgb;
 
+use super::color_difference::{cielab, delta_e_lab, linear};
+use super::distinct::FARTHEST;
+
 /// White, the default background and stroke colour.
 pub const WHITE: Rgb = Rgb::new(0xff, 0xff, 0xff);
 
@@ -95,16 +98,17 @@ impl PaletteKind {
 }
 
 /// The colours `groups` top-level groups choose from: for [`PaletteKind::Tableau`]
-/// Tableau 10 or 20, or as many distinct generated colours as `groups` up to
-/// what the generated palette holds ([`generated`]), after which [`assign`]
-/// reuses colours, keeping touching groups apart; for
-/// [`PaletteKind::Colorblind`] always Okabe–Ito.
+/// Tableau 10 or 20, or as many distinct colours as `groups`
+/// ([`extended`]: Tableau 20, then colours picked farthest
+/// apart, then the generated palette) up to what the generated palette
+/// holds, after which [`assign`] reuses colours, keeping touching groups
+/// apart; for [`PaletteKind::Colorblind`] always Okabe–Ito.
 pub fn group_palette(kind: PaletteKind, groups: usize) -> Vec<Rgb> {
     match kind {
         PaletteKind::Colorblind => OKABE_ITO.to_vec(),
         PaletteKind::Tableau if groups <= TABLEAU10.len() => TABLEAU10.to_vec(),
         PaletteKind::Tableau if groups <= TABLEAU20.len() => TABLEAU20.to_vec(),
-        PaletteKind::Tableau => generated(groups),
+        PaletteKind::Tableau => extended(groups),
     }
 }
 
@@ -117,10 +121,29 @@ pub fn family(kind: PaletteKind, groups: usize) -> std::collections::HashSet<Rgb
         PaletteKind::Colorblind => OKABE_ITO.into_iter().collect(),
         PaletteKind::Tableau => TABLEAU10
             .into_iter()
-            .chain(TABLEAU20)
-            .chain(generated(groups))
+            .chain(extended(groups.max(TABLEAU20.len())))
             .collect(),
     }
+}
+
+/// Up to `n` distinct colours: Tableau 20, [`FARTHEST`], then the generated
+/// palette without the colours already given. A shorter palette is a prefix
+/// of a longer one, so a group keeps its colour when groups are added.
+pub fn extended(n: usize) -> Vec<Rgb> {
+    let mut out: Vec<Rgb> = TABLEAU20.into_iter().chain(FARTHEST).take(n).collect();
+    if out.len() < n {
+        let given: std::collections::HashSet<Rgb> = out.iter().copied().collect();
+        // The generated palette is a bounded search; asking it for `n`
+        // beyond the given colours is enough, as they are among its colours
+        // or Tableau's.
+        let rest = generated(n.saturating_add(given.len()));
+        out.extend(
+            rest.into_iter()
+                .filter(|c| !given.contains(c))
+                .take(n - out.len()),
+        );
+    }
+    out
 }
 
 /// Rings of the generated palette: per ring, three lightness levels cycled
@@ -207,9 +230,27 @@ pub fn assign(
         palette.iter().enumerate().map(|(k, &c)| (c, k)).collect();
     let mut colors: Vec<Option<Rgb>> = fixed.to_vec();
     let mut used = vec![0usize; palette.len()];
+    // A palette of up to `NEAR_PALETTE` colours also counts those a kept
+    // colour looks like as used: Tableau 10's brown `#9c755f` is kept when
+    // a map grows past ten groups, and Tableau 20's `#9d7660` (ΔE00 0.4)
+    // must not go to a new group while another colour is free.
+    let near: Vec<[f64; 3]> = if palette.len() <= NEAR_PALETTE {
+        palette.iter().map(|&c| cielab(c)).collect()
+    } else {
+        Vec::new()
+    };
     for c in fixed.iter().flatten() {
-        if let Some(&k) = index.get(c) {
-            used[k] += 1;
+        if near.is_empty() {
+            if let Some(&k) = index.get(c) {
+                used[k] += 1;
+            }
+            continue;
+        }
+        let lab = cielab(*c);
+        for (k, p) in near.iter().enumerate() {
+            if delta_e_lab(lab, *p) < LEGEND_ALIKE {
+                used[k] += 1;
+            }
         }
     }
     let mut least = LeastUsed::new(&used);
@@ -250,6 +291,16 @@ pub fn assign(
     improve(&mut colors, palette, &neighbors, fixed);
     colors
 }
+
+/// Largest palette whose colours are compared with the kept ones by
+/// likeness rather than equality in [`assign`]: Tableau's palettes up to
+/// [`super::distinct::FARTHEST`] and then some, at most one CIEDE2000 per
+/// kept colour and palette colour.
+const NEAR_PALETTE: usize = 256;
+/// CIEDE2000 under which [`assign`] takes a palette colour for a kept one:
+/// below the closest pair of Tableau 20 (9.1), above Tableau 10's colours
+/// against their nearest in Tableau 20 (0.4 to 4.4).
+const LEGEND_ALIKE: f64 = 5.0;
 
 /// Least-used colours a group may take at once: enough that every hue of a
 /// generated palette is among them (its consecutive colours step round the
@@ -407,15 +458,7 @@ const TRIALS: usize = 4_000_000;
 
 /// sRGB (8 bits per channel) to OKLab `[L, a, b]`.
 pub fn oklab(c: Rgb) -> [f64; 3] {
-    let lin = |c: u8| {
-        let c = f64::from(c) / 255.0;
-        if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    };
-    let (r, g, b) = (lin(c.r), lin(c.g), lin(c.b));
+    let (r, g, b) = (linear(c.r), linear(c.g), linear(c.b));
     let l = (0.412_221_470_8 * r + 0.536_332_536_3 * g + 0.051_445_992_9 * b).cbrt();
     let m = (0.211_903_498_2 * r + 0.680_699_545_1 * g + 0.107_396_956_6 * b).cbrt();
     let s = (0.088_302_461_9 * r + 0.281_718_837_6 * g + 0.629_978_700_5 * b).cbrt();
@@ -512,15 +555,7 @@ const SHADE_LIGHTEST: f64 = 0.32;
 
 /// Relative luminance (WCAG 2), 0 for black to 1 for white.
 pub fn luminance(c: Rgb) -> f64 {
-    let lin = |c: u8| {
-        let c = f64::from(c) / 255.0;
-        if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    };
-    0.2126 * lin(c.r) + 0.7152 * lin(c.g) + 0.0722 * lin(c.b)
+    0.2126 * linear(c.r) + 0.7152 * linear(c.g) + 0.0722 * linear(c.b)
 }
 
 fn to_hsl(c: Rgb) -> (f64, f64, f64) {
@@ -639,6 +674,7 @@ pub fn sibling_shade(parent: Rgb, index: usize, count: usize, main: usize) -> Rg
 
 #[cfg(test)]
 mod tests {
+    use super::super::distinct::LEGEND_DISTANCE;
     use super::*;
 
     #[test]
@@ -690,13 +726,15 @@ mod tests {
         }
     }
 
+    fn assert_all_distinct(colors: &[Rgb]) {
+        let unique: std::collections::HashSet<Rgb> = colors.iter().copied().collect();
+        assert_eq!(unique.len(), colors.len());
+    }
+
     #[test]
     fn generated_colors_are_distinct_and_mid_tone() {
         let colors = generated(300);
-        let mut unique = colors.clone();
-        unique.sort_by_key(|c| c.to_hex());
-        unique.dedup();
-        assert_eq!(unique.len(), 300);
+        assert_all_distinct(&colors);
         for c in &colors {
             let l = oklab(*c)[0];
             assert!((0.55..0.85).contains(&l), "{c}: L {l}");
@@ -706,6 +744,25 @@ mod tests {
             generated(300)[..5].to_vec(),
             "a prefix is stable"
         );
+    }
+
+    #[test]
+    fn a_new_group_takes_no_colour_like_a_kept_one() {
+        // Ten groups kept Tableau 10's colours; the map grows to 25, whose
+        // palette (Tableau 20 and on) holds near twins of four of them.
+        let n = 25;
+        let fixed: Vec<Option<Rgb>> = (0..n).map(|g| TABLEAU10.get(g).copied()).collect();
+        let order: Vec<usize> = (0..n).collect();
+        let colors = assign(&group_palette(PaletteKind::Tableau, n), &order, &[], &fixed);
+        for (g, c) in colors.iter().enumerate().skip(TABLEAU10.len()) {
+            for kept in TABLEAU10 {
+                let d = super::super::color_difference::delta_e(*c, kept);
+                assert!(
+                    d >= LEGEND_ALIKE,
+                    "group {g}: {c} beside kept {kept}: ΔE00 {d}"
+                );
+            }
+        }
     }
 
     #[test]
@@ -896,5 +953,77 @@ mod tests {
         // Neighbours in index order alternate dark/light.
         assert!(luminance(shades[0]) < luminance(shades[1]));
         assert!(luminance(shades[1]) > luminance(shades[2]));
+    }
+
+    /// `count` candidates of the generated palette picked one by one, each
+    /// the farthest from `seed` and the picks before it.
+    fn farthest_points(seed: &[Rgb], count: usize) -> Vec<Rgb> {
+        let candidates = generated(usize::MAX);
+        let lab: Vec<[f64; 3]> = candidates.iter().map(|&c| cielab(c)).collect();
+        let mut nearest: Vec<f64> = lab
+            .iter()
+            .map(|c| {
+                seed.iter()
+                    .map(|&s| delta_e_lab(*c, cielab(s)))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect();
+        let mut picks = Vec::with_capacity(count);
+        for _ in 0..count {
+            let k = (0..candidates.len())
+                .max_by(|&a, &b| nearest[a].total_cmp(&nearest[b]).then(b.cmp(&a)))
+                .expect("candidates");
+            picks.push(candidates[k]);
+            for (i, c) in lab.iter().enumerate() {
+                nearest[i] = nearest[i].min(delta_e_lab(*c, lab[k]));
+            }
+        }
+        picks
+    }
+
+    fn closest_pair(colors: &[Rgb]) -> f64 {
+        let lab: Vec<[f64; 3]> = colors.iter().map(|&c| cielab(c)).collect();
+        let mut least = f64::INFINITY;
+        for i in 0..lab.len() {
+            for j in 0..i {
+                least = least.min(delta_e_lab(lab[i], lab[j]));
+            }
+        }
+        least
+    }
+
+    #[test]
+    fn the_table_is_the_farthest_point_picks() {
+        let picks = farthest_points(&TABLEAU20, 100);
+        let table: Vec<String> = picks
+            .iter()
+            .map(|c| format!("Rgb::new(0x{:02x}, 0x{:02x}, 0x{:02x}),", c.r, c.g, c.b))
+            .collect();
+        assert_eq!(FARTHEST.to_vec(), picks, "the table:\n{}", table.join("\n"));
+    }
+
+    #[test]
+    fn no_two_colours_of_a_legend_look_alike() {
+        // The stated distance: up to 60 groups no pair closer than Tableau
+        // 20's own closest pair (ΔE00 9.1); at 120 groups, 6.5.
+        let t20 = closest_pair(&TABLEAU20);
+        assert!((9.0..9.2).contains(&t20), "{t20}");
+        for n in [21, 30, 45, 60] {
+            let got = closest_pair(&extended(n));
+            assert!(got >= LEGEND_DISTANCE, "{n} groups: ΔE00 {got}");
+        }
+        let got = closest_pair(&extended(120));
+        assert!(got >= 6.5, "120 groups: ΔE00 {got}");
+        // What the generated palette alone gave 30 groups.
+        assert!(closest_pair(&generated(30)) < 3.0);
+    }
+
+    #[test]
+    fn a_longer_palette_extends_a_shorter_one() {
+        let long = extended(400);
+        assert_all_distinct(&long);
+        for n in [1, 20, 21, 119, 120, 121, 300] {
+            assert_eq!(extended(n), long[..n].to_vec(), "{n}");
+        }
     }
 }

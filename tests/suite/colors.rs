@@ -4,7 +4,8 @@
 //! makes a mid-ranked section the heaviest by far changes no cell's fill,
 //! its revert gives back every fill, a package that outgrows the rest of
 //! its section shifts no sibling's shade, and a build after a build is up
-//! to date (the colours recorded are the colours drawn).
+//! to date (the colours recorded are the colours drawn). Its legend's 28
+//! colours are no two alike.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -74,6 +75,34 @@ fn ranked(text: &str) -> Vec<(String, f64)> {
     let mut v: Vec<(String, f64)> = sums.into_iter().collect();
     v.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
     v
+}
+
+/// The fills of the legend's group swatches, in legend order.
+fn legend_fills(dir: &Path) -> Vec<String> {
+    let svg = std::fs::read_to_string(dir.join("out/debian-packages.svg")).expect("SVG");
+    let doc = roxmltree::Document::parse(&svg).expect("SVG parses");
+    doc.descendants()
+        .filter(|n| n.attribute("class") == Some("np-legend-item"))
+        .filter_map(|item| item.children().find(|c| c.has_tag_name("rect")))
+        .filter_map(|rect| rect.attribute("fill").map(str::to_owned))
+        .collect()
+}
+
+#[test]
+fn no_two_sections_in_the_legend_look_alike() {
+    use nptreemap::render::color_difference::delta_e;
+    use nptreemap::render::distinct::LEGEND_DISTANCE;
+    let dir = debian("legend");
+    support::build(&dir.join("nptreemap.yaml"));
+    let fills = legend_fills(&dir);
+    assert_eq!(fills.len(), 28, "{fills:?}");
+    let rgb = |hex: &str| nptreemap::render::palette::Rgb::from_hex(hex).expect(hex);
+    for (i, a) in fills.iter().enumerate() {
+        for b in &fills[..i] {
+            let d = delta_e(rgb(a), rgb(b));
+            assert!(d >= LEGEND_DISTANCE, "{a} and {b}: ΔE00 {d:.1}");
+        }
+    }
 }
 
 #[test]

@@ -371,8 +371,8 @@ fn beacon(k: usize) -> String {
     )
 }
 
-/// Copies the files under `from` (the state folders' stored layouts, the
-/// inputs, the config) into `to`, leaving the outputs and the manifests.
+/// Copies the files under `from` (the state folders' stored layouts and
+/// manifests, the inputs, the config) into `to`, leaving the outputs.
 fn copy_sources(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).expect("mkdir");
     for entry in std::fs::read_dir(from).expect("read_dir") {
@@ -386,6 +386,7 @@ fn copy_sources(from: &Path, to: &Path) {
         if path.is_dir() {
             copy_sources(&path, &target);
         } else if name.ends_with(".layout.json")
+            || name.ends_with(".manifest.json")
             || name.ends_with(".csv")
             || name.ends_with(".yaml")
             || name == "beacon.json"
@@ -401,8 +402,9 @@ fn copy_sources(from: &Path, to: &Path) {
 /// step the loss of item 6 (a weight edit, a render edit and an identical
 /// save, each during the rebuild before it). After each quiet period every
 /// output equals a one-shot `nptreemap build` of the same files (config,
-/// inputs and the stored layout, the warm start, copied to a folder of
-/// its own), and `build --check` passes in the daemon's folder; with
+/// inputs and the committed state: the stored layout, the warm start, and
+/// the manifest, which keeps the colours; copied to a folder of its own),
+/// and `build --check` passes in the daemon's folder; with
 /// `history:` on, the page carries the session's past layouts, which
 /// `build`'s page does not, so only it may differ. Every edit kind occurs.
 /// `NPTREEMAP_WATCH_EDITS_SEED` and `NPTREEMAP_WATCH_EDITS_STEPS` run
