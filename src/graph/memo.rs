@@ -45,6 +45,13 @@ impl Cx<'_> {
             .record_output(self.name, stage, output, ran, ms_since(since), note);
     }
 
+    /// Records an output's stage that ran and took `ms` milliseconds (timed
+    /// apart from the others, as when they run at once).
+    pub fn record_output_ms(&mut self, stage: Stage, output: String, ms: f64, note: impl Into<String>) {
+        self.stages
+            .record_output(self.name, stage, output, true, ms, note);
+    }
+
     /// Records a stage that ran (`ran`) or was reused, timed from `since`.
     pub fn record(&mut self, stage: Stage, ran: bool, since: Instant, note: impl Into<String>) {
         self.stages

@@ -353,7 +353,8 @@ impl DatasetGraph {
         })
     }
 
-    /// Render: each output whose file does not hold its bytes already.
+    /// Render: each output whose file does not hold its bytes already, all
+    /// of them at once ([`render_in_parallel`]).
     #[allow(clippy::too_many_arguments)]
     fn render(
         &self,
@@ -366,25 +367,44 @@ impl DatasetGraph {
         cx: &mut Cx<'_>,
     ) -> Result<Vec<(OutputRecord, OutputBuild)>, BuildError> {
         let d = job.dataset;
-        let mut svg_text = None;
         // The past layouts are one more input of the HTML page's render,
         // keyed by their stored layouts' fingerprints (as the current one
         // is): a page is rendered again when its history changed, and the
         // other outputs, which do not show it, are not.
         let past: Vec<Arc<Computed>> = self.past.iter().map(|(_, c)| Arc::clone(c)).collect();
         let past_states: Vec<Fingerprint> = self.past.iter().map(|(s, _)| *s).collect();
+        let t = Instant::now();
+        let keys: Vec<Fingerprint> = d
+            .outputs
+            .iter()
+            .map(|out| output_key(key, laid.state, style, out, &past_states))
+            .collect();
+        let known: Vec<Option<OutputBuild>> = d
+            .outputs
+            .iter()
+            .zip(disk)
+            .zip(&keys)
+            .map(|((out, disk), &render_key)| self.known(d, manifest, out, render_key, *disk))
+            .collect();
+        let needed: Vec<&OutputConfig> = d
+            .outputs
+            .iter()
+            .zip(&known)
+            .filter(|(_, k)| k.is_none())
+            .map(|(out, _)| out)
+            .collect();
+        let mut drawn = render_in_parallel(&laid.computed, style, &needed, &past)?.into_iter();
         let mut outputs = Vec::with_capacity(d.outputs.len());
-        for (out, disk) in d.outputs.iter().zip(disk) {
-            let render_key = output_key(key, laid.state, style, out, &past_states);
-            let t = Instant::now();
-            let built = match self.known(d, manifest, out, render_key, *disk) {
+        for (((out, disk), render_key), known) in d.outputs.iter().zip(disk).zip(keys).zip(known) {
+            let shown = super::shown(d, &out.path);
+            let built = match known {
                 Some(built) => {
-                    cx.record_output(Stage::Render, super::shown(d, &out.path), false, t, "file up to date");
+                    cx.record_output(Stage::Render, shown, false, t, "file up to date");
                     built
                 }
                 None => {
-                    let bytes = pipeline::render_output(&laid.computed, style, out, &past, &mut svg_text)?;
-                    cx.record_output(Stage::Render, super::shown(d, &out.path), true, t, out.kind().name());
+                    let (bytes, ms) = drawn.next().expect("one rendering per output needed");
+                    cx.record_output_ms(Stage::Render, shown, ms, out.kind().name());
                     OutputBuild::made(out.path.clone(), bytes, *disk)
                 }
             };
@@ -441,6 +461,55 @@ impl DatasetGraph {
             })
             .collect()
     }
+}
+
+/// Renders `outputs` of one layout at once, each with the milliseconds it
+/// took: the picture's SVG text, which the SVG and the PNG both draw, beside
+/// the outputs that do not show it (the page, the layout JSON), then the
+/// pictures from that text. The bytes are those of rendering them one by
+/// one; only the order of the work changes. The SVG text's time counts
+/// towards the first picture.
+fn render_in_parallel(
+    computed: &Computed,
+    style: &Style,
+    outputs: &[&OutputConfig],
+    past: &[Arc<Computed>],
+) -> Result<Vec<(Vec<u8>, f64)>, BuildError> {
+    use rayon::prelude::*;
+    let pictured = |out: &OutputConfig| out.kind().draws_picture();
+    let timed = |out: &OutputConfig, text: Option<String>| {
+        let t = Instant::now();
+        let mut text = text;
+        pipeline::render_output(computed, style, out, past, &mut text).map(|b| (b, ms_since(t)))
+    };
+    let (text, plain) = rayon::join(
+        || {
+            outputs.iter().any(|o| pictured(o)).then(|| {
+                let t = Instant::now();
+                (render::picture(computed, style), ms_since(t))
+            })
+        },
+        || {
+            outputs
+                .par_iter()
+                .map(|out| (!pictured(out)).then(|| timed(out, None)).transpose())
+                .collect::<Result<Vec<_>, _>>()
+        },
+    );
+    let first = outputs.iter().position(|o| pictured(o));
+    outputs
+        .par_iter()
+        .zip(plain?)
+        .enumerate()
+        .map(|(k, (out, done))| match (done, &text) {
+            (Some(done), _) => Ok(done),
+            (None, Some((text, picture_ms))) => {
+                let (bytes, ms) = timed(out, Some(text.clone()))?;
+                Ok((bytes, ms + if Some(k) == first { *picture_ms } else { 0.0 }))
+            }
+            (None, None) => timed(out, None),
+        })
+        .collect()
 }
 
 /// A warning per `render.colors` entry that names no top-level group: a

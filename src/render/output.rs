@@ -81,6 +81,12 @@ impl OutputKind {
         self != OutputKind::Json
     }
 
+    /// Whether it draws the picture from its SVG text (the SVG and the PNG,
+    /// which share that text between the outputs of one layout).
+    pub fn draws_picture(self) -> bool {
+        matches!(self, OutputKind::Svg | OutputKind::Png)
+    }
+
     /// Whether it carries the past layouts (`history:`), which are then one
     /// more input of its render.
     pub fn shows_history(self) -> bool {
