@@ -3,8 +3,9 @@
 `nptreemap build` on a C-headers-like tree, timed edit by edit in one run.
 
 For each case it writes target/incremental/CASE/: the tree (benches/c_headers.py
-over a real source tree, default /usr/include; `headers2000` and `headers500`
-keep 2,000 and 500 of its headers, spread over the same folders), a config with SVG, PNG, layout JSON and HTML outputs and
+over a real source tree, default /usr/include; `headers6000`, `headers2000` and
+`headers500` keep 6,000, 2,000 and 500 of its headers, spread over the same
+folders), a config with SVG, PNG, layout JSON and HTML outputs and
 `limits.max_dimensions` raised to 10,000 (the tree has thousands of distinct
 included names, each a dimension of the Jaccard vectors; the default limit is
 1,024), then runs, each in a fresh process:
@@ -53,7 +54,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 OUT = REPO / "target" / "incremental"
-CASES = {"headers": 0, "headers2000": 2000, "headers500": 500}
+CASES = {"headers": 0, "headers6000": 6000, "headers2000": 2000, "headers500": 500}
 
 CONFIG = """# benches/incremental.py: a C-headers-like tree (benches/c_headers.py).
 # limits.max_dimensions is raised: every distinct included name is a
