@@ -107,8 +107,11 @@ class Daemon:
 
 
 def status_ms(line):
-    # "bench: data: tree.json; laid out warm in 41 ms; wrote ..."
-    part = line.split(" in ", 1)[1]
+    # "bench: data: tree.json; laid out warm in 9 ms, on disk in 41 ms; wrote ..."
+    # or "bench: config: render; re-rendered in 41 ms; ...": the last time
+    # before the outputs, the whole rebuild's.
+    head = line.split("; wrote", 1)[0].split("; no output", 1)[0]
+    part = head.rsplit(" in ", 1)[1]
     return float(part.split(" ms", 1)[0])
 
 

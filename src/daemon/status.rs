@@ -51,6 +51,8 @@ pub enum Status {
         reason: Reason,
         /// How the layout came about.
         layout: LayoutKind,
+        /// The layout stage's own time, ms, when it ran.
+        layout_ms: Option<f64>,
         /// Wall time of read + parse + layout + render + write, ms.
         ms: f64,
         /// Outputs whose bytes changed and were written.
@@ -223,6 +225,7 @@ impl Status {
                 dataset,
                 reason,
                 layout,
+                layout_ms,
                 ms,
                 written,
                 unchanged,
@@ -237,7 +240,13 @@ impl Status {
                     LayoutKind::Kept => "written again",
                 };
                 let again = if *recovered { "ok again, " } else { "" };
-                write!(f, "{dataset}: {again}{reason}; {how} in {ms:.0} ms; ")?;
+                match (layout, layout_ms) {
+                    (LayoutKind::Cold | LayoutKind::Warm, Some(l)) => write!(
+                        f,
+                        "{dataset}: {again}{reason}; {how} in {l:.0} ms, on disk in {ms:.0} ms; "
+                    )?,
+                    _ => write!(f, "{dataset}: {again}{reason}; {how} in {ms:.0} ms; ")?,
+                }
                 if written.is_empty() && *failed == 0 {
                     f.write_str("no output changed")?;
                 } else if written.is_empty() {
@@ -279,21 +288,27 @@ mod tests {
 
     #[test]
     fn a_rebuild_line_names_dataset_change_time_and_outputs() {
-        let line = Status::Built {
-            dataset: "countries".to_string(),
-            reason: Reason::Data(vec!["borders.csv".to_string()]),
-            layout: LayoutKind::Warm,
-            ms: 41.6,
-            written: vec![PathBuf::from("out/c.svg"), PathBuf::from("out/c.png")],
-            unchanged: 1,
-            failed: 0,
-            recovered: false,
-        }
-        .to_string();
+        let line = |layout, layout_ms| {
+            Status::Built {
+                dataset: "countries".to_string(),
+                reason: Reason::Data(vec!["borders.csv".to_string()]),
+                layout,
+                layout_ms,
+                ms: 41.6,
+                written: vec![PathBuf::from("out/c.svg"), PathBuf::from("out/c.png")],
+                unchanged: 1,
+                failed: 0,
+                recovered: false,
+            }
+            .to_string()
+        };
+        // The layout's time and the whole rebuild's, each named.
         assert_eq!(
-            line,
-            "countries: data: borders.csv; laid out warm in 42 ms; wrote c.svg, c.png (1 unchanged)"
+            line(LayoutKind::Warm, Some(8.2)),
+            "countries: data: borders.csv; laid out warm in 8 ms, on disk in 42 ms; wrote c.svg, c.png (1 unchanged)"
         );
+        // A rebuild that only drew again has one time.
+        assert!(line(LayoutKind::Reused, None).contains("; re-rendered in 42 ms; wrote"));
     }
 
     #[test]
@@ -303,6 +318,7 @@ mod tests {
                 dataset: "c".to_string(),
                 reason: Reason::Start,
                 layout: LayoutKind::Cold,
+                layout_ms: None,
                 ms: 5.0,
                 written,
                 unchanged: 0,
@@ -331,6 +347,7 @@ mod tests {
                 dataset: evil.to_string(),
                 reason: Reason::Data(vec![evil.to_string()]),
                 layout: LayoutKind::Cold,
+                layout_ms: None,
                 ms: 1.0,
                 written: vec![PathBuf::from(format!("out/{evil}.svg"))],
                 unchanged: 0,

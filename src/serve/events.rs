@@ -314,6 +314,7 @@ mod tests {
             dataset: dataset.to_string(),
             reason: Reason::Start,
             layout: LayoutKind::Warm,
+            layout_ms: None,
             ms: 1.0,
             written: if changed { vec!["out/a.html".into()] } else { Vec::new() },
             unchanged: 0,
