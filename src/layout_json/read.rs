@@ -423,6 +423,21 @@ mod tests {
             .expect("fits its own dataset");
     }
 
+    #[test]
+    fn the_typed_path_reads_what_the_field_by_field_path_reads() {
+        // The stored state (full precision) and the layout JSON output
+        // (`also_above_gives_back_the_pairs_of_the_levels_above` reads
+        // constraints through the typed path).
+        let (ds, text) = sample_text();
+        let c = compute(&ds, &Request::default()).expect("layout");
+        for text in [text, super::super::state(&c)] {
+            let doc: Doc = serde_json::from_str(&text).expect("typed");
+            let typed = typed(doc).expect("typed path reads it");
+            assert_eq!(typed, by_value(&text).expect("reads"));
+            assert_eq!(previous(&text).expect("reads"), typed);
+        }
+    }
+
     /// The error for `text`, which must name `field`.
     fn error_names(text: &str, field: &str) {
         match previous(text) {
