@@ -6,11 +6,11 @@
 //!
 //! Hostile input is an error, never a panic: the text goes through
 //! `serde_json` (which limits nesting). A document is read first into typed
-//! records ([`Doc`]), four times quicker than a `Value` tree on the stored
-//! layout of a 6,000-header tree (20 MB: the tree of values was a fifth of
-//! a warm build, issue 32); anything that path does not accept is read
-//! again as a `Value` walked with checked accessors, whose errors name the
-//! field. Both paths end in the same checks.
+//! records (`Doc`), about 2.5 times quicker than a `Value` tree on the
+//! stored layout of a 6,000-header tree (20 MB: the tree of values was a
+//! fifth of a warm build's samples, issue 32); anything that path does not
+//! accept is read again as a `Value` walked with checked accessors, whose
+//! errors name the field. Both paths end in the same checks.
 
 use serde::Deserialize;
 use serde_json::{Map, Value};
