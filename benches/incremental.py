@@ -93,13 +93,23 @@ def run_measured(binary: Path, args: list[str], cwd: Path) -> dict:
     }
 
 
-STAGE = re.compile(r"headers: (\w+) (ran|reused) in ([0-9.]+) ms")
+STAGE = re.compile(r"headers: (\w+)(?: (\S+))? (ran|reused) in ([0-9.]+) ms")
 
 
 def stages(stderr: str) -> str:
+    """The stages that ran, with their times: each output's render on its
+    own (they run at once, so they do not add up), the writes as one (they
+    are timed together)."""
     ran: dict[str, float] = {}
-    for name, how, ms in STAGE.findall(stderr):
-        if how == "ran":
+    for name, output, how, ms in STAGE.findall(stderr):
+        if how != "ran":
+            continue
+        if name == "render" and output:
+            key = f"render {output.rsplit('.', 1)[-1]}"
+            ran[key] = ran.get(key, 0.0) + float(ms)
+        elif name == "write":
+            ran[name] = max(ran.get(name, 0.0), float(ms))
+        else:
             ran[name] = ran.get(name, 0.0) + float(ms)
     return ", ".join(f"{k} {v / 1000:.2f} s" if v >= 100 else f"{k} {v:.0f} ms" for k, v in ran.items()) or "none"
 
