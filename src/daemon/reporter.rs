@@ -190,6 +190,8 @@ impl<'a> Reporter<'a> {
         let worker::Built {
             reason,
             layout,
+            why,
+            realized,
             ms,
             written,
             warnings,
@@ -248,6 +250,8 @@ impl<'a> Reporter<'a> {
             reason,
             layout,
             layout_ms,
+            why,
+            realized,
             ms,
             written: written.written,
             unchanged: written.unchanged.len(),

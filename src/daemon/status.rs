@@ -53,6 +53,10 @@ pub enum Status {
         layout: LayoutKind,
         /// The layout stage's own time, ms, when it ran.
         layout_ms: Option<f64>,
+        /// Why it was laid out cold, when it was.
+        why: Option<String>,
+        /// The constraints realised and in all, when there are any.
+        realized: Option<(usize, usize)>,
         /// Wall time of read + parse + layout + render + write, ms.
         ms: f64,
         /// Outputs whose bytes changed and were written.
@@ -226,6 +230,8 @@ impl Status {
                 reason,
                 layout,
                 layout_ms,
+                why,
+                realized,
                 ms,
                 written,
                 unchanged,
@@ -233,20 +239,32 @@ impl Status {
                 recovered,
             } => {
                 let how = match layout {
-                    LayoutKind::Cold => "laid out",
+                    LayoutKind::Cold => "laid out cold",
                     LayoutKind::Warm => "laid out warm",
                     LayoutKind::Reused => "re-rendered",
                     LayoutKind::UpToDate => "found up to date",
                     LayoutKind::Kept => "written again",
                 };
                 let again = if *recovered { "ok again, " } else { "" };
+                // Like `build`'s line: how the layout was got (and why
+                // cold), its own time, then the whole rebuild's, then the
+                // constraints realised.
+                write!(f, "{dataset}: {again}{reason}; {how} in ")?;
                 match (layout, layout_ms) {
-                    (LayoutKind::Cold | LayoutKind::Warm, Some(l)) => write!(
-                        f,
-                        "{dataset}: {again}{reason}; {how} in {l:.0} ms, on disk in {ms:.0} ms; "
-                    )?,
-                    _ => write!(f, "{dataset}: {again}{reason}; {how} in {ms:.0} ms; ")?,
+                    (LayoutKind::Cold | LayoutKind::Warm, Some(l)) => write!(f, "{l:.0} ms")?,
+                    _ => write!(f, "{ms:.0} ms")?,
                 }
+                if let Some(why) = why {
+                    write!(f, " ({why})")?;
+                }
+                if let (LayoutKind::Cold | LayoutKind::Warm, Some(_)) = (layout, layout_ms) {
+                    write!(f, ", on disk in {ms:.0} ms")?;
+                }
+                if let Some((done, all)) = realized {
+                    let share = 100.0 * *done as f64 / (*all).max(1) as f64;
+                    write!(f, "; {done} of {all} constraints realized ({share:.1}%)")?;
+                }
+                f.write_str("; ")?;
                 if written.is_empty() && *failed == 0 {
                     f.write_str("no output changed")?;
                 } else if written.is_empty() {
@@ -294,6 +312,8 @@ mod tests {
                 reason: Reason::Data(vec!["borders.csv".to_string()]),
                 layout,
                 layout_ms,
+                why: None,
+                realized: Some((74, 88)),
                 ms: 41.6,
                 written: vec![PathBuf::from("out/c.svg"), PathBuf::from("out/c.png")],
                 unchanged: 1,
@@ -305,10 +325,11 @@ mod tests {
         // The layout's time and the whole rebuild's, each named.
         assert_eq!(
             line(LayoutKind::Warm, Some(8.2)),
-            "countries: data: borders.csv; laid out warm in 8 ms, on disk in 42 ms; wrote c.svg, c.png (1 unchanged)"
+            "countries: data: borders.csv; laid out warm in 8 ms, on disk in 42 ms; \
+             74 of 88 constraints realized (84.1%); wrote c.svg, c.png (1 unchanged)"
         );
         // A rebuild that only drew again has one time.
-        assert!(line(LayoutKind::Reused, None).contains("; re-rendered in 42 ms; wrote"));
+        assert!(line(LayoutKind::Reused, None).contains("; re-rendered in 42 ms; 74 of 88 constraints"));
     }
 
     #[test]
@@ -319,6 +340,8 @@ mod tests {
                 reason: Reason::Start,
                 layout: LayoutKind::Cold,
                 layout_ms: None,
+                why: Some("no stored layout".to_string()),
+                realized: None,
                 ms: 5.0,
                 written,
                 unchanged: 0,
@@ -329,11 +352,11 @@ mod tests {
         };
         assert_eq!(
             built(Vec::new(), 3, false),
-            "c: start; laid out in 5 ms; 3 output(s) not written"
+            "c: start; laid out cold in 5 ms (no stored layout); 3 output(s) not written"
         );
         assert_eq!(
             built(vec![PathBuf::from("o/a.svg")], 1, true),
-            "c: ok again, start; laid out in 5 ms; wrote a.svg (1 not written)"
+            "c: ok again, start; laid out cold in 5 ms (no stored layout); wrote a.svg (1 not written)"
         );
     }
 
@@ -348,6 +371,8 @@ mod tests {
                 reason: Reason::Data(vec![evil.to_string()]),
                 layout: LayoutKind::Cold,
                 layout_ms: None,
+                why: None,
+                realized: None,
                 ms: 1.0,
                 written: vec![PathBuf::from(format!("out/{evil}.svg"))],
                 unchanged: 0,

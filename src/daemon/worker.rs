@@ -62,6 +62,10 @@ pub struct Built {
     pub reason: Reason,
     /// How the layout came about.
     pub layout: LayoutKind,
+    /// Why it was laid out cold, when it was.
+    pub why: Option<String>,
+    /// The constraints realised and in all, when there are any.
+    pub realized: Option<(usize, usize)>,
     /// Wall time, ms.
     pub ms: f64,
     /// What writing the outputs did.
@@ -297,6 +301,11 @@ impl Remembered {
         if shared.stopping() {
             return Outcome::Abandoned;
         }
+        let why = match &build.layout {
+            LayoutStep::Cold(why) => Some(why.clone()),
+            _ => None,
+        };
+        let realized = (build.constraints > 0).then_some((build.realized, build.constraints));
         let layout = match &build.layout {
             LayoutStep::Cold(_) => LayoutKind::Cold,
             LayoutStep::Warm => LayoutKind::Warm,
@@ -339,6 +348,8 @@ impl Remembered {
         Outcome::Built(Built {
             reason,
             layout,
+            why,
+            realized,
             ms: ms_since(job.since.min(started)),
             written,
             warnings,
@@ -379,6 +390,8 @@ impl Remembered {
         Outcome::Built(Built {
             reason: Reason::Retry,
             layout: LayoutKind::Kept,
+            why: None,
+            realized: None,
             ms: ms_since(started),
             written,
             warnings: Vec::new(),

@@ -315,6 +315,8 @@ mod tests {
             reason: Reason::Start,
             layout: LayoutKind::Warm,
             layout_ms: None,
+            why: None,
+            realized: None,
             ms: 1.0,
             written: if changed { vec!["out/a.html".into()] } else { Vec::new() },
             unchanged: 0,
