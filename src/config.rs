@@ -566,27 +566,7 @@ impl Config {
             }
             d.base = base.to_path_buf();
             check_exec(d, i)?;
-            for (k, out) in d.outputs.iter_mut().enumerate() {
-                out.path = base.join(&out.path);
-                if out.kind.is_none() {
-                    out.kind = OutputKind::of_path(&out.path);
-                }
-                if out.kind.is_none() {
-                    return Err(ConfigError::Value {
-                        field: format!("datasets[{i}].outputs[{k}].path"),
-                        message: format!(
-                            "{}: cannot tell the kind from the extension; add `kind: svg|png|json|html`",
-                            out.path.display()
-                        ),
-                    });
-                }
-                if !(out.scale.is_finite() && out.scale > 0.0) {
-                    return Err(ConfigError::Value {
-                        field: format!("datasets[{i}].outputs[{k}].scale"),
-                        message: "must be a positive number".to_string(),
-                    });
-                }
-            }
+            resolve_outputs(d, i, base)?;
         }
         raw.render.validate()?;
         let config = Config {
@@ -741,6 +721,33 @@ impl DatasetConfig {
             config_stem: None,
         }
     }
+}
+
+/// Resolves dataset `i`'s output paths against `base` and checks each
+/// output's kind (from its extension when not given) and scale.
+fn resolve_outputs(d: &mut DatasetConfig, i: usize, base: &Path) -> Result<(), ConfigError> {
+    for (k, out) in d.outputs.iter_mut().enumerate() {
+        out.path = base.join(&out.path);
+        if out.kind.is_none() {
+            out.kind = OutputKind::of_path(&out.path);
+        }
+        if out.kind.is_none() {
+            return Err(ConfigError::Value {
+                field: format!("datasets[{i}].outputs[{k}].path"),
+                message: format!(
+                    "{}: cannot tell the kind from the extension; add `kind: svg|png|json|html`",
+                    out.path.display()
+                ),
+            });
+        }
+        if !(out.scale.is_finite() && out.scale > 0.0) {
+            return Err(ConfigError::Value {
+                field: format!("datasets[{i}].outputs[{k}].scale"),
+                message: "must be a positive number".to_string(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The exec keys are given exactly when the format is `exec`.

@@ -14,7 +14,7 @@ use super::extras::JsonExtras;
 use super::precision::{self, Spelled};
 use super::FORMAT;
 use crate::geom::Point;
-use crate::layout::Layout;
+use crate::layout::{Layout, ZeroItems};
 
 /// Decimals of a constraint's `similarity`: the bins it fell into were
 /// chosen from the exact value; a reader sees which pairs are alike and how
@@ -92,10 +92,16 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
     });
     push_array(&mut out, "constraints", constraints);
 
-    // Items of weight 0 (issue 34), only when there are any: the setting and
-    // their count, and with `hide` the nodes left out (no cell: the
-    // checker's rules are about cells).
-    let zero = &extra.zero;
+    push_zero_weights(&mut out, &extra.zero);
+    push_metrics(&mut out, &extra.metrics);
+    out.push_str("\n}\n");
+    out
+}
+
+/// Appends the items of weight 0 (issue 34), only when there are any: the
+/// setting and their count, and with `hide` the nodes left out (no cell:
+/// the checker's rules are about cells).
+fn push_zero_weights(out: &mut String, zero: &ZeroItems) {
     if zero.items > 0 {
         let summary = ZeroOut {
             mode: zero.mode.name(),
@@ -112,12 +118,15 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
             depth: h.depth,
             weight: Num(0.0),
         });
-        push_array(&mut out, "hidden", hidden);
+        push_array(out, "hidden", hidden);
     }
+}
 
-    if !extra.metrics.is_empty() {
+/// Appends the `metrics` object, only when there are any.
+fn push_metrics(out: &mut String, metrics: &[(String, f64)]) {
+    if !metrics.is_empty() {
         out.push_str(",\n  \"metrics\": {");
-        for (i, (key, value)) in extra.metrics.iter().enumerate() {
+        for (i, (key, value)) in metrics.iter().enumerate() {
             if i > 0 {
                 out.push(',');
             }
@@ -129,8 +138,6 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
         }
         out.push_str("\n  }");
     }
-    out.push_str("\n}\n");
-    out
 }
 
 /// Appends `  "name": [` + one element per line + `  ]` (or `[]` when empty).

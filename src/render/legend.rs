@@ -245,31 +245,7 @@ fn push_entry(
             num(gy),
             s = num(swatch)
         )),
-        LegendItem::Tab => {
-            // Two cells side by side, the left one's dovetail in the right
-            // one, as on the map.
-            let h = 0.5 * swatch;
-            let (b, hd, d) = (0.16 * swatch, 0.24 * swatch, 0.26 * swatch);
-            let mid = gy + h;
-            out.push_str(&format!(
-                "<g class=\"np-legend-tab\"><rect x=\"{}\" y=\"{}\" width=\"{h2}\" height=\"{s}\" fill=\"#9c9c9c\"/><rect x=\"{}\" y=\"{}\" width=\"{h2}\" height=\"{s}\" fill=\"#cfcfcf\"/><polygon points=\"{},{} {},{} {},{} {},{}\" fill=\"#9c9c9c\" stroke=\"#ffffff\" stroke-width=\"{}\" stroke-linejoin=\"round\"/></g>",
-                num(gx),
-                num(gy),
-                num(gx + h),
-                num(gy),
-                num(gx + h - 0.02 * swatch),
-                num(mid - b),
-                num(gx + h + d),
-                num(mid - hd),
-                num(gx + h + d),
-                num(mid + hd),
-                num(gx + h - 0.02 * swatch),
-                num(mid + b),
-                num(0.06 * swatch),
-                h2 = num(h),
-                s = num(swatch)
-            ));
-        }
+        LegendItem::Tab => out.push_str(&tab_glyph(gx, gy, swatch)),
         LegendItem::Unlinked => out.push_str(&format!(
             "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#ffffff\" stroke=\"#d62728\" stroke-width=\"{}\"/>",
             num(gx + 0.5 * swatch),
@@ -291,6 +267,32 @@ fn push_entry(
         num(y + 0.5 * row + 0.35 * font),
         escape(&item.text())
     ));
+}
+
+/// The tab's glyph in a swatch at `(gx, gy)`: two cells side by side, the
+/// left one's dovetail in the right one, as on the map.
+fn tab_glyph(gx: f64, gy: f64, swatch: f64) -> String {
+    let h = 0.5 * swatch;
+    let (b, hd, d) = (0.16 * swatch, 0.24 * swatch, 0.26 * swatch);
+    let mid = gy + h;
+    format!(
+        "<g class=\"np-legend-tab\"><rect x=\"{}\" y=\"{}\" width=\"{h2}\" height=\"{s}\" fill=\"#9c9c9c\"/><rect x=\"{}\" y=\"{}\" width=\"{h2}\" height=\"{s}\" fill=\"#cfcfcf\"/><polygon points=\"{},{} {},{} {},{} {},{}\" fill=\"#9c9c9c\" stroke=\"#ffffff\" stroke-width=\"{}\" stroke-linejoin=\"round\"/></g>",
+        num(gx),
+        num(gy),
+        num(gx + h),
+        num(gy),
+        num(gx + h - 0.02 * swatch),
+        num(mid - b),
+        num(gx + h + d),
+        num(mid - hd),
+        num(gx + h + d),
+        num(mid + hd),
+        num(gx + h - 0.02 * swatch),
+        num(mid + b),
+        num(0.06 * swatch),
+        h2 = num(h),
+        s = num(swatch)
+    )
 }
 
 #[cfg(test)]

@@ -443,40 +443,8 @@ pub fn place_markers(
             Some(l) => Point::new(l.x1 + r, l.y0),
             None => polygon.centroid(),
         };
-        let (lo, hi) = polygon.bbox();
-        const STEPS: usize = 12;
-        let mut best: Option<(f64, Point)> = None;
-        for iy in 0..=STEPS {
-            for ix in 0..=STEPS {
-                let c = Point::new(
-                    lo.x + (hi.x - lo.x) * ix as f64 / STEPS as f64,
-                    lo.y + (hi.y - lo.y) * iy as f64 / STEPS as f64,
-                );
-                if inset(polygon, c) < margin {
-                    continue;
-                }
-                let hits_label = label.as_ref().is_some_and(|l| {
-                    let dx = c.x - c.x.clamp(l.x0, l.x1);
-                    let dy = c.y - c.y.clamp(l.y0, l.y1);
-                    dx * dx + dy * dy < r * r
-                });
-                let square = [
-                    c + Point::new(-r, -r),
-                    c + Point::new(r, -r),
-                    c + Point::new(r, r),
-                    c + Point::new(-r, r),
-                ];
-                let hits_tab = tabs_in[i].iter().any(|t| convex_overlap(t, &square));
-                if hits_label || hits_tab {
-                    continue;
-                }
-                let d = c.distance(wanted);
-                if best.is_none_or(|(bd, _)| d < bd) {
-                    best = Some((d, c));
-                }
-            }
-        }
-        if let Some((_, at)) = best {
+        let best = marker_spot(polygon, label.as_ref(), &tabs_in[i], r, margin, wanted);
+        if let Some(at) = best {
             used += marker_area;
             out.push(Marker {
                 node: i,
@@ -488,6 +456,53 @@ pub fn place_markers(
     }
     out.sort_by_key(|m| m.node);
     out
+}
+
+/// The centre of a marker of radius `r` in `polygon` at least `margin`
+/// inside it, clear of its label box and its tabs, nearest `wanted`: the best
+/// of a 13 × 13 grid over the cell's box, if any point of it fits.
+fn marker_spot(
+    polygon: &ConvexPolygon,
+    label: Option<&Rect>,
+    tabs: &[[Point; 4]],
+    r: f64,
+    margin: f64,
+    wanted: Point,
+) -> Option<Point> {
+    let (lo, hi) = polygon.bbox();
+    const STEPS: usize = 12;
+    let mut best: Option<(f64, Point)> = None;
+    for iy in 0..=STEPS {
+        for ix in 0..=STEPS {
+            let c = Point::new(
+                lo.x + (hi.x - lo.x) * ix as f64 / STEPS as f64,
+                lo.y + (hi.y - lo.y) * iy as f64 / STEPS as f64,
+            );
+            if inset(polygon, c) < margin {
+                continue;
+            }
+            let hits_label = label.is_some_and(|l| {
+                let dx = c.x - c.x.clamp(l.x0, l.x1);
+                let dy = c.y - c.y.clamp(l.y0, l.y1);
+                dx * dx + dy * dy < r * r
+            });
+            let square = [
+                c + Point::new(-r, -r),
+                c + Point::new(r, -r),
+                c + Point::new(r, r),
+                c + Point::new(-r, r),
+            ];
+            let hits_tab = tabs.iter().any(|t| convex_overlap(t, &square));
+            if hits_label || hits_tab {
+                continue;
+            }
+            let d = c.distance(wanted);
+            if best.is_none_or(|(bd, _)| d < bd) {
+                best = Some((d, c));
+            }
+        }
+    }
+    best.map(|(_, at)| at)
 }
 
 /// The tab layer's SVG: each tab as its cell-coloured shape and its outline.
