@@ -81,6 +81,17 @@ pub struct Built {
     pub stability: Option<Stability>,
 }
 
+/// How the layout came about, as the status line says it, and why it was
+/// laid out cold when it was.
+fn layout_kind(step: &LayoutStep) -> (LayoutKind, Option<String>) {
+    match step {
+        LayoutStep::Cold(why) => (LayoutKind::Cold, Some(why.clone())),
+        LayoutStep::Warm => (LayoutKind::Warm, None),
+        LayoutStep::Reused => (LayoutKind::Reused, None),
+        LayoutStep::UpToDate => (LayoutKind::UpToDate, None),
+    }
+}
+
 /// How a task ended.
 pub enum Outcome {
     /// The inputs did not change: nothing was done.
@@ -301,17 +312,8 @@ impl Remembered {
         if shared.stopping() {
             return Outcome::Abandoned;
         }
-        let why = match &build.layout {
-            LayoutStep::Cold(why) => Some(why.clone()),
-            _ => None,
-        };
+        let (layout, why) = layout_kind(&build.layout);
         let realized = (build.constraints > 0).then_some((build.realized, build.constraints));
-        let layout = match &build.layout {
-            LayoutStep::Cold(_) => LayoutKind::Cold,
-            LayoutStep::Warm => LayoutKind::Warm,
-            LayoutStep::Reused => LayoutKind::Reused,
-            LayoutStep::UpToDate => LayoutKind::UpToDate,
-        };
         // How far the cells moved from the layout the warm start began with
         // (cheap next to the layout: one pass over the leaves and the
         // realised pairs).
