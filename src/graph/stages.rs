@@ -141,27 +141,10 @@ impl DatasetGraph {
         let colors = render::group_colors(&out.laid.computed, &style);
         style.cells.kept = colors.clone();
         let outputs = self.render(job, &style, key, &out.laid, &manifest, &disk, &mut cx)?;
-        let record = LayoutRecord {
-            inputs: Some(key.inputs),
-            settings: key.settings,
-            state: out.laid.state,
-            constraints: out.laid.computed.constraints.len(),
-            realized: out.laid.computed.realized.iter().filter(|r| **r).count(),
-            warnings: dataset
-                .warnings()
-                .iter()
-                .map(|w| (w.role.clone(), w.to_string()))
-                .collect(),
-        };
         let records = outputs.iter().map(|(r, _)| r.clone()).collect();
-        let realized = record.realized;
-        pending.manifest = Some(Manifest {
-            format: manifest::FORMAT.to_string(),
-            layout: Some(record),
-            outputs: records,
-            colors: colors.groups.iter().map(|(id, c)| (id.clone(), c.to_hex())).collect(),
-            shades: colors.main.clone(),
-        });
+        let next = next_manifest(key, &out.laid, &dataset, records, &colors);
+        let realized = next.layout.as_ref().map_or(0, |r| r.realized);
+        pending.manifest = Some(next);
         Ok(DatasetBuild {
             name: d.name.clone(),
             started_from: out.started_from.filter(|_| out.step == LayoutStep::Warm),
@@ -460,6 +443,36 @@ impl DatasetGraph {
                 self.known(d, manifest, out, render_key, *disk)
             })
             .collect()
+    }
+}
+
+/// The manifest a build leaves for the next: what the layout was made from,
+/// each output's render key and bytes, and the colours drawn (kept next).
+fn next_manifest(
+    key: LayoutKey,
+    laid: &Laid,
+    dataset: &Dataset,
+    outputs: Vec<OutputRecord>,
+    colors: &render::Kept,
+) -> Manifest {
+    let record = LayoutRecord {
+        inputs: Some(key.inputs),
+        settings: key.settings,
+        state: laid.state,
+        constraints: laid.computed.constraints.len(),
+        realized: laid.computed.realized.iter().filter(|r| **r).count(),
+        warnings: dataset
+            .warnings()
+            .iter()
+            .map(|w| (w.role.clone(), w.to_string()))
+            .collect(),
+    };
+    Manifest {
+        format: manifest::FORMAT.to_string(),
+        layout: Some(record),
+        outputs,
+        colors: colors.groups.iter().map(|(id, c)| (id.clone(), c.to_hex())).collect(),
+        shades: colors.main.clone(),
     }
 }
 

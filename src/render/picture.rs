@@ -550,6 +550,37 @@ fn name_fill(
     }
 }
 
+/// The legend of a picture coloured by a field: its scale (named log or
+/// clipped when it is), and a swatch for the cells without a value.
+fn scale_items(a: &Applied) -> Vec<LegendItem> {
+    // A clipped scale's ends hold every value beyond them.
+    let (below, above) = if a.clipped {
+        ("≤ ", "≥ ")
+    } else {
+        ("", "")
+    };
+    let mut items = vec![LegendItem::Scale {
+        field: if a.log {
+            format!("{} (log scale)", a.field)
+        } else if a.clipped {
+            format!("{} (scale clipped at outliers)", a.field)
+        } else {
+            a.field.clone()
+        },
+        low: format!("{below}{}", format_value(a.lo, "")),
+        high: format!("{above}{}", format_value(a.hi, "")),
+        stops: a.stops.clone(),
+    }];
+    if a.missing {
+        items.push(LegendItem::Swatch {
+            color: color_by::MISSING,
+            label: format!("no {} value", a.field),
+            group: None,
+        });
+    }
+    items
+}
+
 /// What the legend lists: the `note` (first, so that no cut drops it), a
 /// key for each glyph the picture draws (`tabs`, `markers`), then the
 /// top-level groups (when they have children of their own; otherwise every
@@ -576,31 +607,7 @@ pub(crate) fn legend_items(
     // Coloured by a field, the colours mean its values, not the groups
     // (whose names are on the map).
     if let Some(a) = applied {
-        // A clipped scale's ends hold every value beyond them.
-        let (below, above) = if a.clipped {
-            ("≤ ", "≥ ")
-        } else {
-            ("", "")
-        };
-        items.push(LegendItem::Scale {
-            field: if a.log {
-                format!("{} (log scale)", a.field)
-            } else if a.clipped {
-                format!("{} (scale clipped at outliers)", a.field)
-            } else {
-                a.field.clone()
-            },
-            low: format!("{below}{}", format_value(a.lo, "")),
-            high: format!("{above}{}", format_value(a.hi, "")),
-            stops: a.stops.clone(),
-        });
-        if a.missing {
-            items.push(LegendItem::Swatch {
-                color: color_by::MISSING,
-                label: format!("no {} value", a.field),
-                group: None,
-            });
-        }
+        items.extend(scale_items(a));
         return items;
     }
     let root = dataset.node(dataset.root());
