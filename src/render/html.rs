@@ -16,6 +16,7 @@ use serde::Serialize;
 use super::label_text::display_name;
 use super::labels::format_value;
 use super::legend::LegendItem;
+use super::overlay::Link;
 use super::palette::TABLEAU10;
 use super::picture::{colors, compose, fills, legend_items, Style};
 use super::svg::{escape, leaf_labels, path_data};
@@ -456,57 +457,7 @@ pub fn html_page_with_history(
     let svg_text = compose(dataset, layout, &links, &adjacent, &page_style);
     let svg_text = lighten(&svg_text);
 
-    let names = &style.cells.labels.names;
-    let mut partners: Vec<Vec<(usize, bool)>> = vec![Vec::new(); dataset.len()];
-    for link in &links {
-        let (a, b) = (link.a.min(link.b), link.a.max(link.b));
-        if a != b && a < partners.len() && !partners[a].iter().any(|p| p.0 == b) {
-            partners[a].push((b, link.realized));
-        }
-    }
-    let hidden: HashMap<&str, &HiddenUnder> = computed
-        .zero
-        .under
-        .iter()
-        .map(|u| (u.parent.as_str(), u))
-        .collect();
-    let count = dataset.len().min(layout.cells.len());
-    let nodes = (0..count)
-        .map(|i| {
-            let node = dataset.node(i);
-            let label = display_name(dataset, i, names, &style.cells.labels.text);
-            let leaf = node.children.is_empty();
-            HtmlNode {
-                id: node.id.clone(),
-                label: (label != node.id).then_some(label),
-                parent: node.parent,
-                weight: format_value(node.value, ""),
-                zoom: zoom_box(dataset, layout, i),
-                neighbors: if leaf {
-                    view.leaf_neighbors(computed, i)
-                        .into_iter()
-                        .filter(|&j| j > i)
-                        .collect()
-                } else {
-                    Vec::new()
-                },
-                partners: std::mem::take(&mut partners[i]),
-                fields: shown_fields(&node.fields, &style.page.fields),
-                link: style.page.link.as_deref().and_then(|name| {
-                    let href = &node.fields.iter().find(|(n, _)| n == name)?.1;
-                    Some(HtmlLink {
-                        href: href.clone(),
-                        ok: followable(href),
-                    })
-                }),
-                empty: hidden.get(node.id.as_str()).map(|u| HtmlEmpty {
-                    items: u.items,
-                    names: u.names.clone(),
-                    more: u.more,
-                }),
-            }
-        })
-        .collect();
+    let nodes = page_nodes(computed, &view, &links, style);
 
     let labels = page_style.cells.labels.show.then(|| {
         let placed = leaf_labels(dataset, layout, &page_style.cells.labels);
@@ -565,6 +516,70 @@ pub fn html_page_with_history(
             new_tab: style.page.new_tab,
         },
     )
+}
+
+/// Per node of the real view, what the page's script reads: id, label,
+/// parent, weight, zoom box, neighbours and constraint partners, the
+/// `page:` fields and link, and the items of weight 0 under it.
+fn page_nodes(
+    computed: &Computed,
+    view: &RealView<'_>,
+    links: &[Link],
+    style: &Style,
+) -> Vec<HtmlNode> {
+    let dataset = view.dataset.as_ref();
+    let layout = view.layout.as_ref();
+    let names = &style.cells.labels.names;
+    let mut partners: Vec<Vec<(usize, bool)>> = vec![Vec::new(); dataset.len()];
+    for link in links {
+        let (a, b) = (link.a.min(link.b), link.a.max(link.b));
+        if a != b && a < partners.len() && !partners[a].iter().any(|p| p.0 == b) {
+            partners[a].push((b, link.realized));
+        }
+    }
+    let hidden: HashMap<&str, &HiddenUnder> = computed
+        .zero
+        .under
+        .iter()
+        .map(|u| (u.parent.as_str(), u))
+        .collect();
+    let count = dataset.len().min(layout.cells.len());
+    (0..count)
+        .map(|i| {
+            let node = dataset.node(i);
+            let label = display_name(dataset, i, names, &style.cells.labels.text);
+            let leaf = node.children.is_empty();
+            HtmlNode {
+                id: node.id.clone(),
+                label: (label != node.id).then_some(label),
+                parent: node.parent,
+                weight: format_value(node.value, ""),
+                zoom: zoom_box(dataset, layout, i),
+                neighbors: if leaf {
+                    view.leaf_neighbors(computed, i)
+                        .into_iter()
+                        .filter(|&j| j > i)
+                        .collect()
+                } else {
+                    Vec::new()
+                },
+                partners: std::mem::take(&mut partners[i]),
+                fields: shown_fields(&node.fields, &style.page.fields),
+                link: style.page.link.as_deref().and_then(|name| {
+                    let href = &node.fields.iter().find(|(n, _)| n == name)?.1;
+                    Some(HtmlLink {
+                        href: href.clone(),
+                        ok: followable(href),
+                    })
+                }),
+                empty: hidden.get(node.id.as_str()).map(|u| HtmlEmpty {
+                    items: u.items,
+                    names: u.names.clone(),
+                    more: u.more,
+                }),
+            }
+        })
+        .collect()
 }
 
 /// The node's values of the `wanted` fields, in that order.

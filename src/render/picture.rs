@@ -323,27 +323,7 @@ pub(crate) fn compose_noted(
     } else {
         Vec::new()
     };
-    let edge_width = |a: usize, b: usize| {
-        // The outline between two cells is the one of their lowest common
-        // ancestor's children.
-        let (mut x, mut y) = (a, b);
-        while dataset.node(x).depth > dataset.node(y).depth {
-            x = dataset.node(x).parent.unwrap_or(x);
-        }
-        while dataset.node(y).depth > dataset.node(x).depth {
-            y = dataset.node(y).parent.unwrap_or(y);
-        }
-        while x != y {
-            match (dataset.node(x).parent, dataset.node(y).parent) {
-                (Some(px), Some(py)) => {
-                    x = px;
-                    y = py;
-                }
-                _ => break,
-            }
-        }
-        stroke_width(style.cells.stroke_width, dataset.node(x).depth + 1)
-    };
+    let edge_width = |a: usize, b: usize| outline_between(dataset, style.cells.stroke_width, a, b);
     let tabs = if style.tabs {
         place_tabs(layout, links, &labels, u, &edge_width)
     } else {
@@ -401,21 +381,7 @@ pub(crate) fn compose_noted(
         ));
     }
     if let Some(lines) = &title {
-        // One <text> per line, the last one's baseline where a one-line
-        // title's is.
-        let last = lines.len() - 1;
-        for (k, line) in lines.iter().enumerate() {
-            let y = -PAD * u - 0.25 * title_size - TITLE_LEADING * title_size * (last - k) as f64;
-            out.push_str(&format!(
-                "<text class=\"np-title\" x=\"{}\" y=\"{}\" font-family=\"{}\" font-size=\"{}\" font-weight=\"bold\" fill=\"{}\">{}</text>\n",
-                num(PAD * u),
-                num(y),
-                escape(&style.cells.font_family),
-                num(title_size),
-                style.cells.text_color,
-                escape(line)
-            ));
-        }
+        push_title(&mut out, lines, title_size, u, style);
     }
     push_cells(&mut out, dataset, layout, &style.cells, &colors);
     // Tabs on the edges, group names across the groups, then the leaf labels
@@ -430,29 +396,75 @@ pub(crate) fn compose_noted(
     if !links.is_empty() {
         out.push_str(&marks_svg(layout, links, &markers, &style.overlay, u));
     }
-    if let Some(border) = style
-        .border
-        .filter(|b| b.width > 0.0 && b.width.is_finite())
-    {
-        let root = dataset.root();
-        if root < layout.cells.len() {
-            let pts: Vec<String> = layout.cells[root]
-                .polygon
-                .points()
-                .iter()
-                .map(|p| format!("{},{}", num(p.x), num(p.y)))
-                .collect();
-            out.push_str(&format!(
-                "<polygon class=\"np-border\" points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" stroke-linejoin=\"round\"/>\n",
-                pts.join(" "),
-                border.color,
-                num(border.width)
-            ));
-        }
-    }
+    push_border(&mut out, dataset, layout, style);
     out.push_str(&legend_text);
     out.push_str("</svg>\n");
     out
+}
+
+/// The outline width between cells `a` and `b`: that of their lowest common
+/// ancestor's children.
+fn outline_between(dataset: &Dataset, base: f64, a: usize, b: usize) -> f64 {
+    let (mut x, mut y) = (a, b);
+    while dataset.node(x).depth > dataset.node(y).depth {
+        x = dataset.node(x).parent.unwrap_or(x);
+    }
+    while dataset.node(y).depth > dataset.node(x).depth {
+        y = dataset.node(y).parent.unwrap_or(y);
+    }
+    while x != y {
+        match (dataset.node(x).parent, dataset.node(y).parent) {
+            (Some(px), Some(py)) => {
+                x = px;
+                y = py;
+            }
+            _ => break,
+        }
+    }
+    stroke_width(base, dataset.node(x).depth + 1)
+}
+
+/// The title's lines, one `<text>` each, the last one's baseline where a
+/// one-line title's is.
+fn push_title(out: &mut String, lines: &[String], title_size: f64, u: f64, style: &Style) {
+    let last = lines.len() - 1;
+    for (k, line) in lines.iter().enumerate() {
+        let y = -PAD * u - 0.25 * title_size - TITLE_LEADING * title_size * (last - k) as f64;
+        out.push_str(&format!(
+            "<text class=\"np-title\" x=\"{}\" y=\"{}\" font-family=\"{}\" font-size=\"{}\" font-weight=\"bold\" fill=\"{}\">{}</text>\n",
+            num(PAD * u),
+            num(y),
+            escape(&style.cells.font_family),
+            num(title_size),
+            style.cells.text_color,
+            escape(line)
+        ));
+    }
+}
+
+/// The border round the map (the root's cell), when the style has one.
+fn push_border(out: &mut String, dataset: &Dataset, layout: &Layout, style: &Style) {
+    let Some(border) = style
+        .border
+        .filter(|b| b.width > 0.0 && b.width.is_finite())
+    else {
+        return;
+    };
+    let root = dataset.root();
+    if root < layout.cells.len() {
+        let pts: Vec<String> = layout.cells[root]
+            .polygon
+            .points()
+            .iter()
+            .map(|p| format!("{},{}", num(p.x), num(p.y)))
+            .collect();
+        out.push_str(&format!(
+            "<polygon class=\"np-border\" points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" stroke-linejoin=\"round\"/>\n",
+            pts.join(" "),
+            border.color,
+            num(border.width)
+        ));
+    }
 }
 
 /// Opacity of the group names: large and light, under the leaf labels.
