@@ -242,6 +242,40 @@ fn named_column(t: &Profile<'_>, path: &Path, flag: &str, name: &str) -> Result<
     })
 }
 
+/// The weight column: the one given (every value a number >= 0, else the
+/// error names the line), else one named like a weight, else the first
+/// column of numbers >= 0 but the id.
+fn weight_column(
+    t: &Profile<'_>,
+    path: &Path,
+    id: usize,
+    given: &Overrides,
+) -> Result<Option<usize>, UsageError> {
+    Ok(match &given.weight {
+        Some(name) => {
+            let i = named_column(t, path, "--weight", name)?;
+            if let Some(row) = t.table.rows.iter().find(|r| {
+                !cell(r, i)
+                    .parse::<f64>()
+                    .is_ok_and(|x| x.is_finite() && x >= 0.0)
+            }) {
+                return Err(UsageError(format!(
+                    "--weight {name}: column {name:?} of {} is not a number >= 0 (line {}: {:?}); \
+                     a weight is a cell's area",
+                    path.display(),
+                    row.line,
+                    cell(row, i)
+                )));
+            }
+            Some(i)
+        }
+        None => t
+            .named(&["weight", "value", "size"])
+            .filter(|&i| t.columns[i].nonnegative)
+            .or_else(|| (0..t.columns.len()).find(|&i| i != id && t.columns[i].nonnegative)),
+    })
+}
+
 /// The field mapping of node table `t` (at `path`) with id column `id`: the
 /// overrides where given, else init's guesses.
 pub(super) fn fields(
@@ -287,29 +321,7 @@ pub(super) fn fields(
                     })
             }),
     };
-    let weight = match &given.weight {
-        Some(name) => {
-            let i = column("--weight", name)?;
-            if let Some(row) = t.table.rows.iter().find(|r| {
-                !cell(r, i)
-                    .parse::<f64>()
-                    .is_ok_and(|x| x.is_finite() && x >= 0.0)
-            }) {
-                return Err(UsageError(format!(
-                    "--weight {name}: column {name:?} of {} is not a number >= 0 (line {}: {:?}); \
-                     a weight is a cell's area",
-                    path.display(),
-                    row.line,
-                    cell(row, i)
-                )));
-            }
-            Some(i)
-        }
-        None => t
-            .named(&["weight", "value", "size"])
-            .filter(|&i| t.columns[i].nonnegative)
-            .or_else(|| (0..t.columns.len()).find(|&i| i != id && t.columns[i].nonnegative)),
-    };
+    let weight = weight_column(t, path, id, given)?;
     let groups = match &given.groups {
         Some(names) => names
             .iter()

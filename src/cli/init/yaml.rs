@@ -109,46 +109,9 @@ impl Writer {
     }
 }
 
-/// The commented config of `plan`.
-pub(super) fn config_text(plan: &Plan) -> Result<String, serde_yaml::Error> {
-    let mut w = Writer::default();
-    w.comment("", &format!("Written by `{}`.", plan.command_line));
-    w.comment(
-        "",
-        "Build with `nptreemap build`, keep current with `nptreemap watch`.",
-    );
-    w.comment(
-        "",
-        "Every key, with its default and what it does: `nptreemap config --defaults`.",
-    );
-    for line in &plan.why {
-        w.comment("", line);
-    }
-    w.text.push_str("layout:\n");
-    w.at(
-        "  ",
-        "seed",
-        &1,
-        Some("the same seed gives the same picture"),
-    )?;
-    if let Some(text) = &plan.fields.label_text {
-        w.text.push_str("render:\n  labels:\n");
-        w.at(
-            "    ",
-            "text",
-            text,
-            Some("the label column repeats: this is unique per row"),
-        )?;
-    }
-    w.text.push_str("datasets:\n");
-    let (item, d) = ("  - ", "    ");
-    w.entry((item, d), "name", &plan.name, None)?;
-    w.at(d, "format", plan.format, None)?;
-    w.text.push_str("    files:\n");
-    let f = "      ";
-    for (role, path) in &plan.files {
-        w.at(f, role, path, None)?;
-    }
+/// The dataset's `fields:` section: each column `init` chose, or a comment
+/// saying what it looked for and found none of.
+fn write_fields(w: &mut Writer, plan: &Plan, f: &str) -> Result<(), serde_yaml::Error> {
     w.text.push_str("    fields:\n");
     let fields = &plan.fields;
     w.at(f, "id", &fields.id, Some("unique per row"))?;
@@ -192,9 +155,14 @@ pub(super) fn config_text(plan: &Plan) -> Result<String, serde_yaml::Error> {
     if let Some(strength) = &plan.strength {
         w.at(f, "strength", strength, None)?;
     }
+    Ok(())
+}
+
+/// The page's own columns and link, commented out: written by the YAML
+/// crate, then commented line by line, so removing the `# ` gives valid
+/// YAML.
+fn write_page(w: &mut Writer, plan: &Plan, d: &str) -> Result<(), serde_yaml::Error> {
     if !plan.page.fields.is_empty() || plan.page.link.is_some() {
-        // Written by the YAML crate, then commented out line by line: the
-        // reader removes the `# ` and has valid YAML.
         let mut page = Writer::default();
         page.text.push_str("page:\n");
         if !plan.page.fields.is_empty() {
@@ -212,6 +180,51 @@ pub(super) fn config_text(plan: &Plan) -> Result<String, serde_yaml::Error> {
             w.comment(d, line);
         }
     }
+    Ok(())
+}
+
+/// The commented config of `plan`.
+pub(super) fn config_text(plan: &Plan) -> Result<String, serde_yaml::Error> {
+    let mut w = Writer::default();
+    w.comment("", &format!("Written by `{}`.", plan.command_line));
+    w.comment(
+        "",
+        "Build with `nptreemap build`, keep current with `nptreemap watch`.",
+    );
+    w.comment(
+        "",
+        "Every key, with its default and what it does: `nptreemap config --defaults`.",
+    );
+    for line in &plan.why {
+        w.comment("", line);
+    }
+    w.text.push_str("layout:\n");
+    w.at(
+        "  ",
+        "seed",
+        &1,
+        Some("the same seed gives the same picture"),
+    )?;
+    if let Some(text) = &plan.fields.label_text {
+        w.text.push_str("render:\n  labels:\n");
+        w.at(
+            "    ",
+            "text",
+            text,
+            Some("the label column repeats: this is unique per row"),
+        )?;
+    }
+    w.text.push_str("datasets:\n");
+    let (item, d) = ("  - ", "    ");
+    w.entry((item, d), "name", &plan.name, None)?;
+    w.at(d, "format", plan.format, None)?;
+    w.text.push_str("    files:\n");
+    let f = "      ";
+    for (role, path) in &plan.files {
+        w.at(f, role, path, None)?;
+    }
+    write_fields(&mut w, plan, f)?;
+    write_page(&mut w, plan, d)?;
     w.text.push_str("    outputs:\n");
     for path in &plan.outputs {
         w.entry(("      - ", "        "), "path", path, None)?;
