@@ -711,8 +711,21 @@ fn zoom_box(dataset: &nptreemap_formats::Dataset, layout: &Layout, i: usize) -> 
         return None;
     }
     let (cx, cy) = (0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y));
+    // Centred on the group, then moved back inside the canvas where the box
+    // fits in it: a group at the map's edge fills the view instead of
+    // sharing it with blank page (the Python email package, at the bottom
+    // of its map, took the top half of its zoomed view).
+    let inside = |c: f64, size: f64, canvas: f64| {
+        let start = c - 0.5 * size;
+        if size <= canvas {
+            start.clamp(0.0, canvas - size)
+        } else {
+            start
+        }
+    };
+    let (x, y) = (inside(cx, w, cw), inside(cy, h, ch));
     let r = |v: f64| (v * 100.0).round() / 100.0;
-    Some([r(cx - 0.5 * w), r(cy - 0.5 * h), r(w), r(h)])
+    Some([r(x), r(y), r(w), r(h)])
 }
 
 /// `data` as JSON safe inside a `<script>` element: every `<` becomes the JSON

@@ -459,3 +459,53 @@ fn past_layouts_are_the_earlier_pages_cells_and_stay_escaped() {
         html_page_with_history(&after, &style, &[again.clone(), again])
     );
 }
+
+#[test]
+fn a_zoom_box_stays_inside_the_canvas_and_holds_its_group() {
+    // Groups of uneven weight: some sit at the map's edges, where a box
+    // centred on them reached past the canvas (blank page in the view).
+    let mut b = DatasetBuilder::new();
+    b.add(NodeSpec::new("root"));
+    for g in 0..8 {
+        let group = format!("g{g}");
+        b.add(NodeSpec::new(group.clone()).parent("root"));
+        for k in 0..3 {
+            let weight = 1.0 + (g * 3 + k) as f64;
+            b.add(
+                NodeSpec::new(format!("{group}-{k}"))
+                    .parent(group.as_str())
+                    .weight(weight),
+            );
+        }
+    }
+    let dataset = b.build().expect("valid");
+    let computed =
+        crate::layout::compute(&dataset, &crate::layout::Request::default()).expect("layout");
+    let (data, layout) = (&computed.dataset, &computed.layout);
+    let (cw, ch) = (layout.canvas.width, layout.canvas.height);
+    let mut boxes = 0;
+    for g in 0..8 {
+        let i = data.find(&format!("g{g}")).expect("group");
+        let Some([x, y, w, h]) = zoom_box(data, layout, i) else {
+            continue;
+        };
+        boxes += 1;
+        let (lo, hi) = layout.cells[i].polygon.bbox();
+        // Rounded to hundredths.
+        let eps = 0.01;
+        assert!(x >= -eps && y >= -eps, "g{g}: {x},{y}");
+        assert!(
+            x + w <= cw + eps && y + h <= ch + eps,
+            "g{g}: {x},{y} {w}x{h}"
+        );
+        assert!(
+            x <= lo.x + eps && y <= lo.y + eps,
+            "g{g} starts inside its box"
+        );
+        assert!(
+            x + w >= hi.x - eps && y + h >= hi.y - eps,
+            "g{g} ends inside its box"
+        );
+    }
+    assert!(boxes >= 4, "{boxes} groups worth zooming into");
+}
