@@ -230,26 +230,22 @@ pub fn assign(
         palette.iter().enumerate().map(|(k, &c)| (c, k)).collect();
     let mut colors: Vec<Option<Rgb>> = fixed.to_vec();
     let mut used = vec![0usize; palette.len()];
-    // A palette of up to `NEAR_PALETTE` colours also counts those a kept
-    // colour looks like as used: Tableau 10's brown `#9c755f` is kept when
-    // a map grows past ten groups, and Tableau 20's `#9d7660` (ΔE00 0.4)
-    // must not go to a new group while another colour is free.
-    let near: Vec<[f64; 3]> = if palette.len() <= NEAR_PALETTE {
-        palette.iter().map(|&c| cielab(c)).collect()
-    } else {
-        Vec::new()
-    };
+    // A kept colour the palette does not hold counts the palette colours it
+    // looks like as used (in a palette of up to `NEAR_PALETTE`): Tableau
+    // 10's brown `#9c755f` is kept when a map grows past ten groups, and
+    // Tableau 20's `#9d7660` (ΔE00 0.4) must not go to a new group while
+    // another colour is free.
+    let mut near: Option<Vec<[f64; 3]>> = None;
     for c in fixed.iter().flatten() {
-        if near.is_empty() {
-            if let Some(&k) = index.get(c) {
-                used[k] += 1;
-            }
-            continue;
-        }
-        let lab = cielab(*c);
-        for (k, p) in near.iter().enumerate() {
-            if delta_e_lab(lab, *p) < LEGEND_ALIKE {
-                used[k] += 1;
+        if let Some(&k) = index.get(c) {
+            used[k] += 1;
+        } else if palette.len() <= NEAR_PALETTE {
+            let near = near.get_or_insert_with(|| palette.iter().map(|&c| cielab(c)).collect());
+            let lab = cielab(*c);
+            for (k, p) in near.iter().enumerate() {
+                if delta_e_lab(lab, *p) < LEGEND_ALIKE {
+                    used[k] += 1;
+                }
             }
         }
     }
@@ -292,10 +288,10 @@ pub fn assign(
     colors
 }
 
-/// Largest palette whose colours are compared with the kept ones by
-/// likeness rather than equality in [`assign`]: Tableau's palettes up to
+/// Largest palette whose colours are compared by likeness with a kept
+/// colour it does not hold, in [`assign`]: Tableau's palettes up to
 /// [`super::distinct::FARTHEST`] and then some, at most one CIEDE2000 per
-/// kept colour and palette colour.
+/// such kept colour and palette colour.
 const NEAR_PALETTE: usize = 256;
 /// CIEDE2000 under which [`assign`] takes a palette colour for a kept one:
 /// below the closest pair of Tableau 20 (9.1), above Tableau 10's colours
