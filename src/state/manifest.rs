@@ -6,7 +6,8 @@
 //!
 //! Deterministic JSON (no times, no absolute paths: outputs are named
 //! relative to the config's folder), so it can be committed; about 150 bytes
-//! plus 150 per output. One that is missing, unreadable or of another
+//! plus 150 per output and about 75 per kept colour (a top-level group, or a
+//! parent of two children or more: 51 KB for 6,000 C headers in 191 folders). One that is missing, unreadable or of another
 //! format reads as empty: the build then recomputes and writes it anew.
 
 use std::collections::BTreeMap;

@@ -22,7 +22,8 @@
 //!   drawn with (each top-level group's, and per parent the child that
 //!   wears its colour; kept by the next build). A build or `build --check` whose
 //!   inputs, settings and outputs match it is done after reading and hashing
-//!   them. Small (about 150 bytes per output), deterministic, committed.
+//!   them. Small (about 150 bytes per output and 75 per kept colour: 51 KB
+//!   for 6,000 C headers), deterministic, committed.
 //! - `cache/<name>.constraints.bin` ([`constraints`]): the constraints of
 //!   the last similarity inputs, so that an edit that leaves them alone (a
 //!   weight) recomputes none. Local only: a `.gitignore` in `cache/` says so,
