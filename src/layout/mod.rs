@@ -110,6 +110,44 @@ pub struct Report {
     pub frames: Vec<Frame>,
 }
 
+impl Report {
+    /// Counts one optimised diagram: its ticks, its area error (the caller
+    /// sums the errors for [`Report::set_mean`]) and whether it converged.
+    /// The one place both engines count a diagram, so their reports agree.
+    pub(crate) fn count_diagram(&mut self, iterations: usize, error: f64, converged: bool) {
+        self.diagrams += 1;
+        self.iterations += iterations;
+        self.area_error_max = self.area_error_max.max(error);
+        if !converged {
+            self.unconverged += 1;
+        }
+    }
+
+    /// Sets the mean area error from the sum of the counted diagrams' errors.
+    pub(crate) fn set_mean(&mut self, error_sum: f64) {
+        if self.diagrams > 0 {
+            self.area_error_mean = error_sum / self.diagrams as f64;
+        }
+    }
+
+    /// This report and `below`'s (a deeper level's) as one; the mean is left
+    /// for [`Report::set_mean`] once every level is in.
+    pub(crate) fn merge(self, below: Report) -> Report {
+        Report {
+            diagrams: self.diagrams + below.diagrams,
+            iterations: self.iterations + below.iterations,
+            area_error_mean: 0.0,
+            area_error_max: self.area_error_max.max(below.area_error_max),
+            unconverged: self.unconverged + below.unconverged,
+            reused: self.reused + below.reused,
+            degenerate: self.degenerate + below.degenerate,
+            repaired: self.repaired + below.repaired,
+            fallbacks: self.fallbacks + below.fallbacks,
+            frames: self.frames.into_iter().chain(below.frames).collect(),
+        }
+    }
+}
+
 impl Layout {
     /// The cell of node `index`.
     pub fn cell(&self, index: usize) -> &LayoutCell {

@@ -130,16 +130,11 @@ pub(super) fn top_down(
         let mut next = Vec::new();
         for d in divisions {
             if d.optimized {
-                report.diagrams += 1;
-                report.iterations += d.iterations;
+                report.count_diagram(d.iterations, d.error, d.converged);
                 if d.iterations == 0 {
                     report.reused += 1;
                 }
                 error_sum += d.error;
-                report.area_error_max = report.area_error_max.max(d.error);
-                if !d.converged {
-                    report.unconverged += 1;
-                }
             }
             report.degenerate += d.degenerate;
             for (child, cell) in d.cells {
@@ -149,9 +144,7 @@ pub(super) fn top_down(
         }
         frontier = next;
     }
-    if report.diagrams > 0 {
-        report.area_error_mean = error_sum / report.diagrams as f64;
-    }
+    report.set_mean(error_sum);
     Ok((finish(dataset, params.canvas, cells), report))
 }
 

@@ -95,19 +95,50 @@ fn derive(
         return None;
     }
 
-    let mut bins: Vec<Bins> = vec![Bins::default(); nodes.len()];
-    // Per leaf rank: its row over the copies of the current level, other than
-    // its own (leaves with a chain only, from the level of their head on).
-    let mut summaries: Vec<Option<ScoreTops>> = vec![None; deepest.len()];
-    let mut position_of_rank = vec![u32::MAX; deepest.len()];
+    let mut chains = Chains {
+        prepared,
+        kind,
+        sparse,
+        rank,
+        leaf_of,
+        bins: vec![Bins::default(); nodes.len()],
+        summaries: vec![None; deepest.len()],
+        position_of_rank: vec![u32::MAX; deepest.len()],
+    };
     for (level, roles) in levels.iter().zip(&roles).skip(1) {
+        chains.level(level, roles);
+    }
+    Some(chains.bins)
+}
+
+/// What the derivation carries down the levels: every node's bins so far,
+/// and per leaf rank its row over the copies of the current level other than
+/// its own (leaves with a chain only, from the level of their head on).
+struct Chains<'a> {
+    prepared: &'a Dataset,
+    kind: SimilarityKind,
+    sparse: bool,
+    /// Position of every original leaf in the deepest level.
+    rank: Vec<u32>,
+    /// The original leaf of every node (itself unless a copy).
+    leaf_of: Vec<usize>,
+    bins: Vec<Bins>,
+    summaries: Vec<Option<ScoreTops>>,
+    /// The current level's position of each leaf rank's copy.
+    position_of_rank: Vec<u32>,
+}
+
+impl Chains<'_> {
+    /// The bins of one level's nodes: real rows scanned, copies' rows derived.
+    fn level(&mut self, level: &[usize], roles: &[Role]) {
+        let (prepared, kind, sparse) = (self.prepared, self.kind, self.sparse);
         let of = |r: Role| -> Vec<usize> { (0..level.len()).filter(|&p| roles[p] == r).collect() };
         let (copies, heads) = (of(Role::Copy), of(Role::Head));
         if copies.is_empty() && heads.is_empty() {
             for (&node, node_bins) in level.iter().zip(level_bins(prepared, kind, level, sparse)) {
-                bins[node] = node_bins;
+                self.bins[node] = node_bins;
             }
-            continue;
+            return;
         }
         let reals: Vec<usize> = (0..level.len()).filter(|&p| roles[p] != Role::Copy).collect();
         let real_bins = if copies.is_empty() {
@@ -116,17 +147,31 @@ fn derive(
             level_rows_bins(prepared, kind, level, Some(&reals), sparse)
         };
         for (&p, node_bins) in reals.iter().zip(real_bins) {
-            bins[level[p]] = node_bins;
+            self.bins[level[p]] = node_bins;
         }
+        let others = of(Role::Other);
+        self.chain_rows(level, copies, heads, others);
+    }
 
+    /// The rows of a level's copies (their leaf's summary renamed to the
+    /// level, merged with fresh columns of the real nodes) and the heads'
+    /// summaries for the levels below.
+    fn chain_rows(
+        &mut self,
+        level: &[usize],
+        copies: Vec<usize>,
+        heads: Vec<usize>,
+        others: Vec<usize>,
+    ) {
+        let (prepared, kind) = (self.prepared, self.kind);
         let features: Vec<NodeFeatures<'_>> = level
             .iter()
             .map(|&n| NodeFeatures::new(kind, prepared, n))
             .collect();
-        let others: Vec<usize> = (0..level.len()).filter(|&p| roles[p] == Role::Other).collect();
+        let (rank, leaf_of) = (&self.rank, &self.leaf_of);
         let to_rank = |p: u32| rank[leaf_of[level[p as usize]]];
         for &p in &copies {
-            position_of_rank[to_rank(p as u32) as usize] = p as u32;
+            self.position_of_rank[to_rank(p as u32) as usize] = p as u32;
         }
         let copy_columns = Columns::new(kind, &features, copies.clone());
         let head_columns = Columns::new(kind, &features, heads.clone());
@@ -134,7 +179,7 @@ fn derive(
         let row_of = |tops: &mut TopsBuilder, p: usize, columns: &Columns| {
             columns.row(kind, &features, level, p, tops)
         };
-
+        let (summaries, position_of_rank) = (&self.summaries, &self.position_of_rank);
         // Copies: the leaf's summary, renamed to this level, and the fresh
         // columns of the real nodes.
         let derived: Vec<(Bins, Option<ScoreTops>)> = copies
@@ -157,9 +202,9 @@ fn derive(
             })
             .collect();
         for (&p, (node_bins, grown)) in copies.iter().zip(derived) {
-            bins[level[p]] = node_bins;
+            self.bins[level[p]] = node_bins;
             if let Some(grown) = grown {
-                summaries[to_rank(p as u32) as usize] = Some(grown);
+                self.summaries[to_rank(p as u32) as usize] = Some(grown);
             }
         }
         // Heads: their leaf's row over the copies and the other heads, which
@@ -173,10 +218,9 @@ fn derive(
             })
             .collect();
         for (&p, summary) in heads.iter().zip(started) {
-            summaries[to_rank(p as u32) as usize] = Some(summary);
+            self.summaries[to_rank(p as u32) as usize] = Some(summary);
         }
     }
-    Some(bins)
 }
 
 /// What a node is on its level, for the derivation.

@@ -222,6 +222,17 @@ fn take_block(
     }
 }
 
+/// What [`Search::bounds`] gives a tile.
+struct TileBounds {
+    /// Per cap, the cosine of each row to its centre.
+    gamma: Vec<[f64; KERNEL_ROWS]>,
+    /// Per cap, the highest similarity each row can reach in it.
+    upper: Vec<[f64; KERNEL_ROWS]>,
+    /// Per row, the lowest lower bound over the caps, and its cap.
+    lowest_bound: [f64; KERNEL_ROWS],
+    farthest: [usize; KERNEL_ROWS],
+}
+
 /// What a tile's search needs, shared by all tiles.
 struct Search<'a> {
     kind: SimilarityKind,
@@ -244,31 +255,12 @@ impl Search<'_> {
         let rows: [&[f32]; KERNEL_ROWS] =
             std::array::from_fn(|r| self.filter.unit(tile[r.min(tile.len() - 1)]));
         let caps = index.caps.len();
-        // Cosines to every centre.
-        let mut gamma = vec![[0.0f64; KERNEL_ROWS]; caps];
-        for block in 0..caps.div_ceil(LANES) {
-            let dots = dot_tile::<f32, LANES>(&rows, index.block(&index.centre_blocks, block));
-            for (lane, g) in gamma.iter_mut().skip(block * LANES).take(LANES).enumerate() {
-                *g = std::array::from_fn(|r| f64::from(dots[r][lane]));
-            }
-        }
-        let upper: Vec<[f64; KERNEL_ROWS]> = index
-            .caps
-            .iter()
-            .zip(&gamma)
-            .map(|(cap, g)| std::array::from_fn(|r| index.upper(cap, g[r])))
-            .collect();
-        let mut lowest_bound = [f64::INFINITY; KERNEL_ROWS];
-        let mut farthest = [0usize; KERNEL_ROWS];
-        for (c, (cap, g)) in index.caps.iter().zip(&gamma).enumerate() {
-            for r in 0..tile.len() {
-                let lower = index.lower(cap, g[r]);
-                if lower < lowest_bound[r] {
-                    lowest_bound[r] = lower;
-                    farthest[r] = c;
-                }
-            }
-        }
+        let TileBounds {
+            gamma,
+            upper,
+            lowest_bound,
+            farthest,
+        } = self.bounds(&rows, tile.len());
         let mut order: Vec<usize> = (0..caps).collect();
         let best_upper = |c: usize| {
             upper[c][..tile.len()]
@@ -277,18 +269,7 @@ impl Search<'_> {
         };
         order.sort_by(|&a, &b| best_upper(b).total_cmp(&best_upper(a)).then(a.cmp(&b)));
 
-        let mut state: Vec<RowBest> = tile.iter().map(|_| RowBest::new()).collect();
-        for (&i, row) in tile.iter().zip(state.iter_mut()) {
-            for &j in self.exact {
-                let s = pair_similarity(
-                    self.kind,
-                    &self.features[i],
-                    &self.features[j],
-                    self.level[j],
-                );
-                row.take(s, j, eps);
-            }
-        }
+        let mut state = self.exact_rows(tile);
         // The cosine (of directions) an entry must reach to matter to a row.
         let threshold = |row: &RowBest| 2.0 * (row.floor - eps) - 1.0 - slack;
         let mut visited = caps * tile.len();
@@ -333,8 +314,76 @@ impl Search<'_> {
                 }
             }
         }
-        let settled = tile
+        (self.settled(tile, state, lowest_bound), visited)
+    }
+
+    /// Per cap, the cosines of the tile's rows to its centre and its upper
+    /// bound per row; per row, the cap of lowest lower bound (visited first,
+    /// whole) and that bound.
+    fn bounds(&self, rows: &[&[f32]; KERNEL_ROWS], len: usize) -> TileBounds {
+        let index = self.index;
+        let caps = index.caps.len();
+        // Cosines to every centre.
+        let mut gamma = vec![[0.0f64; KERNEL_ROWS]; caps];
+        for block in 0..caps.div_ceil(LANES) {
+            let dots = dot_tile::<f32, LANES>(rows, index.block(&index.centre_blocks, block));
+            for (lane, g) in gamma.iter_mut().skip(block * LANES).take(LANES).enumerate() {
+                *g = std::array::from_fn(|r| f64::from(dots[r][lane]));
+            }
+        }
+        let upper: Vec<[f64; KERNEL_ROWS]> = index
+            .caps
             .iter()
+            .zip(&gamma)
+            .map(|(cap, g)| std::array::from_fn(|r| index.upper(cap, g[r])))
+            .collect();
+        let mut lowest_bound = [f64::INFINITY; KERNEL_ROWS];
+        let mut farthest = [0usize; KERNEL_ROWS];
+        for (c, (cap, g)) in index.caps.iter().zip(&gamma).enumerate() {
+            for r in 0..len {
+                let lower = index.lower(cap, g[r]);
+                if lower < lowest_bound[r] {
+                    lowest_bound[r] = lower;
+                    farthest[r] = c;
+                }
+            }
+        }
+        TileBounds {
+            gamma,
+            upper,
+            lowest_bound,
+            farthest,
+        }
+    }
+
+    /// The tile's rows with the exact nodes (those not in the index) taken.
+    fn exact_rows(&self, tile: &[usize]) -> Vec<RowBest> {
+        let eps = self.filter.eps();
+        let mut state: Vec<RowBest> = tile.iter().map(|_| RowBest::new()).collect();
+        for (&i, row) in tile.iter().zip(state.iter_mut()) {
+            for &j in self.exact {
+                let s = pair_similarity(
+                    self.kind,
+                    &self.features[i],
+                    &self.features[j],
+                    self.level[j],
+                );
+                row.take(s, j, eps);
+            }
+        }
+        state
+    }
+
+    /// The rows of the tile that settle, with their views.
+    fn settled(
+        &self,
+        tile: &[usize],
+        state: Vec<RowBest>,
+        lowest_bound: [f64; KERNEL_ROWS],
+    ) -> Vec<(usize, Bins)> {
+        let eps = self.filter.eps();
+        let slack = self.index.slack();
+        tile.iter()
             .zip(state)
             .zip(lowest_bound)
             .filter_map(|((&i, mut row), bound)| {
@@ -351,8 +400,7 @@ impl Search<'_> {
                     .fold(below, f64::min);
                 self.settle(i, row, below).map(|bins| (i, bins))
             })
-            .collect();
-        (settled, visited)
+            .collect()
     }
 
     /// The view of row `i` from its search, when every lowest score in range

@@ -8,7 +8,7 @@
 use super::level::Snapshot;
 use super::links::LevelLinks;
 use super::params::Distances;
-use crate::geom::{step_towards, Point};
+use crate::geom::{step_towards, ConvexPolygon, Point};
 use crate::layout::map::MapSimulation;
 
 /// New site positions for one diagram: Algorithm 2 for each cell, furthest
@@ -26,7 +26,13 @@ pub(super) fn attraction_moves(
     let targets = sim.targets();
     let mut pos: Vec<Point> = state.sites.iter().map(|s| s.position).collect();
     let local: Vec<usize> = children.iter().map(|c| links.local[*c]).collect();
-    let (gap, step, d_opt) = (limits.gap, limits.step, limits.d_opt);
+    let gap = limits.gap;
+    let mover = Mover {
+        clip,
+        links,
+        snap,
+        limits,
+    };
     // Order: decreasing distance to the strongest partner, ties by index.
     let mut order: Vec<(f64, usize)> = (0..children.len())
         .map(|j| {
@@ -52,67 +58,10 @@ pub(super) fn attraction_moves(
                     || p.distance(centroid) <= offset_limit
                     || p.distance(centroid) <= pos[j].distance(centroid))
         };
-        let mut moved = false;
-        if attract && !links.links[me].is_empty() && cell.polygon.is_some() {
-            // Different parent first, then same parent; each by distance, furthest first (§5.5).
-            let mut records: Vec<(bool, f64, usize, u8)> = links.links[me]
-                .iter()
-                .map(|&(t, s)| {
-                    let same = snap.diagram[t] == snap.diagram[me];
-                    let target = if same {
-                        pos[snap.slot[t]]
-                    } else {
-                        snap.site[t]
-                    };
-                    (same, pos[j].distance(target), t, s)
-                })
-                .collect();
-            records.sort_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
-            for (same, dist, t, score) in records {
-                let neighbor = snap.adjacency.are_adjacent(me, t);
-                if same {
-                    if neighbor || dist < d_opt || !has_free_neighbor(links, snap, t, score) {
-                        continue;
-                    }
-                    let target = pos[snap.slot[t]];
-                    if let Some(p) = step_towards(pos[j], target, step) {
-                        if accept(p, &pos, false) {
-                            pos[j] = p;
-                            moved = true;
-                            break;
-                        }
-                    }
-                    continue;
-                }
-                let (d, edge) = clip.exit_through(centroid, snap.centroid[t]);
-                let toward = step_towards(pos[j], snap.site[t], step);
-                let slide = edge
-                    .and_then(|(a, b)| slide_along(pos[j], centroid, snap.centroid[t], a, b, step));
-                if neighbor {
-                    let candidate = if d <= limits.d_max { slide } else { toward };
-                    if let Some(p) = candidate {
-                        if accept(p, &pos, true) {
-                            pos[j] = p;
-                            moved = true;
-                            break;
-                        }
-                    }
-                } else if d > d_opt {
-                    if let Some(p) = toward {
-                        if accept(p, &pos, true) {
-                            pos[j] = p;
-                            moved = true;
-                            break;
-                        }
-                    }
-                } else if let Some(p) = slide {
-                    // Aligning along the parent edge is not a move of its own (§5.6 rule 8).
-                    if accept(p, &pos, true) {
-                        pos[j] = p;
-                    }
-                }
-            }
-        }
+        let moved = attract
+            && !links.links[me].is_empty()
+            && cell.polygon.is_some()
+            && mover.attract(j, me, centroid, &mut pos, accept);
         if cell.polygon.is_none() {
             continue;
         }
@@ -129,6 +78,89 @@ pub(super) fn attraction_moves(
         }
     }
     pos
+}
+
+/// What one diagram's attraction moves read, the same for every cell.
+struct Mover<'a> {
+    clip: &'a ConvexPolygon,
+    links: &'a LevelLinks,
+    snap: &'a Snapshot,
+    limits: &'a Distances,
+}
+
+impl Mover<'_> {
+    /// Tries cell `j`'s (level-local `me`) links: different parent first,
+    /// then same parent, each by distance, furthest first (§5.5); makes the
+    /// first move `accept` takes and says whether one was made. A slide that
+    /// only aligns along the parent edge is not a move of its own (§5.6 rule
+    /// 8): it is made and the search goes on.
+    fn attract(
+        &self,
+        j: usize,
+        me: usize,
+        centroid: Point,
+        pos: &mut [Point],
+        accept: impl Fn(Point, &[Point], bool) -> bool,
+    ) -> bool {
+        let (links, snap, clip, limits) = (self.links, self.snap, self.clip, self.limits);
+        let (step, d_opt) = (limits.step, limits.d_opt);
+        let mut records: Vec<(bool, f64, usize, u8)> = links.links[me]
+            .iter()
+            .map(|&(t, s)| {
+                let same = snap.diagram[t] == snap.diagram[me];
+                let target = if same {
+                    pos[snap.slot[t]]
+                } else {
+                    snap.site[t]
+                };
+                (same, pos[j].distance(target), t, s)
+            })
+            .collect();
+        records.sort_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
+        for (same, dist, t, score) in records {
+            let neighbor = snap.adjacency.are_adjacent(me, t);
+            if same {
+                if neighbor || dist < d_opt || !has_free_neighbor(links, snap, t, score) {
+                    continue;
+                }
+                let target = pos[snap.slot[t]];
+                if let Some(p) = step_towards(pos[j], target, step) {
+                    if accept(p, pos, false) {
+                        pos[j] = p;
+                        return true;
+                    }
+                }
+                continue;
+            }
+            let (d, edge) = clip.exit_through(centroid, snap.centroid[t]);
+            let toward = step_towards(pos[j], snap.site[t], step);
+            let slide =
+                edge.and_then(|(a, b)| slide_along(pos[j], centroid, snap.centroid[t], a, b, step));
+            let candidate = if neighbor {
+                if d <= limits.d_max {
+                    slide
+                } else {
+                    toward
+                }
+            } else if d > d_opt {
+                toward
+            } else {
+                if let Some(p) = slide {
+                    if accept(p, pos, true) {
+                        pos[j] = p;
+                    }
+                }
+                continue;
+            };
+            if let Some(p) = candidate {
+                if accept(p, pos, true) {
+                    pos[j] = p;
+                    return true;
+                }
+            }
+        }
+        false
+    }
 }
 
 /// Does target `t` have a neighbour that a link of strength `score` could

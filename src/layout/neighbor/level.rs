@@ -12,7 +12,7 @@
 //! comparing every boundary cell with [`level_adjacency`], and as the
 //! checker's up to round-off at the 1e-6 threshold ([`MIN_SHARED`]).
 
-use super::cross::{CrossCache, Part};
+use super::cross::{CrossCache, CrossPlan, Part};
 use super::links::{LevelLinks, Score};
 use super::NeighborParams;
 use crate::geom::shared_edge::{MIN_SHARED, PERPENDICULAR_TOL};
@@ -128,67 +128,32 @@ fn snapshot(
         })
         .collect();
     let plan = cross.plan(&parts, links, scale, aspect);
-    let m = links.nodes.len();
-    let mut site = vec![Point::ZERO; m];
-    let mut centroid = vec![Point::ZERO; m];
-    let mut diagram = vec![0; m];
-    let mut slot = vec![0; m];
-    let mut present = Vec::with_capacity(m);
-    let mut pairs = Vec::new();
-    // Cells of moving diagrams on their parent's boundary, and whether each
-    // lies in its diagram's reach (else every pair is compared, see `cross`).
-    let mut boundary = Vec::new();
-    let mut within_reach = true;
-    let mut elongation = 0.0;
-    let mut area_error: f64 = 0.0;
-    let threshold = MIN_SHARED * scale;
-    let on_edge = 10.0 * PERPENDICULAR_TOL * scale;
+    let mut walk = Walk::new(links.nodes.len(), scale);
     for (d, dg) in diagrams.iter().enumerate() {
-        area_error = area_error.max(dg.area_error());
+        walk.area_error = walk.area_error.max(dg.area_error());
         match dg {
             Diagram::Single { child, .. } => {
-                let k = links.local[*child];
                 let (c, a) = plan.single(d).expect("the plan fits the diagrams");
-                site[k] = c;
-                centroid[k] = c;
-                diagram[k] = d;
-                present.push(k);
-                elongation += a - 1.0;
+                walk.single(links.local[*child], d, c, a);
             }
             Diagram::Sim { children, sim } => {
-                let state = sim.state();
-                let clip = sim.clip();
-                for (j, c) in children.iter().enumerate() {
-                    let k = links.local[*c];
-                    let cell = &state.diagram.cells[j];
-                    site[k] = state.sites[j].position;
-                    centroid[k] = cell.centroid;
-                    diagram[k] = d;
-                    slot[k] = j;
-                    let Some(polygon) = &cell.polygon else {
-                        continue;
-                    };
-                    present.push(k);
-                    elongation += aspect(polygon) - 1.0;
-                    for nb in &cell.neighbors {
-                        if nb.site > j && nb.edge[0].distance(nb.edge[1]) >= threshold {
-                            let o = links.local[children[nb.site]];
-                            pairs.push((k.min(o), k.max(o)));
-                        }
-                    }
-                    if diagrams.len() > 1
-                        && polygon
-                            .points()
-                            .iter()
-                            .any(|v| clip.boundary_distance(*v) <= on_edge)
-                    {
-                        boundary.push(k);
-                        within_reach &= plan.holds(d, polygon);
-                    }
-                }
+                walk.sim(d, children, sim, links, &plan, diagrams.len() > 1);
             }
         }
     }
+    let Walk {
+        site,
+        centroid,
+        diagram,
+        slot,
+        present,
+        mut pairs,
+        boundary,
+        within_reach,
+        elongation,
+        area_error,
+        ..
+    } = walk;
     if diagrams.len() > 1 {
         let cell = |k: usize| diagrams[diagram[k]].cell(slot[k]);
         let cross = if within_reach {
@@ -228,6 +193,100 @@ fn snapshot(
         adjacency,
         score,
         area_error,
+    }
+}
+
+/// What [`snapshot`] gathers diagram by diagram, in level-local indices: each
+/// cell's site, centroid, diagram and slot, the cells present, the pairs
+/// adjacent within a diagram, and the cells of moving diagrams on their
+/// parent's boundary (whether each lies in its diagram's reach: else every
+/// pair across diagrams is compared, see `cross`).
+struct Walk {
+    site: Vec<Point>,
+    centroid: Vec<Point>,
+    diagram: Vec<usize>,
+    slot: Vec<usize>,
+    present: Vec<usize>,
+    pairs: Vec<(usize, usize)>,
+    boundary: Vec<usize>,
+    within_reach: bool,
+    elongation: f64,
+    area_error: f64,
+    /// Shortest shared edge that makes two cells adjacent.
+    threshold: f64,
+    /// How near a cell's corner must be to its parent's boundary to count as on it.
+    on_edge: f64,
+}
+
+impl Walk {
+    fn new(m: usize, scale: f64) -> Self {
+        Walk {
+            site: vec![Point::ZERO; m],
+            centroid: vec![Point::ZERO; m],
+            diagram: vec![0; m],
+            slot: vec![0; m],
+            present: Vec::with_capacity(m),
+            pairs: Vec::new(),
+            boundary: Vec::new(),
+            within_reach: true,
+            elongation: 0.0,
+            area_error: 0.0,
+            threshold: MIN_SHARED * scale,
+            on_edge: 10.0 * PERPENDICULAR_TOL * scale,
+        }
+    }
+
+    /// An only child `k` of diagram `d`: its parent's cell, with centroid `c`
+    /// and aspect `a`.
+    fn single(&mut self, k: usize, d: usize, c: Point, a: f64) {
+        self.site[k] = c;
+        self.centroid[k] = c;
+        self.diagram[k] = d;
+        self.present.push(k);
+        self.elongation += a - 1.0;
+    }
+
+    /// The cells of a moving diagram `d`; `shared` when the level has other
+    /// diagrams, whose cells may touch these across the parent's boundary.
+    fn sim(
+        &mut self,
+        d: usize,
+        children: &[usize],
+        sim: &MapSimulation,
+        links: &LevelLinks,
+        plan: &CrossPlan,
+        shared: bool,
+    ) {
+        let state = sim.state();
+        let clip = sim.clip();
+        for (j, c) in children.iter().enumerate() {
+            let k = links.local[*c];
+            let cell = &state.diagram.cells[j];
+            self.site[k] = state.sites[j].position;
+            self.centroid[k] = cell.centroid;
+            self.diagram[k] = d;
+            self.slot[k] = j;
+            let Some(polygon) = &cell.polygon else {
+                continue;
+            };
+            self.present.push(k);
+            self.elongation += aspect(polygon) - 1.0;
+            for nb in &cell.neighbors {
+                if nb.site > j && nb.edge[0].distance(nb.edge[1]) >= self.threshold {
+                    let o = links.local[children[nb.site]];
+                    self.pairs.push((k.min(o), k.max(o)));
+                }
+            }
+            if shared
+                && polygon
+                    .points()
+                    .iter()
+                    .any(|v| clip.boundary_distance(*v) <= self.on_edge)
+            {
+                self.boundary.push(k);
+                self.within_reach &= plan.holds(d, polygon);
+            }
+        }
     }
 }
 

@@ -141,9 +141,7 @@ pub(crate) fn layout_similar_with(
         monitor,
     };
     let (_, cells, mut report, error_sum) = descend(&ctx, 0, cells)?;
-    if report.diagrams > 0 {
-        report.area_error_mean = error_sum / report.diagrams as f64;
-    }
+    report.set_mean(error_sum);
     Ok((finish(dataset, params.canvas, cells), report))
 }
 
@@ -182,14 +180,14 @@ struct Candidate {
 }
 
 /// Lays out level `depth + 1` and everything below it, given the cells down to
-/// `depth`.
+/// `depth`: each start of the level is a [`Candidate`]; the best (or, with
+/// lookahead, the best few, each laid out to the bottom) is kept.
 fn descend(
     ctx: &Context<'_>,
     depth: usize,
     cells: Vec<Option<LayoutCell>>,
 ) -> Result<Descent, LayoutError> {
-    let dataset = ctx.dataset;
-    if depth >= dataset.max_depth() {
+    if depth >= ctx.dataset.max_depth() {
         return Ok((
             leaf_score(ctx, depth, &cells),
             cells,
@@ -197,43 +195,98 @@ fn descend(
             0.0,
         ));
     }
-    let n = dataset.len();
-    let parents: Vec<usize> = (0..n)
-        .filter(|&i| dataset.node(i).depth == depth && !dataset.node(i).children.is_empty())
-        .collect();
-    let level: Vec<usize> = parents
-        .iter()
-        .flat_map(|p| dataset.node(*p).children.iter().copied())
-        .collect();
-    let projected = projection::fit_into(
-        &level.iter().map(|i| ctx.projection[*i]).collect::<Vec<_>>(),
-        ctx.root_box.0,
-        ctx.root_box.1,
-    );
-    let mut proj_of = vec![Point::ZERO; n];
-    for (i, p) in level.iter().zip(projected) {
-        proj_of[*i] = p;
+    let input = LevelInput::new(ctx, depth, &cells);
+    if input.links.is_empty() && ctx.method == Method::Neighbor && !ctx.np.prototype {
+        return plain_level(ctx, depth, &input.parents, input.polygons, cells);
     }
-    let links = LevelLinks::new(dataset, &level, ctx.constraints, depth + 1);
-    let polygons: Vec<ConvexPolygon> = parents
-        .iter()
-        .map(|&p| {
-            cells[p]
-                .as_ref()
-                .map(|c| c.polygon.clone())
-                .expect("invariant: parents are laid out before their children")
-        })
-        .collect();
-    if links.is_empty() && ctx.method == Method::Neighbor && !ctx.np.prototype {
-        return plain_level(ctx, depth, &parents, polygons, cells);
-    }
-    let lv = LevelCtx::new(&links, ctx.scale, ctx.np);
-    let starts = if ctx.method == Method::Neighbor && !ctx.np.prototype {
-        starts_for(level.len(), ctx.np)
+    let lv = LevelCtx::new(&input.links, ctx.scale, ctx.np);
+    let mut candidates = level_candidates(ctx, depth, &input, &lv)?;
+    // Best first; the stable sort keeps earlier starts first among equals.
+    candidates.sort_by(|a, b| b.score.total_cmp(&a.score));
+    let keep = if ctx.lookahead {
+        LOOKAHEAD_CANDIDATES
     } else {
         1
     };
-    let diagrams_here = parents
+    candidates.truncate(keep);
+    let mut best: Option<Descent> = None;
+    for candidate in candidates {
+        let below = descend_from(ctx, depth, candidate, &lv, cells.clone())?;
+        if best.as_ref().is_none_or(|b| below.0 > b.0) {
+            best = Some(below);
+        }
+    }
+    Ok(best.unwrap_or((0.0, cells, Report::default(), 0.0)))
+}
+
+/// What a level's starts share: its parents (nodes at `depth` with
+/// children), their cells, its nodes' projected points fitted to the root's
+/// box, and its constraints in level-local indices.
+struct LevelInput {
+    parents: Vec<usize>,
+    /// Nodes of the level: the parents' children, in parent order.
+    nodes: usize,
+    proj_of: Vec<Point>,
+    links: LevelLinks,
+    polygons: Vec<ConvexPolygon>,
+}
+
+impl LevelInput {
+    fn new(ctx: &Context<'_>, depth: usize, cells: &[Option<LayoutCell>]) -> Self {
+        let dataset = ctx.dataset;
+        let n = dataset.len();
+        let parents: Vec<usize> = (0..n)
+            .filter(|&i| dataset.node(i).depth == depth && !dataset.node(i).children.is_empty())
+            .collect();
+        let level: Vec<usize> = parents
+            .iter()
+            .flat_map(|p| dataset.node(*p).children.iter().copied())
+            .collect();
+        let projected = projection::fit_into(
+            &level.iter().map(|i| ctx.projection[*i]).collect::<Vec<_>>(),
+            ctx.root_box.0,
+            ctx.root_box.1,
+        );
+        let mut proj_of = vec![Point::ZERO; n];
+        for (i, p) in level.iter().zip(projected) {
+            proj_of[*i] = p;
+        }
+        let links = LevelLinks::new(dataset, &level, ctx.constraints, depth + 1);
+        let polygons: Vec<ConvexPolygon> = parents
+            .iter()
+            .map(|&p| {
+                cells[p]
+                    .as_ref()
+                    .map(|c| c.polygon.clone())
+                    .expect("invariant: parents are laid out before their children")
+            })
+            .collect();
+        LevelInput {
+            parents,
+            nodes: level.len(),
+            proj_of,
+            links,
+            polygons,
+        }
+    }
+}
+
+/// Runs every start of level `depth + 1` ([`starts_for`] with our schedule,
+/// one otherwise), reporting progress to the monitor, which may stop it.
+fn level_candidates(
+    ctx: &Context<'_>,
+    depth: usize,
+    input: &LevelInput,
+    lv: &LevelCtx<'_>,
+) -> Result<Vec<Candidate>, LayoutError> {
+    let dataset = ctx.dataset;
+    let starts = if ctx.method == Method::Neighbor && !ctx.np.prototype {
+        starts_for(input.nodes, ctx.np)
+    } else {
+        1
+    };
+    let diagrams_here = input
+        .parents
         .iter()
         .filter(|p| dataset.node(**p).children.len() > 1)
         .count();
@@ -254,10 +307,10 @@ fn descend(
         let mut recorder = Recorder::new(depth + 1, ctx.np.frames, ctx.np.ticks);
         let (score, diagrams, initial) = run_level(
             ctx,
-            &parents,
-            &polygons,
-            &proj_of,
-            &lv,
+            &input.parents,
+            &input.polygons,
+            &input.proj_of,
+            lv,
             depth,
             start,
             recorder.as_mut(),
@@ -271,53 +324,40 @@ fn descend(
             frames,
         });
     }
-    // Best first; the stable sort keeps earlier starts first among equals.
-    candidates.sort_by(|a, b| b.score.total_cmp(&a.score));
-    let keep = if ctx.lookahead {
-        LOOKAHEAD_CANDIDATES
-    } else {
-        1
-    };
-    candidates.truncate(keep);
-    let mut best: Option<Descent> = None;
-    for Candidate {
+    Ok(candidates)
+}
+
+/// Finishes one candidate of level `depth + 1` (polish, real areas, repairs),
+/// writes it into `cells` and lays out everything below.
+fn descend_from(
+    ctx: &Context<'_>,
+    depth: usize,
+    candidate: Candidate,
+    lv: &LevelCtx<'_>,
+    mut cells: Vec<Option<LayoutCell>>,
+) -> Result<Descent, LayoutError> {
+    let (dataset, np) = (ctx.dataset, ctx.np);
+    let Candidate {
         mut diagrams,
         initial,
         frames,
         ..
-    } in candidates
-    {
-        if ctx.method == Method::Neighbor && !ctx.np.prototype {
-            swap::exhaustive_polish(&mut diagrams, &lv);
-        }
-        retarget(&mut diagrams, dataset, ctx.params, ctx.np);
-        let repairs = secure_level(
-            &mut diagrams,
-            &initial,
-            ctx.np,
-            ctx.settings,
-            ctx.params.seed,
-        );
-        if repairs.fallbacks > 0 {
-            // A fallback is a start, optimised with the floored areas.
-            retarget(&mut diagrams, dataset, ctx.params, ctx.np);
-        }
-        let mut cells = cells.clone();
-        let (mut report, error_sum) = apply_level(diagrams, &mut cells);
-        report.repaired = repairs.repaired;
-        report.fallbacks = repairs.fallbacks;
-        report.frames = frames;
-        let (score, cells, below, below_sum) = descend(ctx, depth + 1, cells)?;
-        if best.as_ref().is_none_or(|b| score > b.0) {
-            best = Some((
-                score,
-                cells,
-                add_reports(report, below),
-                error_sum + below_sum,
-            ));
-        }
+    } = candidate;
+    if ctx.method == Method::Neighbor && !np.prototype {
+        swap::exhaustive_polish(&mut diagrams, lv);
     }
-    Ok(best.unwrap_or((0.0, cells, Report::default(), 0.0)))
+    retarget(&mut diagrams, dataset, ctx.params, np);
+    let repairs = secure_level(&mut diagrams, &initial, np, ctx.settings, ctx.params.seed);
+    if repairs.fallbacks > 0 {
+        // A fallback is a start, optimised with the floored areas.
+        retarget(&mut diagrams, dataset, ctx.params, np);
+    }
+    let (mut report, error_sum) = apply_level(diagrams, &mut cells);
+    report.repaired = repairs.repaired;
+    report.fallbacks = repairs.fallbacks;
+    report.frames = frames;
+    let (score, cells, below, below_sum) = descend(ctx, depth + 1, cells)?;
+    Ok((score, cells, report.merge(below), error_sum + below_sum))
 }
 
 /// Lays out level `depth + 1` with the plain engine, each diagram as the
@@ -381,7 +421,7 @@ fn plain_level(
         }
     }
     let (score, cells, below, below_sum) = descend(ctx, depth + 1, cells)?;
-    Ok((score, cells, add_reports(report, below), error_sum + below_sum))
+    Ok((score, cells, report.merge(below), error_sum + below_sum))
 }
 
 /// The realised constraints of the deepest level (the lookahead's measure).
@@ -419,13 +459,12 @@ fn apply_level(diagrams: Vec<Diagram>, cells: &mut [Option<LayoutCell>]) -> (Rep
             }
             Diagram::Sim { children, sim } => {
                 let state = sim.state();
-                report.diagrams += 1;
-                report.iterations += state.iteration_count;
+                report.count_diagram(
+                    state.iteration_count,
+                    state.convergence_ratio,
+                    sim.converged(),
+                );
                 error_sum += state.convergence_ratio;
-                report.area_error_max = report.area_error_max.max(state.convergence_ratio);
-                if !sim.converged() {
-                    report.unconverged += 1;
-                }
                 let clip = sim.clip().clone();
                 let (sites, diagram) = sim.into_parts();
                 for ((child, site), cell) in children.iter().zip(&sites).zip(diagram.cells) {
@@ -443,21 +482,6 @@ fn apply_level(diagrams: Vec<Diagram>, cells: &mut [Option<LayoutCell>]) -> (Rep
         }
     }
     (report, error_sum)
-}
-
-fn add_reports(a: Report, b: Report) -> Report {
-    Report {
-        diagrams: a.diagrams + b.diagrams,
-        iterations: a.iterations + b.iterations,
-        area_error_mean: 0.0,
-        area_error_max: a.area_error_max.max(b.area_error_max),
-        unconverged: a.unconverged + b.unconverged,
-        reused: a.reused + b.reused,
-        degenerate: a.degenerate + b.degenerate,
-        repaired: a.repaired + b.repaired,
-        fallbacks: a.fallbacks + b.fallbacks,
-        frames: a.frames.into_iter().chain(b.frames).collect(),
-    }
 }
 
 /// Lays out one level from one start: initialise every diagram, swap, aim at
