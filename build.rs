@@ -20,6 +20,7 @@ fn main() {
     let out = PathBuf::from(std::env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=src/render/page/bundle.rs");
+    println!("cargo:rerun-if-changed=src/render/page/lexer.rs");
     println!("cargo:rerun-if-changed=src/render");
     println!("cargo:rerun-if-changed=src/layout_json");
     let id = render_source(&root, &["src/render", "src/layout_json"]);
