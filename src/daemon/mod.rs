@@ -86,13 +86,12 @@ impl std::fmt::Debug for FirstBuildProgress {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum DaemonError {
-    /// The config could not be read at start: there is nothing to watch.
+    /// The config could not be read at start (there is nothing to watch),
+    /// or its outputs are unsafe (over an input, the config, another output
+    /// or a special file: nothing is built). The build's own error, so that
+    /// [`BuildError::fault`] judges it as it judges a build.
     #[error(transparent)]
-    Config(#[from] ConfigFileError),
-    /// The config's outputs are unsafe (over an input, the config, another
-    /// output or a special file): nothing is built.
-    #[error(transparent)]
-    Outputs(BuildError),
+    Build(#[from] BuildError),
     /// The config's path cannot be made absolute.
     #[error("{}: {source}", .path.display())]
     Path {
@@ -106,12 +105,18 @@ pub enum DaemonError {
     Watcher(#[from] notify::Error),
 }
 
+impl From<ConfigFileError> for DaemonError {
+    fn from(e: ConfigFileError) -> Self {
+        DaemonError::Build(e.into())
+    }
+}
+
 impl DaemonError {
-    /// Whose fault it is that the daemon could not start: the config's
-    /// (exit code 2) or the system's (1).
+    /// Whose fault it is that the daemon could not start: a build error's
+    /// own ([`BuildError::fault`]), else the system's.
     pub fn fault(&self) -> Fault {
         match self {
-            DaemonError::Config(_) | DaemonError::Outputs(_) => Fault::Input,
+            DaemonError::Build(e) => e.fault(),
             DaemonError::Path { .. } | DaemonError::Watcher(_) => Fault::System,
         }
     }
@@ -194,7 +199,7 @@ pub fn run(
     })?;
     let config = Config::from_path(&config_path)?;
     let (reads, writes) = pipeline::files_of(&config_path, &config.datasets);
-    pipeline::check_outputs(&reads, &writes).map_err(DaemonError::Outputs)?;
+    pipeline::check_outputs(&reads, &writes)?;
     pipeline::remove_stale_temps(&writes);
     let mut watcher = DirWatcher::new(tx.clone())?;
     let stop = options.stop.clone().unwrap_or_default();
