@@ -662,7 +662,7 @@ impl Config {
                 background: r.background,
                 stroke: r.stroke,
                 stroke_width: r.stroke_width,
-                labels: r.labels.style(),
+                labels: r.labels.clone(),
                 palette: r.palette,
                 group_colors: r.colors.clone(),
                 ..defaults.cells
@@ -871,10 +871,10 @@ mod tests {
         assert_eq!(style.legend_order, LegendOrder::Names);
         assert_eq!(style.cells.labels.min_size, 10.0);
         assert!(style.cells.labels.value);
-        assert_eq!(style.cells.labels.names["AS"], "Asia");
+        assert_eq!(style.cells.labels.names.get("AS"), Some("Asia"));
         assert_eq!(
-            c.render.labels.names,
-            vec![
+            c.render.labels.names.pairs(),
+            [
                 ("EU".to_string(), "Europe".to_string()),
                 ("AS".to_string(), "Asia".to_string())
             ]

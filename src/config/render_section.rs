@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Deserializer};
 
 use super::ConfigError;
-use crate::render::{ColorScale, LabelStyle, LabelText, LegendOrder, PaletteKind, Rgb, Style};
+use crate::render::{ColorScale, LabelStyle, LegendOrder, PaletteKind, Rgb, Style};
 
 /// The `render` section: how SVG, PNG and HTML pictures look. Colours are
 /// `#rrggbb` or `#rgb`, parsed when the config is read.
@@ -46,7 +46,7 @@ pub struct RenderConfig {
     pub stroke_width: f64,
     /// Leaf labels and group names: `true`, `false`, or their settings.
     #[serde(deserialize_with = "labels")]
-    pub labels: LabelsConfig,
+    pub labels: LabelStyle,
     /// Interlocking tabs on the shared edges of similar neighbours. Default: true.
     pub tabs: bool,
     /// Dashed red links between similar cells that are not neighbours. Default: false.
@@ -73,113 +73,26 @@ fn color_scale<'de, D: Deserializer<'de>>(d: D) -> Result<ColorScale, D::Error> 
     })
 }
 
-/// `render.labels`: leaf labels and group names. `labels: false` turns both off.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct LabelsConfig {
-    /// Leaf labels. Default: true.
-    pub show: bool,
-    /// Smallest label size at scale 1; smaller labels wrap, are cut or left out. Default: 9.
-    pub min_size: f64,
-    /// Largest label size. Default: 24.
-    pub max_size: f64,
-    /// A second line with the value. Default: false.
-    pub value: bool,
-    /// Text after the value. Default: empty.
-    pub unit: String,
-    /// Group names on the map. Default: true.
-    pub groups: bool,
-    /// Display names for ids or labels (`AS: Asia`), in the legend's `names` order.
-    #[serde(deserialize_with = "ordered_names")]
-    pub names: Vec<(String, String)>,
-    /// What a label says: `auto`, `label`, `id`, `segment`, `relative` or a
-    /// template over columns (`"{name} {version}"`). Default: auto.
-    #[serde(deserialize_with = "label_text")]
-    pub text: LabelText,
-}
-
-/// `render.labels.text`, refused at its line when unknown or malformed.
-fn label_text<'de, D: Deserializer<'de>>(d: D) -> Result<LabelText, D::Error> {
-    let text = String::deserialize(d)?;
-    LabelText::parse(&text)
-        .map_err(|e| serde::de::Error::custom(format_args!("labels.text: {e}")))
-}
-
-impl Default for LabelsConfig {
-    fn default() -> Self {
-        let l = LabelStyle::default();
-        Self {
-            show: l.show,
-            min_size: l.min_size,
-            max_size: l.max_size,
-            value: l.value,
-            unit: l.unit,
-            groups: l.groups,
-            names: Vec::new(),
-            text: l.text,
-        }
-    }
-}
-
-impl LabelsConfig {
-    pub(super) fn style(&self) -> LabelStyle {
-        LabelStyle {
-            show: self.show,
-            min_size: self.min_size,
-            max_size: self.max_size,
-            value: self.value,
-            unit: self.unit.clone(),
-            groups: self.groups,
-            names: self.names.iter().cloned().collect(),
-            names_order: self.names.iter().map(|(k, _)| k.clone()).collect(),
-            text: self.text.clone(),
-        }
-    }
-}
-
 /// `render.labels`: a boolean (all labels on or off) or the settings.
-fn labels<'de, D: Deserializer<'de>>(d: D) -> Result<LabelsConfig, D::Error> {
+fn labels<'de, D: Deserializer<'de>>(d: D) -> Result<LabelStyle, D::Error> {
     struct Visitor;
     impl<'de> serde::de::Visitor<'de> for Visitor {
-        type Value = LabelsConfig;
+        type Value = LabelStyle;
         fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
             f.write_str("true, false or a map of label settings")
         }
-        fn visit_bool<E: serde::de::Error>(self, on: bool) -> Result<LabelsConfig, E> {
-            Ok(LabelsConfig {
+        fn visit_bool<E: serde::de::Error>(self, on: bool) -> Result<LabelStyle, E> {
+            Ok(LabelStyle {
                 show: on,
                 groups: on,
-                ..LabelsConfig::default()
+                ..LabelStyle::default()
             })
         }
-        fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<LabelsConfig, A::Error> {
-            LabelsConfig::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+        fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<LabelStyle, A::Error> {
+            LabelStyle::deserialize(serde::de::value::MapAccessDeserializer::new(map))
         }
     }
     d.deserialize_any(Visitor)
-}
-
-/// `render.labels.names`: a map kept in file order (the legend's `names` order).
-fn ordered_names<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<(String, String)>, D::Error> {
-    struct Visitor;
-    impl<'de> serde::de::Visitor<'de> for Visitor {
-        type Value = Vec<(String, String)>;
-        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-            f.write_str("a map from ids or labels to display names")
-        }
-        fn visit_map<A: serde::de::MapAccess<'de>>(
-            self,
-            mut map: A,
-        ) -> Result<Self::Value, A::Error> {
-            let mut out: Vec<(String, String)> = Vec::new();
-            while let Some((k, v)) = map.next_entry::<String, String>()? {
-                out.retain(|(key, _)| *key != k);
-                out.push((k, v));
-            }
-            Ok(out)
-        }
-    }
-    d.deserialize_map(Visitor)
 }
 
 fn legend_order<'de, D: Deserializer<'de>>(d: D) -> Result<LegendOrder, D::Error> {
@@ -229,7 +142,7 @@ impl Default for RenderConfig {
             border_width: 0.0,
             stroke: cells.stroke,
             stroke_width: cells.stroke_width,
-            labels: LabelsConfig::default(),
+            labels: LabelStyle::default(),
             tabs: style.tabs,
             unrealized_links: style.overlay.show_unrealized,
             unlinked_markers: style.overlay.unlinked_markers,

@@ -14,12 +14,13 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::label_text::display_name;
-use super::labels::format_value;
+use super::labels::{format_value, line_step_em};
 use super::legend::LegendItem;
 use super::overlay::Link;
 use super::palette::TABLEAU10;
 use super::picture::{colors, compose, fills, legend_items, Style};
 use super::svg::{escape, leaf_labels, path_data};
+use super::text::ascent_em;
 use crate::layout::zero::HiddenUnder;
 use crate::layout::{Computed, Layout};
 
@@ -180,6 +181,12 @@ pub struct HtmlLabels {
     pub min: f64,
     /// Largest label size on that scale.
     pub max: f64,
+    /// Baseline to baseline of a label's lines, in ems, and the ascent: the
+    /// picture's font's, so the page's fitter (`page/fit.js`) stacks lines
+    /// as the picture does.
+    pub line: f64,
+    /// The ascent, in ems.
+    pub ascent: f64,
     /// For each `<text>` of the picture's label group, in order, the index
     /// of the node it names; empty when that order could not be confirmed.
     pub placed: Vec<usize>,
@@ -468,6 +475,8 @@ pub fn html_page_with_history(
             halo: page_style.cells.stroke.to_string(),
             min: page_style.cells.labels.min_size,
             max: page_style.cells.labels.max_size,
+            line: line_step_em(),
+            ascent: ascent_em(),
             // The script pairs the picture's label texts with nodes in
             // this order; it must be the picture's own.
             placed: if texts == placed.len() {

@@ -170,18 +170,77 @@ impl Template {
     }
 }
 
+/// `render.labels.names`: display names for ids or labels (`AS: Asia`), in
+/// the config's order (the legend's `names` order). A key given twice keeps
+/// its last name, at its last place, as a YAML reader that keeps the last
+/// value would.
+#[derive(serde::Serialize, Clone, Debug, Default, PartialEq)]
+pub struct DisplayNames {
+    /// (key, name) in the config's order.
+    pairs: Vec<(String, String)>,
+    /// The same, for lookup.
+    #[serde(skip)]
+    map: BTreeMap<String, String>,
+}
+
+impl DisplayNames {
+    /// The names of `pairs`, in order; a repeated key keeps its last.
+    pub fn new(pairs: impl IntoIterator<Item = (String, String)>) -> Self {
+        let mut out: Vec<(String, String)> = Vec::new();
+        for (k, v) in pairs {
+            out.retain(|(key, _)| *key != k);
+            out.push((k, v));
+        }
+        let map = out.iter().cloned().collect();
+        DisplayNames { pairs: out, map }
+    }
+
+    /// The name given for `key`.
+    pub fn get(&self, key: &str) -> Option<&str> {
+        self.map.get(key).map(String::as_str)
+    }
+
+    /// Where `key` stands in the config's order.
+    pub fn rank(&self, key: &str) -> Option<usize> {
+        self.pairs.iter().position(|(k, _)| k == key)
+    }
+
+    /// (key, name) in the config's order.
+    pub fn pairs(&self) -> &[(String, String)] {
+        &self.pairs
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for DisplayNames {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = DisplayNames;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a map from ids or labels to display names")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<Self::Value, A::Error> {
+                let mut pairs = Vec::new();
+                while let Some(pair) = map.next_entry::<String, String>()? {
+                    pairs.push(pair);
+                }
+                Ok(DisplayNames::new(pairs))
+            }
+        }
+        d.deserialize_map(Visitor)
+    }
+}
+
 /// The name shown for node `i`: its entry in `names` (by id, then by label),
 /// else the text `text` chooses, with control characters removed and runs
 /// of white space made one space (as SVG renderers show text), trimmed.
 ///
 /// A virtual copy (uniform depth) shows its original's text, and a node's
 /// group is its nearest real ancestor, so copies change no label.
-pub fn display_name(
-    dataset: &Dataset,
-    i: usize,
-    names: &BTreeMap<String, String>,
-    text: &LabelText,
-) -> String {
+pub fn display_name(dataset: &Dataset, i: usize, names: &DisplayNames, text: &LabelText) -> String {
     let i = original(dataset, i);
     let node = dataset.node(i);
     if let Some(name) = names.get(&node.id).or_else(|| names.get(&node.label)) {
@@ -307,7 +366,7 @@ mod tests {
 
     fn shown(d: &Dataset, id: &str, text: &LabelText) -> String {
         let i = d.find(id).expect("node");
-        display_name(d, i, &BTreeMap::new(), text)
+        display_name(d, i, &DisplayNames::default(), text)
     }
 
     #[test]
@@ -353,8 +412,7 @@ mod tests {
     #[test]
     fn names_win_and_bad_values_say_why() {
         let d = dotted();
-        let names: BTreeMap<String, String> =
-            [("sympy.stats.rv".to_string(), "Random".to_string())].into();
+        let names = DisplayNames::new([("sympy.stats.rv".to_string(), "Random".to_string())]);
         let i = d.find("sympy.stats.rv").expect("node");
         assert_eq!(display_name(&d, i, &names, &LabelText::Segment), "Random");
         let e = LabelText::parse("segmnet").expect_err("unknown");

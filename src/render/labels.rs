@@ -7,17 +7,18 @@
 //! (`super::text`), the metrics usvg lays the text out with. Owns text
 //! choice and placement; may not draw overlays or decide colours.
 
-use std::collections::BTreeMap;
-
 use nptreemap_formats::Dataset;
 
-use super::label_text::{display_name, LabelText};
+use super::label_text::{display_name, DisplayNames, LabelText};
 use super::text::{ascent_em, descent_em, width_em};
 use crate::geom::{cross, ConvexPolygon, Point};
 use crate::layout::Layout;
 
-/// How labels are chosen and sized (the config's `render.labels`).
-#[derive(serde::Serialize, Clone, Debug, PartialEq)]
+/// How labels are chosen and sized: the config's `render.labels`, read
+/// straight into this (a boolean turns leaf labels and group names on or
+/// off together, see `crate::config`).
+#[derive(serde::Serialize, serde::Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
 pub struct LabelStyle {
     /// Leaf labels at all. Default: true.
     pub show: bool,
@@ -34,13 +35,20 @@ pub struct LabelStyle {
     /// Group names drawn on the map. Default: true.
     pub groups: bool,
     /// Display names for ids or labels such as continent codes
-    /// (`AS: Asia`); used on the map, in the legend and in the page's tooltips.
-    pub names: BTreeMap<String, String>,
-    /// The keys of `names` in the config's order (the legend's `names` order).
-    pub names_order: Vec<String>,
+    /// (`AS: Asia`); used on the map, in the legend and in the page's
+    /// tooltips, and ordering the legend with `legend_order: names`.
+    pub names: DisplayNames,
     /// What the labels say (`render.labels.text`): by default a path-like
-    /// label without its group's name in front.
+    /// label without its group's name in front. `auto`, `label`, `id`,
+    /// `segment`, `relative` or a template over columns (`"{name} {version}"`),
+    /// refused at its line when unknown or malformed.
+    #[serde(deserialize_with = "label_text")]
     pub text: LabelText,
+}
+
+fn label_text<'de, D: serde::Deserializer<'de>>(d: D) -> Result<LabelText, D::Error> {
+    let text = <String as serde::Deserialize>::deserialize(d)?;
+    LabelText::parse(&text).map_err(|e| serde::de::Error::custom(format_args!("labels.text: {e}")))
 }
 
 impl Default for LabelStyle {
@@ -52,8 +60,7 @@ impl Default for LabelStyle {
             value: false,
             unit: String::new(),
             groups: true,
-            names: BTreeMap::new(),
-            names_order: Vec::new(),
+            names: DisplayNames::default(),
             text: LabelText::default(),
         }
     }
@@ -131,7 +138,7 @@ const SIDE_PAD_EM: f64 = 0.3;
 const END_PAD_EM: f64 = 0.08;
 /// Lines of one label are this far apart, baseline to baseline, in font sizes:
 /// the font's line box, so the boxes of two lines just touch.
-fn line_step_em() -> f64 {
+pub fn line_step_em() -> f64 {
     ascent_em() + descent_em()
 }
 /// The value line's size relative to the label's.

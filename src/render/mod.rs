@@ -38,11 +38,20 @@ pub(crate) mod text;
 #[cfg(test)]
 pub(crate) mod test_support;
 
+/// The built-in font's metrics, for the repository's own tests: the page's
+/// label fitter (`page/fit.js`) is held to the picture's with them.
+#[cfg(feature = "internals")]
+#[doc(hidden)]
+pub mod metrics {
+    pub use super::labels::line_step_em;
+    pub use super::text::{ascent_em, width_em};
+}
+
 pub use color_by::{ColorBy, ColorScale};
 pub use html::{
     html, html_page, html_page_with_history, HtmlData, HtmlEmpty, HtmlFrame, HtmlLayout, HtmlNode,
 };
-pub use label_text::LabelText;
+pub use label_text::{DisplayNames, LabelText};
 pub use labels::LabelStyle;
 pub use output::{OutputError, OutputKind};
 pub use palette::{PaletteKind, Rgb};

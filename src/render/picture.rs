@@ -198,8 +198,13 @@ pub(crate) fn unit(layout: &Layout) -> f64 {
 const MIN_UNIT: f64 = 0.75;
 
 /// The constraint links the picture draws: those of the deepest level (where
-/// the paper draws them, method-reference §8.2–8.4).
-fn deepest_links(computed: &Computed) -> Vec<Link> {
+/// the paper draws them, method-reference §8.2–8.4), each end named by
+/// `real` (the page names a virtual copy by its original); a link with an
+/// end `real` does not know is left out.
+pub(crate) fn deepest_links(
+    computed: &Computed,
+    real: impl Fn(usize) -> Option<usize>,
+) -> Vec<Link> {
     let dataset = &computed.dataset;
     let deepest = dataset.max_depth();
     computed
@@ -207,11 +212,13 @@ fn deepest_links(computed: &Computed) -> Vec<Link> {
         .iter()
         .zip(&computed.realized)
         .filter(|(c, _)| dataset.node(c.a).depth == deepest)
-        .map(|(c, r)| Link {
-            a: c.a,
-            b: c.b,
-            similarity: c.similarity,
-            realized: *r,
+        .filter_map(|(c, r)| {
+            Some(Link {
+                a: real(c.a)?,
+                b: real(c.b)?,
+                similarity: c.similarity,
+                realized: *r,
+            })
         })
         .collect()
 }
@@ -282,7 +289,7 @@ pub fn picture(computed: &Computed, style: &Style) -> String {
     compose_noted(
         &computed.dataset,
         &computed.layout,
-        &deepest_links(computed),
+        &deepest_links(computed, Some),
         pairs,
         style,
         computed.zero.summary().as_deref(),
@@ -652,13 +659,9 @@ pub(crate) fn legend_items(
         LegendOrder::Names => {
             let rank = |i: usize| {
                 let n = dataset.node(i);
-                style
-                    .cells
-                    .labels
-                    .names_order
-                    .iter()
-                    .position(|k| *k == n.id || *k == n.label)
-                    .unwrap_or(usize::MAX)
+                let names = &style.cells.labels.names;
+                let ranks = [names.rank(&n.id), names.rank(&n.label)];
+                ranks.into_iter().flatten().min().unwrap_or(usize::MAX)
             };
             groups.sort_by(|a, b| rank(*a).cmp(&rank(*b)).then(by_weight(a, b)));
         }

@@ -91,7 +91,7 @@ pub(crate) fn units_per_em() -> f32 {
 }
 
 /// Height above the baseline of the box usvg gives a line of text, in ems.
-pub(crate) fn ascent_em() -> f64 {
+pub fn ascent_em() -> f64 {
     f64::from(font().ascent / font().units_per_em)
 }
 
@@ -142,7 +142,7 @@ pub(crate) fn shape(text: &str) -> Arc<Shaped> {
 }
 
 /// The advance width of `text` in ems.
-pub(crate) fn width_em(text: &str) -> f64 {
+pub fn width_em(text: &str) -> f64 {
     f64::from(shape(text).advance / units_per_em())
 }
 

@@ -19,6 +19,10 @@ use std::process::{Command, Stdio};
 
 use bundle::{Bundle, BundleError, Kind, BUNDLES};
 
+use nptreemap::geom::{ConvexPolygon, Point};
+use nptreemap::render::labels::place_leaf;
+use nptreemap::render::metrics;
+
 use crate::support::temp_dir;
 
 fn root() -> &'static Path {
@@ -587,4 +591,172 @@ fn the_lexer_tells_regular_expressions_from_division() {
     let module = bundle::parse("m/x.js", text).expect("parses");
     assert_eq!(module.exports, ["f", "g", "h"]);
     assert!(module.imports.is_empty());
+}
+
+/// The strings the fitter of `text` may measure: the text, its words and
+/// the halves of every break, and every prefix cut with an ellipsis (a
+/// superset: a string missing from the table fails the run in node).
+fn measured(text: &str) -> Vec<String> {
+    let mut out = vec![text.to_owned()];
+    let chars: Vec<char> = text.chars().collect();
+    for k in 0..=chars.len() {
+        let (a, b) = (
+            chars[..k].iter().collect::<String>(),
+            chars[k..].iter().collect::<String>(),
+        );
+        out.extend([a.trim().to_owned(), b.trim().to_owned()]);
+    }
+    for k in 0..chars.len() {
+        out.push(chars[..k].iter().collect::<String>().trim_end().to_owned() + "…");
+    }
+    out
+}
+
+/// Convex cells of every shape the fitter meets: points on an ellipse
+/// (3 to 12 corners, stretched up to 8:1, turned), from a seeded LCG.
+fn random_cells(count: usize) -> Vec<ConvexPolygon> {
+    let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..count)
+        .map(|_| {
+            let n = 3 + (next() * 10.0) as usize;
+            let (rx, ry) = (
+                5.0 + 200.0 * next(),
+                (5.0 + 200.0 * next()) / (1.0 + 7.0 * next()),
+            );
+            let (turn, (cx, cy)) = (
+                next() * std::f64::consts::TAU,
+                (1000.0 * next(), 1000.0 * next()),
+            );
+            let mut angles: Vec<f64> = (0..n).map(|_| next() * std::f64::consts::TAU).collect();
+            angles.sort_by(f64::total_cmp);
+            let points = angles
+                .iter()
+                .map(|a| {
+                    let (x, y) = (rx * a.cos(), ry * a.sin());
+                    Point::new(
+                        cx + x * turn.cos() - y * turn.sin(),
+                        cy + x * turn.sin() + y * turn.cos(),
+                    )
+                })
+                .collect();
+            ConvexPolygon::new(points).expect("points on an ellipse are convex")
+        })
+        .collect()
+}
+
+/// The page's fitter (`page/fit.js`, run in node) places every label as
+/// the picture's `place_leaf` does, given the same cells, sizes and text widths:
+/// the same lines, the same size and anchor (one algorithm in two
+/// languages, issue 31 item 5).
+#[test]
+fn the_page_fits_labels_as_the_picture_does() {
+    let Some(node) = node_or_skip() else { return };
+    let texts = [
+        "Congo",
+        "Bosnia and Herzegovina",
+        "xml.etree.ElementTree",
+        "os",
+        "libreoffice-calc",
+        "configuration_manager_with_a_long_name",
+        "src/render/labels.rs",
+        "naïve café au lait",
+        "日本語のテキスト",
+        "a b",
+        "Saint Vincent and the Grenadines",
+        "x",
+        "python3-distutils-extra",
+        "The Lord of the Rings: The Return of the King",
+    ];
+    let cells = random_cells(600);
+    let mut widths = std::collections::BTreeMap::new();
+    let mut cases = Vec::new();
+    for (k, cell) in cells.iter().enumerate() {
+        let text = texts[k % texts.len()];
+        let min = 4.0 + (k % 9) as f64;
+        let max = min * (1.2 + (k % 5) as f64);
+        for m in measured(text) {
+            let w = metrics::width_em(&m);
+            widths.insert(m, w);
+        }
+        let points: Vec<f64> = cell.points().iter().flat_map(|p| [p.x, p.y]).collect();
+        cases.push(serde_json::json!({"text": text, "p": points, "min": min, "max": max}));
+    }
+    let dir = temp_dir("page-fit-twin");
+    let fit = include_str!("../../src/render/page/fit.js");
+    std::fs::write(dir.join("fit.mjs"), fit).expect("write");
+    let input = serde_json::json!({
+        "widths": widths, "cases": cases, "line": metrics::line_step_em(), "ascent": metrics::ascent_em(),
+    });
+    std::fs::write(dir.join("in.json"), input.to_string()).expect("write");
+    let driver = r#"
+        import { placeLeaf } from "./fit.mjs";
+        import { readFileSync } from "node:fs";
+        const input = JSON.parse(readFileSync(new URL("./in.json", import.meta.url)));
+        const width = (s) => {
+          if (!(s in input.widths)) { throw new Error("no width for " + JSON.stringify(s)); }
+          return input.widths[s];
+        };
+        const out = input.cases.map((c) =>
+          placeLeaf(c.text, c.p, c.min, c.max, width, input.line, input.ascent));
+        process.stdout.write(JSON.stringify(out));
+    "#;
+    std::fs::write(dir.join("driver.mjs"), driver).expect("write");
+    let run = Command::new(node)
+        .arg(dir.join("driver.mjs"))
+        .output()
+        .expect("node runs");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let page: Vec<serde_json::Value> = serde_json::from_slice(&run.stdout).expect("JSON");
+    let mut outcomes = [0usize; 4];
+    for (k, (cell, got)) in cells.iter().zip(&page).enumerate() {
+        let case = &cases[k];
+        let text = case["text"].as_str().expect("text");
+        let (min, max) = (
+            case["min"].as_f64().expect("min"),
+            case["max"].as_f64().expect("max"),
+        );
+        let want = place_leaf(k, text, None, cell, min, max);
+        let Some(want) = want else {
+            assert!(got.is_null(), "case {k} {text:?}: the page placed {got}");
+            outcomes[3] += 1;
+            continue;
+        };
+        let lines = got["lines"]
+            .as_array()
+            .unwrap_or_else(|| panic!("case {k} {text:?}: placed"));
+        assert_eq!(lines.len(), want.lines.len(), "case {k} {text:?}");
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (1.0 + a.abs());
+        let size = got["size"].as_f64().expect("size");
+        assert!(
+            close(size, want.lines[0].size),
+            "case {k}: {size} vs {}",
+            want.lines[0].size
+        );
+        for (g, w) in lines.iter().zip(&want.lines) {
+            assert_eq!(g["text"].as_str(), Some(w.text.as_str()), "case {k}");
+            assert!(close(g["x"].as_f64().expect("x"), w.x), "case {k}: x");
+            assert!(
+                close(g["baseline"].as_f64().expect("y"), w.baseline),
+                "case {k}: y"
+            );
+        }
+        let outcome = match (want.lines.len(), want.lines[0].text.ends_with('…')) {
+            (2, _) => 1,
+            (_, true) => 2,
+            _ => 0,
+        };
+        outcomes[outcome] += 1;
+    }
+    // Every rule was met: one line, two lines, cut, left out.
+    assert!(outcomes.iter().all(|&n| n >= 10), "outcomes {outcomes:?}");
 }

@@ -1,24 +1,20 @@
 // Labels: the picture's own by node, and those placed for a zoomed view.
 // A module of the page's script (bundled by src/render/page/bundle.rs). When
 // the view shows part of the map z times larger, every leaf in view gets the
-// label the picture would give it at that scale, by the picture's rules: the
-// largest size at which the text fits in the cell around its centroid, shown
-// when it reaches the picture's minimum size on screen (on two lines at a
-// word or path break when one line does not fit, cut with an ellipsis after
-// at least four characters only when neither does), never above the
-// picture's maximum. Placed again after every zoom and resize. The group names of the two levels below the view are
+// label the picture would give it at that scale, by the picture's own fitter
+// (fit.js): shown when it reaches the picture's minimum size on screen, never
+// above the picture's maximum. Placed again after every zoom and resize. The group names of the two levels below the view are
 // drawn large and light. Text widths are measured by the browser in the
 // labels' own font. Labels stay SVG text, so the browser's find (Ctrl-F) sees
 // them.
 import { EMPTY, N, NS, bbox, cells, centroid, data, depths, full, ids, isLeaf, labels, leafCells, poly, root, svg, within } from "./model.js";
+import { lineFit, placeLeaf, positive } from "./fit.js";
 
 // How the picture labels cells (src/render/html.rs, `HtmlLabels`); null
 // when it has no leaf labels.
 export const LS = data.labels || null;
 var zoomLabels = null, zoomGroups = null, zoomLabelOf = new Map();
 var measure = null, widthCache = new Map();
-// Ascent plus descent of a line, and the air kept around the text, in em.
-export const LINE_EM = 1.2, PAD_EM = 0.15;
 
 // The picture's labels by node, found on first use (a page that is only
 // looked at never pays for them).
@@ -35,7 +31,7 @@ function staticLabel(i) {
   return staticLabels.get(i);
 }
 
-export function textWidth(s) {
+function textWidth(s) {
   var w = widthCache.get(s);
   if (w === undefined) {
     if (!measure) {
@@ -50,7 +46,7 @@ export function textWidth(s) {
 
 // The largest font size (canvas units) at which a box of `wEm` x `hEm`
 // font sizes centred on (cx, cy) lies inside convex cell i.
-export function fitSize(i, cx, cy, wEm, hEm) {
+function fitSize(i, cx, cy, wEm, hEm) {
   var p = poly(i), n = p.length, best = Infinity;
   if (n < 6) { return 0; }
   // The polygon's orientation decides which side of each edge is inside.
@@ -90,54 +86,22 @@ function sizeRange(z) {
 
 // The shortest text leaf i may show: the label itself when short, else
 // its first four characters and an ellipsis.
-export function shortestText(i) {
+function shortestText(i) {
   var chars = Array.from(labels[i]);
   return chars.length <= 5 ? labels[i] : chars.slice(0, 4).join("").replace(/\s+$/, "") + "\u2026";
 }
 
-// The two lines of `text` broken at a space or after a path separator
-// (`.`, `/`, `:`, `-`, `_`) nearest its middle, or null when it has none.
-function twoLines(text) {
-  var chars = Array.from(text), best = -1, bestGap = Infinity;
-  for (var k = 1; k < chars.length - 1; k++) {
-    var at = chars[k] === " " ? k : (/[.\/:\-_]/.test(chars[k - 1]) ? k : -1);
-    if (at < 0) { continue; }
-    var gap = Math.abs(chars.length / 2 - at);
-    if (gap < bestGap) { bestGap = gap; best = at; }
-  }
-  if (best < 0) { return null; }
-  var a = chars.slice(0, best).join("").replace(/\s+$/, ""), b = chars.slice(best).join("").replace(/^\s+/, "");
-  return a && b ? [a, b] : null;
+// The largest font size (canvas units) at which leaf i fits the shortest
+// text it may show on one line.
+export function shortestFit(i) {
+  return LS ? lineFit(positive(poly(i)), textWidth(shortestText(i)), LS.line) : 0;
 }
 
-// What leaf i shows at zoom z: { text, size, x, y } (text an array of two
-// lines when broken) or null.
+// What leaf i shows at zoom z: fit.js's placement ({ lines, size }) or null.
 function fitLeaf(i, z, range) {
-  if (!LS) { return null; }
-  var text = labels[i];
-  if (!text) { return null; }
-  var c = centroid(i);
-  var r = range || sizeRange(z), min = r[0], max = r[1];
-  var size = fitSize(i, c[0], c[1], textWidth(text) + 2 * PAD_EM, LINE_EM + PAD_EM);
-  var lines = size < min ? twoLines(text) : null;
-  if (lines) {
-    var two = fitSize(i, c[0], c[1], Math.max(textWidth(lines[0]), textWidth(lines[1])) + 2 * PAD_EM, 2 * LINE_EM + PAD_EM);
-    if (two >= min) { return { text: lines, size: Math.min(two, max), x: c[0], y: c[1] }; }
-  }
-  if (size < min) {
-    // The longest prefix of at least four characters that fits with "…".
-    var chars = Array.from(text), lo = 4, hi = chars.length - 1, found = null;
-    while (lo <= hi) {
-      var k = (lo + hi) >> 1;
-      var cut = chars.slice(0, k).join("").replace(/\s+$/, "") + "\u2026";
-      var s = fitSize(i, c[0], c[1], textWidth(cut) + 2 * PAD_EM, LINE_EM + PAD_EM);
-      if (s >= min) { found = { text: cut, size: s }; lo = k + 1; } else { hi = k - 1; }
-    }
-    if (!found) { return null; }
-    text = found.text;
-    size = found.size;
-  }
-  return { text: text, size: Math.min(size, max), x: c[0], y: c[1] };
+  if (!LS || !labels[i]) { return null; }
+  var r = range || sizeRange(z);
+  return placeLeaf(labels[i], positive(poly(i)), r[0], r[1], textWidth, LS.line, LS.ascent);
 }
 
 // The label shown for node i now: the zoomed view's, else the picture's.
@@ -149,23 +113,32 @@ export function labelShown(i, z) {
   return !!staticLabel(i);
 }
 
-// A label centred on (x, y): one line, or two (an array) a line apart.
-function textAt(x, y, size, text, halo) {
+// A group name centred on (x, y).
+function textAt(x, y, size, text) {
   var t = document.createElementNS(NS, "text");
   t.setAttribute("x", x.toFixed(2));
+  t.setAttribute("y", (y + 0.35 * size).toFixed(2));
   t.setAttribute("font-size", size.toFixed(2));
-  if (halo) { t.setAttribute("stroke-width", (0.2 * size).toFixed(2)); }
-  if (typeof text === "string") {
-    t.setAttribute("y", (y + 0.35 * size).toFixed(2));
-    t.textContent = text;
+  t.textContent = text;
+  return t;
+}
+
+// A leaf's label as fit.js placed it: each line at its own baseline.
+function placedText(f) {
+  var t = document.createElementNS(NS, "text");
+  t.setAttribute("font-size", f.size.toFixed(2));
+  t.setAttribute("stroke-width", (0.2 * f.size).toFixed(2));
+  if (f.lines.length === 1) {
+    t.setAttribute("x", f.lines[0].x.toFixed(2));
+    t.setAttribute("y", f.lines[0].baseline.toFixed(2));
+    t.textContent = f.lines[0].text;
     return t;
   }
-  t.setAttribute("y", (y - 0.25 * size).toFixed(2));
-  text.forEach(function (line, k) {
+  f.lines.forEach(function (line) {
     var s = document.createElementNS(NS, "tspan");
-    s.setAttribute("x", x.toFixed(2));
-    if (k > 0) { s.setAttribute("dy", LINE_EM + "em"); }
-    s.textContent = line;
+    s.setAttribute("x", line.x.toFixed(2));
+    s.setAttribute("y", line.baseline.toFixed(2));
+    s.textContent = line.text;
     t.appendChild(s);
   });
   return t;
@@ -205,7 +178,7 @@ export function placeZoomLabels(box, z, g, before) {
       var r = [c[0] - size * w / 2, c[1] - 0.6 * size, c[0] + size * w / 2, c[1] + 0.6 * size];
       if (taken.some(function (q) { return r[0] < q[2] && q[0] < r[2] && r[1] < q[3] && q[1] < r[3]; })) { continue; }
       taken.push(r);
-      var t = textAt(c[0], c[1], size, labels[i], false);
+      var t = textAt(c[0], c[1], size, labels[i]);
       t.setAttribute("data-of", ids[i]);
       zoomGroups.appendChild(t);
     }
@@ -223,7 +196,7 @@ export function placeZoomLabels(box, z, g, before) {
     if (!inView(i)) { return; }
     var f = fitLeaf(i, z, range);
     if (!f) { return; }
-    var t = textAt(f.x, f.y, f.size, f.text, true);
+    var t = placedText(f);
     t.setAttribute("data-of", ids[i]);
     zoomLabels.appendChild(t);
     zoomLabelOf.set(i, t);

@@ -11,6 +11,7 @@ use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec};
 
 use crate::layout::{Computed, Layout};
 use crate::render::overlay::Link;
+use crate::render::picture::deepest_links;
 
 /// The real nodes of a computation, with their cells.
 pub(crate) struct RealView<'a> {
@@ -102,21 +103,7 @@ impl<'a> RealView<'a> {
     /// The constraints of the deepest level (where the picture draws them),
     /// between real leaves.
     pub(crate) fn links(&self, computed: &Computed) -> Vec<Link> {
-        let dataset = &computed.dataset;
-        let deepest = dataset.max_depth();
-        computed
-            .constraints
-            .iter()
-            .zip(&computed.realized)
-            .filter(|(c, _)| c.a < self.real_of.len() && c.b < self.real_of.len())
-            .filter(|(c, _)| dataset.node(c.a).depth == deepest)
-            .map(|(c, r)| Link {
-                a: self.real_of[c.a],
-                b: self.real_of[c.b],
-                similarity: c.similarity,
-                realized: *r,
-            })
-            .collect()
+        deepest_links(computed, |i| self.real_of.get(i).copied())
     }
 
     /// The top-level groups that share an edge (real indices), for colours.

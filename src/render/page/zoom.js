@@ -11,7 +11,7 @@
 import { N, NS, ancestors, cells, centroid, data, full, ids, isLeaf, labels, leafCells, parents, part, root, svg, within } from "./model.js";
 import { clear, highlight, hovered, hushHover, over } from "./hover.js";
 import {
-  LINE_EM, LS, MIN_PX, PAD_EM, dropZoomLabels, fitSize, labelShown, placeZoomLabels, shortestText, textWidth, unitPx
+  LS, MIN_PX, dropZoomLabels, labelShown, placeZoomLabels, shortestFit, unitPx
 } from "./lod.js";
 
 var crumbs = part("crumbs");
@@ -79,7 +79,7 @@ function leafBox(i, g) {
   var c = centroid(i);
   if (LS) {
     // Large enough for the shortest text the leaf may show, with room.
-    var s = fitSize(i, c[0], c[1], textWidth(shortestText(i)) + 2 * PAD_EM, LINE_EM + PAD_EM);
+    var s = shortestFit(i);
     if (s > 0) { z = Math.max(z, 1.25 * MIN_PX / (unitPx() * s)); }
   }
   z = Math.min(z, MAX_ZOOM);
