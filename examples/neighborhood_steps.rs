@@ -161,7 +161,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         constraints.len()
     );
 
-    // The projection the layout takes (`layout::neighbor::projection_of`): PCA when
+    // The projection the layout takes (`layout::similar::projection_of`): PCA when
     // every node has a vector of one length, else MDS of 1 − similarity.
     let t = Instant::now();
     let nodes = prepared.nodes();

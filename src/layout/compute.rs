@@ -9,9 +9,9 @@
 use std::sync::{Arc, OnceLock};
 
 use super::method::Method;
-use super::neighbor::{layout_similar_with, projection_of, NeighborParams};
 use super::previous::{Previous, WarmRefusal};
 use super::progress::{Monitor, ProgressSink};
+use super::similar::{layout_similar_with, projection_of, NeighborParams};
 use super::warm::layout_warm_with;
 use super::zero::{self, ZeroItems, ZeroWeights};
 use super::{treemap, Layout, LayoutError, Params, Report};

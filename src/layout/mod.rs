@@ -32,7 +32,7 @@ internal! {
     /// One-level optimiser: Lloyd steps plus weight adaptation towards target areas.
     mod map;
     /// Similarity-driven layouts: initialisation, baselines, joint optimisation.
-    mod neighbor;
+    mod similar;
     /// Start positions and weights for one diagram.
     mod seed;
     /// Top-down recursion over the hierarchy.
@@ -49,10 +49,10 @@ pub use check::SanityError;
 pub use compute::{compute, Computed, LayoutSettings, Request, Start};
 pub use frames::Frame;
 pub use method::Method;
-pub use neighbor::NeighborParams;
 pub use params::{Canvas, Outline, Params};
 pub use previous::{Previous, PreviousNode, WarmRefusal};
 pub use progress::{Progress, ProgressFn, ProgressSink};
+pub use similar::NeighborParams;
 pub use treemap::layout;
 pub use zero::{ZeroItems, ZeroWeights};
 

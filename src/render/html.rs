@@ -24,7 +24,6 @@ use super::text::ascent_em;
 use crate::layout::zero::HiddenUnder;
 use crate::layout::{Computed, Layout};
 
-#[path = "page/view.rs"]
 mod view;
 
 use view::RealView;
@@ -749,6 +748,5 @@ fn data_json(data: &HtmlData) -> String {
 
 // The path first: the architecture test reads `#[cfg(test)]` as applying
 // to the `mod` line right after it.
-#[path = "page/tests.rs"]
 #[cfg(test)]
 mod tests;

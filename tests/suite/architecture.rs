@@ -749,7 +749,7 @@ fn the_file_reader_sees_super_groups_and_nested_paths() {
 }
 
 /// Issue 22: every source path ARCHITECTURE.md names is there (`src/…`,
-/// `layout/neighbor/`, a file name such as `treemap.rs`), so the document
+/// `layout/similar/`, a file name such as `treemap.rs`), so the document
 /// cannot keep naming a file that was moved or split.
 #[test]
 fn architecture_md_names_only_paths_that_exist() {
