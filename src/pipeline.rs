@@ -15,7 +15,7 @@ use crate::config::{
 };
 use crate::exec::{self, ExecError};
 use crate::layout::{compute, Computed, LayoutError, Previous, Request};
-use crate::render::{OutputError, Style};
+use crate::render::{OutputError, Parts, Style};
 #[cfg(feature = "png")]
 use crate::render::PngError;
 use crate::workspace::FileError;
@@ -413,11 +413,11 @@ pub fn render_outputs(
     style: &Style,
     outputs: &[OutputConfig],
 ) -> Result<Vec<Rendered>, BuildError> {
-    let mut svg_text = None;
+    let (mut svg_text, parts) = (None, Parts::new());
     outputs
         .iter()
         .map(|out| {
-            let bytes = render_output(computed, style, out, &[], &mut svg_text)?;
+            let bytes = render_output(computed, style, out, &[], &mut svg_text, &parts)?;
             Ok(Rendered {
                 path: out.path.clone(),
                 bytes,
@@ -435,10 +435,11 @@ pub fn render_output(
     out: &OutputConfig,
     past: &[std::sync::Arc<Computed>],
     svg_text: &mut Option<String>,
+    parts: &Parts,
 ) -> Result<Vec<u8>, BuildError> {
     let path = out.path.clone();
     out.kind()
-        .render(computed, style, out.scale, past, svg_text)
+        .render(computed, style, out.scale, past, svg_text, parts)
         .map_err(|e| match e {
             #[cfg(feature = "png")]
             OutputError::Png(source) => BuildError::Png { path, source },

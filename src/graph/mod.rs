@@ -229,6 +229,9 @@ pub struct DatasetGraph {
     /// moved since (a `state_dir:` edit, another set of outputs), so that the
     /// new folder holds the layout its manifest vouches for.
     stored_at: Option<PathBuf>,
+    /// The labels of the last render, for the next (issue 32: an edit fits
+    /// only the labels of the cells it moved).
+    parts: crate::render::Parts,
 }
 
 /// An output's file as the build found it.

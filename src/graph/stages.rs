@@ -376,7 +376,11 @@ impl DatasetGraph {
             .filter(|(_, k)| k.is_none())
             .map(|(out, _)| out)
             .collect();
-        let mut drawn = render_in_parallel(&laid.computed, style, &needed, &past)?.into_iter();
+        self.parts.next_render();
+        let mut drawn =
+            render_in_parallel(&laid.computed, style, &needed, &past, &self.parts)?.into_iter();
+        let labels = self.parts.counts();
+        let mut noted = false;
         let mut outputs = Vec::with_capacity(d.outputs.len());
         for (((out, disk), render_key), known) in d.outputs.iter().zip(disk).zip(keys).zip(known) {
             let shown = super::shown(d, &out.path);
@@ -387,7 +391,19 @@ impl DatasetGraph {
                 }
                 None => {
                     let (bytes, ms) = drawn.next().expect("one rendering per output needed");
-                    cx.record_output_ms(Stage::Render, shown, ms, out.kind().name());
+                    // The labels' counts go with the first output that drew any.
+                    let note = if out.kind().styled() && !noted && labels.reused + labels.fitted > 0 {
+                        noted = true;
+                        format!(
+                            "{}; labels: {} fitted, {} reused",
+                            out.kind().name(),
+                            labels.fitted,
+                            labels.reused
+                        )
+                    } else {
+                        out.kind().name().to_string()
+                    };
+                    cx.record_output_ms(Stage::Render, shown, ms, note);
                     OutputBuild::made(out.path.clone(), bytes, *disk)
                 }
             };
@@ -487,19 +503,28 @@ fn render_in_parallel(
     style: &Style,
     outputs: &[&OutputConfig],
     past: &[Arc<Computed>],
+    parts: &render::Parts,
 ) -> Result<Vec<(Vec<u8>, f64)>, BuildError> {
     use rayon::prelude::*;
     let pictured = |out: &OutputConfig| out.kind().draws_picture();
+    let styled = outputs.iter().position(|o| o.kind().styled());
+    let t = Instant::now();
+    if styled.is_some() {
+        render::fit_labels(computed, style, parts);
+    }
+    // The labels' time counts towards the first output that draws them.
+    let labels_ms = ms_since(t);
     let timed = |out: &OutputConfig, text: Option<String>| {
         let t = Instant::now();
         let mut text = text;
-        pipeline::render_output(computed, style, out, past, &mut text).map(|b| (b, ms_since(t)))
+        pipeline::render_output(computed, style, out, past, &mut text, parts)
+            .map(|b| (b, ms_since(t)))
     };
     let (text, plain) = rayon::join(
         || {
             outputs.iter().any(|o| pictured(o)).then(|| {
                 let t = Instant::now();
-                (render::picture(computed, style), ms_since(t))
+                (render::picture_with(computed, style, parts), ms_since(t))
             })
         },
         || {
@@ -522,6 +547,8 @@ fn render_in_parallel(
             }
             (None, None) => timed(out, None),
         })
+        .enumerate()
+        .map(|(k, done)| done.map(|(b, ms)| (b, ms + if Some(k) == styled { labels_ms } else { 0.0 })))
         .collect()
 }
 

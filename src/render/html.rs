@@ -18,7 +18,8 @@ use super::labels::{format_value, line_step_em};
 use super::legend::LegendItem;
 use super::overlay::Link;
 use super::palette::TABLEAU10;
-use super::picture::{colors, compose, fills, legend_items, Style};
+use super::parts::Parts;
+use super::picture::{colors, compose_noted, fills, legend_items, Style};
 use super::svg::{escape, leaf_labels, path_data};
 use super::text::ascent_em;
 use crate::layout::zero::HiddenUnder;
@@ -451,6 +452,17 @@ pub fn html_page_with_history(
     style: &Style,
     past: &[Arc<Computed>],
 ) -> String {
+    html_page_with_parts(computed, style, past, &Parts::new())
+}
+
+/// [`html_page_with_history`] with the labels `parts` has from this
+/// render's other outputs and the render before: the same bytes.
+pub fn html_page_with_parts(
+    computed: &Computed,
+    style: &Style,
+    past: &[Arc<Computed>],
+    parts: &Parts,
+) -> String {
     let view = RealView::new(computed);
     let dataset = view.dataset.as_ref();
     let layout = view.layout.as_ref();
@@ -460,13 +472,13 @@ pub fn html_page_with_history(
     page_style.legend = false;
     let links = view.links(computed);
     let adjacent = view.top_pairs(computed);
-    let svg_text = compose(dataset, layout, &links, &adjacent, &page_style);
+    let svg_text = compose_noted(dataset, layout, &links, &adjacent, &page_style, None, parts);
     let svg_text = lighten(&svg_text);
 
     let nodes = page_nodes(computed, &view, &links, style);
 
     let labels = page_style.cells.labels.show.then(|| {
-        let placed = leaf_labels(dataset, layout, &page_style.cells.labels);
+        let placed = leaf_labels(dataset, layout, &page_style.cells.labels, parts);
         let texts = label_texts(&svg_text);
         HtmlLabels {
             font: page_style.cells.font_family.clone(),

@@ -25,6 +25,8 @@ pub mod output;
 pub mod overlay;
 /// Colours: hex parsing, the Tableau palettes, lightness variations for children.
 pub mod palette;
+/// What one render keeps for the next: each leaf's label by its drawn cell.
+pub mod parts;
 /// The framed picture: map, overlay, title, legend, border; its [`Style`].
 pub mod picture;
 /// PNG from the SVG text through usvg and resvg, with a built-in font.
@@ -49,13 +51,17 @@ pub mod metrics {
 
 pub use color_by::{ColorBy, ColorScale};
 pub use html::{
-    html, html_page, html_page_with_history, HtmlData, HtmlEmpty, HtmlFrame, HtmlLayout, HtmlNode,
+    html, html_page, html_page_with_history, html_page_with_parts, HtmlData, HtmlEmpty, HtmlFrame,
+    HtmlLayout, HtmlNode,
 };
 pub use label_text::{DisplayNames, LabelText};
 pub use labels::LabelStyle;
 pub use output::{OutputError, OutputKind};
 pub use palette::{PaletteKind, Rgb};
-pub use picture::{group_colors, picture, Border, LegendOrder, PageFields, Style};
+pub use parts::{LabelCounts, Parts};
+pub use picture::{
+    fit_labels, group_colors, picture, picture_with, Border, LegendOrder, PageFields, Style,
+};
 #[cfg(feature = "png")]
 pub use png::{png, PngError};
 pub use svg::{svg, Kept, SvgStyle};

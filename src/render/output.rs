@@ -7,7 +7,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::{html_page_with_history, picture, Style};
+use super::{html_page_with_parts, picture_with, Parts, Style};
 use crate::layout::Computed;
 
 /// Kinds of output.
@@ -96,7 +96,8 @@ impl OutputKind {
     /// Its bytes for a finished layout. `past` are the layouts before it,
     /// oldest first (used when it [shows history](OutputKind::shows_history));
     /// `svg_text` keeps the picture's SVG text between the outputs of one
-    /// layout (the SVG and the PNG draw the same picture).
+    /// layout (the SVG and the PNG draw the same picture); `parts` the
+    /// labels of this render's other outputs and of the render before.
     pub fn render(
         self,
         computed: &Computed,
@@ -104,15 +105,16 @@ impl OutputKind {
         scale: f64,
         past: &[std::sync::Arc<Computed>],
         svg_text: &mut Option<String>,
+        parts: &Parts,
     ) -> Result<Vec<u8>, OutputError> {
         Ok(match self {
             OutputKind::Svg => svg_text
-                .get_or_insert_with(|| picture(computed, style))
+                .get_or_insert_with(|| picture_with(computed, style, parts))
                 .clone()
                 .into_bytes(),
             #[cfg(feature = "png")]
             OutputKind::Png => {
-                let text = svg_text.get_or_insert_with(|| picture(computed, style));
+                let text = svg_text.get_or_insert_with(|| picture_with(computed, style, parts));
                 super::png(text, scale)?
             }
             #[cfg(not(feature = "png"))]
@@ -124,7 +126,7 @@ impl OutputKind {
                 });
             }
             OutputKind::Json => crate::layout_json::document(computed).into_bytes(),
-            OutputKind::Html => html_page_with_history(computed, style, past).into_bytes(),
+            OutputKind::Html => html_page_with_parts(computed, style, past, parts).into_bytes(),
         })
     }
 }

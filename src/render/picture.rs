@@ -15,6 +15,7 @@ use super::labels::{format_value, place_groups, Placed};
 use super::legend::{legend, LegendItem};
 use super::overlay::{marks_svg, place_markers, place_tabs, tabs_svg, Link, OverlayStyle};
 use super::palette::{luminance, Rgb, WHITE};
+use super::parts::Parts;
 use super::svg::{
     cell_colors, escape, leaf_labels, main_child, num, push_cells, push_labels, push_text,
     stroke_width, Kept, SvgStyle,
@@ -285,6 +286,24 @@ pub fn group_colors(computed: &Computed, style: &Style) -> Kept {
 /// constraints, the interlocking tabs and unrealised-link markers of its
 /// deepest level, framed as `style` says. Identical input gives identical bytes.
 pub fn picture(computed: &Computed, style: &Style) -> String {
+    picture_with(computed, style, &Parts::new())
+}
+
+/// Fits the leaf labels of `computed`'s picture into `parts` ahead of the
+/// outputs that draw them (the picture and the page), so that outputs
+/// rendered at once share one fitting instead of each making its own.
+pub fn fit_labels(computed: &Computed, style: &Style, parts: &Parts) {
+    leaf_labels(
+        &computed.dataset,
+        &computed.layout,
+        &style.cells.labels,
+        parts,
+    );
+}
+
+/// [`picture`] with the labels `parts` has from this render's other outputs
+/// and the render before: the same bytes, fewer labels fitted.
+pub fn picture_with(computed: &Computed, style: &Style, parts: &Parts) -> String {
     let pairs = computed.adjacency().get(1).map_or(&[][..], |a| a.pairs());
     compose_noted(
         &computed.dataset,
@@ -293,6 +312,7 @@ pub fn picture(computed: &Computed, style: &Style) -> String {
         pairs,
         style,
         computed.zero.summary().as_deref(),
+        parts,
     )
 }
 
@@ -308,11 +328,12 @@ pub fn compose(
     adjacent: &[(usize, usize)],
     style: &Style,
 ) -> String {
-    compose_noted(dataset, layout, links, adjacent, style, None)
+    compose_noted(dataset, layout, links, adjacent, style, None, &Parts::new())
 }
 
 /// [`compose`] with a `note` first in the legend: what the picture leaves
-/// out or does not draw to scale (issue 34: "12 items of weight 0 not drawn").
+/// out or does not draw to scale (issue 34: "12 items of weight 0 not drawn"),
+/// and the labels `parts` keeps.
 pub(crate) fn compose_noted(
     dataset: &Dataset,
     layout: &Layout,
@@ -320,11 +341,12 @@ pub(crate) fn compose_noted(
     adjacent: &[(usize, usize)],
     style: &Style,
     note: Option<&str>,
+    parts: &Parts,
 ) -> String {
     let (cw, ch) = (layout.canvas.width, layout.canvas.height);
     let u = unit(layout);
     let (colors, applied) = fills(dataset, adjacent, style);
-    let labels = leaf_labels(dataset, layout, &style.cells.labels);
+    let labels = leaf_labels(dataset, layout, &style.cells.labels, parts);
     let groups = if style.cells.labels.groups {
         place_groups(dataset, layout, &style.cells.labels, &labels, u)
     } else {

@@ -9,8 +9,11 @@ use nptreemap_formats::Dataset;
 use std::collections::BTreeMap;
 
 use super::label_text::display_name;
-use super::labels::{format_value, place_leaf, LabelStyle, Placed};
+use rayon::prelude::*;
+
+use super::labels::{format_value, LabelStyle, Placed};
 use super::palette::{self, PaletteKind, Rgb, WHITE};
+use super::parts::{LabelKey, Parts};
 use crate::geom::ConvexPolygon;
 use crate::layout::Layout;
 
@@ -130,7 +133,7 @@ pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
         &style.kept,
     );
     push_cells(&mut out, dataset, layout, style, &colors);
-    let labels = leaf_labels(dataset, layout, &style.labels);
+    let labels = leaf_labels(dataset, layout, &style.labels, &Parts::new());
     push_labels(&mut out, &labels, style);
     out.push_str("</svg>\n");
     out
@@ -330,29 +333,34 @@ pub(crate) fn path_data(out: &mut String, polygon: &ConvexPolygon) {
     out.push('Z');
 }
 
-/// The leaf labels that fit, in dataset order (none when labels are off).
-pub(crate) fn leaf_labels(dataset: &Dataset, layout: &Layout, style: &LabelStyle) -> Vec<Placed> {
+/// The leaf labels that fit, in dataset order (none when labels are off),
+/// from `parts` where an earlier render fitted them to the same drawn cell.
+pub(crate) fn leaf_labels(
+    dataset: &Dataset,
+    layout: &Layout,
+    style: &LabelStyle,
+    parts: &Parts,
+) -> Vec<Placed> {
     if !style.show {
         return Vec::new();
     }
     let count = dataset.len().min(layout.cells.len());
-    (0..count)
+    let keys: Vec<(usize, LabelKey)> = (0..count)
+        .into_par_iter()
         .filter(|&i| dataset.is_leaf(i) && is_drawn(dataset, i))
-        .filter_map(|i| {
+        .map(|i| {
             let text = display_name(dataset, i, &style.names, &style.text);
             let value = style
                 .value
                 .then(|| format_value(dataset.node(i).value, &style.unit));
-            place_leaf(
+            let cell = &layout.cells[i].polygon;
+            (
                 i,
-                &text,
-                value.as_deref(),
-                &layout.cells[i].polygon,
-                style.min_size,
-                style.max_size,
+                LabelKey::new(text, value, cell, style.min_size, style.max_size),
             )
         })
-        .collect()
+        .collect();
+    parts.labels(keys).into_iter().flatten().collect()
 }
 
 /// Appends the label group: one `<text>` per placed label (a `<tspan>` per

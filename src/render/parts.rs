@@ -1,0 +1,258 @@
+//! What one render keeps for the next (issue 32, "draw what moved"): each
+//! leaf's label, by everything that decides it: its text and value line, its
+//! size range and its cell as drawn (the SVG's two decimals). The picture,
+//! the page's picture and the page's label list of one build share one
+//! placement per leaf, and a render after an edit fits only the labels of
+//! the cells the edit moved: after one weight edit of 6,000 C headers, a few
+//! dozen of 38,629 cells move at two decimals, while every one moves in its
+//! last bits, so the key is the drawn cell, and the label is fitted to the
+//! drawn cell too (which is the cell the reader sees).
+//!
+//! Two generations: what the current render asked for, and what the one
+//! before it did. [`Parts::next_render`] drops the older, so the memo holds
+//! at most two renders' labels however long a `watch` runs. Thread-safe: the
+//! outputs of one build render in parallel and share it.
+//!
+//! Hand-written rather than a caching crate: the generations are the
+//! eviction rule a render needs (a cache sized by count would keep the
+//! labels of a layout long gone, or drop those of a large one), and it is
+//! one map of our own keys.
+
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+use rayon::prelude::*;
+
+use super::labels::{place_leaf, Placed};
+use crate::geom::{ConvexPolygon, Point};
+
+/// Drawn coordinates per canvas unit: the SVG writes two decimals.
+const DRAWN_PER_UNIT: f64 = 100.0;
+
+/// Everything that decides a leaf's label.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct LabelKey {
+    text: String,
+    value: Option<String>,
+    /// The cell's corners in hundredths of a canvas unit.
+    cell: Vec<(i64, i64)>,
+    /// The font size range's bits.
+    sizes: (u64, u64),
+}
+
+impl LabelKey {
+    /// The key of a leaf with `text` (and value line `value`) in `polygon`,
+    /// fitted between `min` and `max`.
+    pub(crate) fn new(
+        text: String,
+        value: Option<String>,
+        polygon: &ConvexPolygon,
+        min: f64,
+        max: f64,
+    ) -> LabelKey {
+        // Coordinates are finite and within the canvas (`Layout::sanity_check`);
+        // `as` saturates anything else, which still gives a key.
+        let drawn = |v: f64| (v * DRAWN_PER_UNIT).round() as i64;
+        LabelKey {
+            text,
+            value,
+            cell: polygon
+                .points()
+                .iter()
+                .map(|p| (drawn(p.x), drawn(p.y)))
+                .collect(),
+            sizes: (min.to_bits(), max.to_bits()),
+        }
+    }
+
+    /// The label this key decides, for node `node`: fitted to the cell as
+    /// drawn; none when that cell is degenerate at two decimals (too small
+    /// for any label).
+    fn place(&self, node: usize) -> Option<Placed> {
+        let points = self
+            .cell
+            .iter()
+            .map(|&(x, y)| Point::new(x as f64 / DRAWN_PER_UNIT, y as f64 / DRAWN_PER_UNIT))
+            .collect();
+        let cell = ConvexPolygon::from_convex(points)?;
+        let (min, max) = (f64::from_bits(self.sizes.0), f64::from_bits(self.sizes.1));
+        place_leaf(node, &self.text, self.value.as_deref(), &cell, min, max)
+    }
+}
+
+/// The label memo of the renders of one dataset (see the module docs).
+#[derive(Debug, Default)]
+pub struct Parts {
+    labels: Mutex<Generations>,
+}
+
+#[derive(Debug, Default)]
+struct Generations {
+    current: HashMap<LabelKey, Option<Placed>>,
+    previous: HashMap<LabelKey, Option<Placed>>,
+    /// Labels found and fitted since the last [`Parts::next_render`].
+    reused: usize,
+    fitted: usize,
+}
+
+/// How many labels a render found in the memo and how many it fitted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LabelCounts {
+    /// Found (from this render's other outputs or the render before).
+    pub reused: usize,
+    /// Fitted anew.
+    pub fitted: usize,
+}
+
+impl Parts {
+    /// An empty memo.
+    pub fn new() -> Parts {
+        Parts::default()
+    }
+
+    /// Starts the next render: what the render before last asked for, and
+    /// not the last, is dropped. Returns the last render's counts.
+    pub fn next_render(&self) -> LabelCounts {
+        let mut g = self.lock();
+        let counts = LabelCounts {
+            reused: g.reused,
+            fitted: g.fitted,
+        };
+        g.previous = std::mem::take(&mut g.current);
+        g.reused = 0;
+        g.fitted = 0;
+        counts
+    }
+
+    /// The counts of the render under way.
+    pub fn counts(&self) -> LabelCounts {
+        let g = self.lock();
+        LabelCounts {
+            reused: g.reused,
+            fitted: g.fitted,
+        }
+    }
+
+    /// The labels of `(node, key)` pairs, in their order (`None` for a leaf
+    /// whose label does not fit): from the memo where it has them, the rest
+    /// fitted in parallel and kept.
+    pub(crate) fn labels(&self, keys: Vec<(usize, LabelKey)>) -> Vec<Option<Placed>> {
+        let mut found: Vec<Option<Option<Placed>>> = {
+            let mut g = self.lock();
+            keys.iter()
+                .map(|(node, key)| g.take(key).map(|p| p.map(|p| Placed { node: *node, ..p })))
+                .collect()
+        };
+        let missing: Vec<usize> = (0..keys.len()).filter(|&k| found[k].is_none()).collect();
+        let fitted: Vec<Option<Placed>> = missing
+            .par_iter()
+            .map(|&k| keys[k].1.place(keys[k].0))
+            .collect();
+        let mut g = self.lock();
+        g.fitted += missing.len();
+        g.reused += keys.len() - missing.len();
+        for (&k, placed) in missing.iter().zip(fitted) {
+            g.current.insert(keys[k].1.clone(), placed.clone());
+            found[k] = Some(placed);
+        }
+        found.into_iter().map(Option::flatten).collect()
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Generations> {
+        // A panic while the lock was held leaves whole entries only.
+        self.labels.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+impl Generations {
+    /// The entry of `key` from either generation, kept in the current one.
+    fn take(&mut self, key: &LabelKey) -> Option<Option<Placed>> {
+        if let Some(p) = self.current.get(key) {
+            return Some(p.clone());
+        }
+        let p = self.previous.remove(key)?;
+        self.current.insert(key.clone(), p.clone());
+        Some(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::Layout;
+    use crate::render::labels::LabelStyle;
+    use crate::render::svg::leaf_labels;
+    use crate::render::test_support::sample;
+
+    #[test]
+    fn a_label_from_the_memo_is_the_label_fitted_to_the_drawn_cell() {
+        let (dataset, layout) = sample();
+        let style = LabelStyle::default();
+        let parts = Parts::new();
+        let first = leaf_labels(&dataset, &layout, &style, &parts);
+        assert!(!first.is_empty(), "the sample has labels");
+        let fitted = parts.counts().fitted;
+        assert_eq!(parts.counts().reused, 0);
+        // The same drawing again: every label found, none fitted, same labels.
+        let again = leaf_labels(&dataset, &layout, &style, &parts);
+        assert_eq!(again, first);
+        assert_eq!(
+            parts.counts(),
+            LabelCounts {
+                reused: fitted,
+                fitted
+            }
+        );
+        // A fresh memo fits the same labels: the memo changes no byte.
+        assert_eq!(leaf_labels(&dataset, &layout, &style, &Parts::new()), first);
+    }
+
+    #[test]
+    fn a_cell_moved_at_two_decimals_is_fitted_again_and_one_moved_less_is_not() {
+        let (dataset, mut layout) = sample();
+        let style = LabelStyle::default();
+        let parts = Parts::new();
+        leaf_labels(&dataset, &layout, &style, &parts);
+        parts.next_render();
+        let leaf = dataset.find("A1").expect("A1");
+        let shift = |layout: &mut Layout, d: f64| {
+            let moved: Vec<Point> = layout.cells[leaf]
+                .polygon
+                .points()
+                .iter()
+                .map(|p| Point::new(p.x + d, p.y))
+                .collect();
+            layout.cells[leaf].polygon = ConvexPolygon::new(moved).expect("convex");
+        };
+        shift(&mut layout, 0.001);
+        leaf_labels(&dataset, &layout, &style, &parts);
+        let counts = parts.next_render();
+        assert_eq!(
+            counts.fitted, 0,
+            "a thousandth does not move the drawn cell"
+        );
+        shift(&mut layout, 0.5);
+        leaf_labels(&dataset, &layout, &style, &parts);
+        let counts = parts.next_render();
+        assert_eq!(counts.fitted, 1, "only the moved cell's label is fitted");
+        assert!(counts.reused >= 1);
+    }
+
+    #[test]
+    fn the_memo_keeps_two_renders_at_most() {
+        let (dataset, layout) = sample();
+        let parts = Parts::new();
+        let sizes = [9.0, 10.0, 11.0];
+        for &min in &sizes {
+            let style = LabelStyle {
+                min_size: min,
+                ..LabelStyle::default()
+            };
+            leaf_labels(&dataset, &layout, &style, &parts);
+            parts.next_render();
+        }
+        let g = parts.lock();
+        let leaves = (0..dataset.len()).filter(|&i| dataset.is_leaf(i)).count();
+        assert!(g.current.is_empty() && g.previous.len() <= leaves);
+    }
+}
