@@ -5,6 +5,9 @@
 //! identical bytes for identical input. Only PNG can fail, and then on a bug
 //! (its input is our own SVG) or an absurd pixel size.
 
+/// The map's cells painted straight onto the PNG's pixels.
+#[cfg(feature = "png")]
+mod cell_paint;
 /// Colour by a numeric field: the scales and the values.
 pub mod color_by;
 /// CIELAB and the CIEDE2000 colour difference.
