@@ -82,6 +82,8 @@ impl DatasetGraph {
             settings: manifest::settings_key(&job.request.settings()),
         };
         let manifest = self.manifest_of(d);
+        // A new render: the labels of the one before last are dropped.
+        self.parts.next_render();
         let disk: Vec<Option<OnDisk>> = d.outputs.iter().map(|o| super::on_disk(&o.path)).collect();
         // The group colours of the last build are kept (issue 32): they are
         // part of the style every render key names.
@@ -311,7 +313,17 @@ impl DatasetGraph {
             LayoutStep::UpToDate => String::new(),
         };
         cx.record(Stage::Layout, step != LayoutStep::Reused, t, note);
-        let text = state::layout::text(&computed);
+        // The stored layout's text (one thread) beside the labels the
+        // pictures will draw (every core): neither waits for the other.
+        let pictured = job.dataset.outputs.iter().any(|o| o.kind().styled());
+        let (text, ()) = rayon::join(
+            || state::layout::text(&computed),
+            || {
+                if pictured {
+                    render::fit_labels(&computed, &job.style, &self.parts);
+                }
+            },
+        );
         let state = Fingerprint::of_bytes(text.as_bytes());
         if chosen.stored != Some(state) {
             pending.layout = Some((text, state));
@@ -376,7 +388,6 @@ impl DatasetGraph {
             .filter(|(_, k)| k.is_none())
             .map(|(out, _)| out)
             .collect();
-        self.parts.next_render();
         let mut drawn =
             render_in_parallel(&laid.computed, style, &needed, &past, &self.parts)?.into_iter();
         let labels = self.parts.counts();
