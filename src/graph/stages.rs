@@ -61,6 +61,14 @@ pub(super) struct Laid {
 }
 
 /// What the layout stage hands on.
+/// What [`DatasetGraph::ready`] gives a build: the parsed inputs with their
+/// warnings, and what a layout is made from when the build lays out.
+struct Readied {
+    dataset: Arc<Dataset>,
+    warnings: Vec<String>,
+    input: Option<(Prepared, Plan, Arc<ZeroItems>)>,
+}
+
 struct LayoutOut {
     laid: Laid,
     step: LayoutStep,
@@ -93,48 +101,67 @@ impl DatasetGraph {
             main: manifest.shades.clone(),
         };
         let current = self.current_outputs(job, &style, &manifest, key, &disk);
-        let memory = self.slots.layout.last().map(|(k, laid)| start::Memory {
-            inputs: k.inputs,
-            settings: k.settings,
-            computed: &laid.computed,
-        });
         let facts = start::Facts {
             refusal: start::refusal(job.cold, self.options.cache),
             inputs: key.inputs,
             settings: key.settings,
             outputs_current: current.is_some(),
-            memory,
+            memory: None,
         };
-        let decision = start::decide(facts, || state::layout::read(d));
-        if let (Decision::UpToDate, Some(outputs), Some(record)) =
-            (&decision, current, manifest.layout.as_ref())
-        {
-            return Ok(self.up_to_date(d, record, outputs, stages));
-        }
+        // Nothing in memory and outputs to make: the decision is to lay out.
+        let speculate = current.is_none() && self.slots.layout.last().is_none();
+        let decided = if speculate {
+            None
+        } else {
+            let memory = self.slots.layout.last().map(|(k, laid)| start::Memory {
+                inputs: k.inputs,
+                settings: k.settings,
+                computed: &laid.computed,
+            });
+            let facts = start::Facts { memory, ..facts };
+            let decision = start::decide(facts, || state::layout::read(d));
+            if let (Decision::UpToDate, Some(outputs), Some(record)) =
+                (&decision, current, manifest.layout.as_ref())
+            {
+                return Ok(self.up_to_date(d, record, outputs, stages));
+            }
+            Some(decision)
+        };
+        let mut pending = Pending::default();
         let mut cx = Cx {
             name: &d.name,
             cache: self.options.cache,
             stages: &mut stages,
         };
-        let dataset = self.parse(d, files, key.inputs, &mut cx)?;
-        let mut warnings = pipeline::warnings(files, &dataset);
-        warnings.extend(unknown_pins(&dataset, &job.style));
-        let mode = job.request.params.zero_weights;
-        // Items of weight 0 hidden or kept (issue 34): everything below
-        // works on what is drawn.
-        let (drawn, zero) = zero::apply(&dataset, mode);
-        let planned = plan(&drawn, &job.request).map_err(|e| layout_error(d, e))?;
-        let mut pending = Pending::default();
+        let (decision, readied) = if let Some(decision) = decided {
+            let lay_out = matches!(decision, Decision::LayOut(_));
+            let readied = self.ready(job, files, key, lay_out, &mut cx, &mut pending)?;
+            (decision, readied)
+        } else {
+            // Nothing in memory and outputs to make: the decision is to lay
+            // out, so reading the stored layout (the warm start's previous,
+            // tens of megabytes at thousands of leaves) and readying the
+            // inputs (parse, prepare, constraints) need not wait for each
+            // other.
+            let (decision, readied) = rayon::join(
+                || start::decide(facts, || state::layout::read(d)),
+                || self.ready(job, files, key, true, &mut cx, &mut pending),
+            );
+            (decision, readied?)
+        };
+        let Readied {
+            dataset,
+            mut warnings,
+            input,
+        } = readied;
         let mut notes = Vec::new();
-        let out = match decision {
-            Decision::LayOut(chosen) => {
+        let out = match (decision, input) {
+            (Decision::LayOut(chosen), Some(input)) => {
                 if let Some(warning) = &chosen.warning {
                     // First: it is about the whole run.
                     warnings.insert(0, warning.clone());
                 }
-                let source = drawn_key(key.inputs, mode);
-                let input = self.similar(Some(d), source, &drawn, &planned, &mut cx, &mut pending);
-                self.lay_out_from(job, key, chosen, (input, planned, zero), &mut cx, &mut pending, &mut notes)?
+                self.lay_out_from(job, key, chosen, input, &mut cx, &mut pending, &mut notes)?
             }
             _ => self.same(d, &mut cx, &mut pending),
         };
@@ -175,6 +202,42 @@ impl DatasetGraph {
             let dataset = pipeline::parse_inputs(d, files)?;
             let note = format!("{} nodes", dataset.len());
             Ok(Made::Ran(Arc::new(dataset), note))
+        })
+    }
+
+    /// The inputs parsed (with their warnings) and, when the build lays out
+    /// (`lay_out`), what the layout is made from: the items of weight 0
+    /// hidden or kept (issue 34: everything below works on what is drawn),
+    /// the plan, the prepared dataset and its constraints.
+    fn ready(
+        &mut self,
+        job: &Job<'_>,
+        files: &[InputFile],
+        key: LayoutKey,
+        lay_out: bool,
+        cx: &mut Cx<'_>,
+        pending: &mut Pending,
+    ) -> Result<Readied, BuildError> {
+        let d = job.dataset;
+        let dataset = self.parse(d, files, key.inputs, cx)?;
+        let mut warnings = pipeline::warnings(files, &dataset);
+        warnings.extend(unknown_pins(&dataset, &job.style));
+        if !lay_out {
+            return Ok(Readied {
+                dataset,
+                warnings,
+                input: None,
+            });
+        }
+        let mode = job.request.params.zero_weights;
+        let (drawn, zero) = zero::apply(&dataset, mode);
+        let planned = plan(&drawn, &job.request).map_err(|e| layout_error(d, e))?;
+        let source = drawn_key(key.inputs, mode);
+        let input = self.similar(Some(d), source, &drawn, &planned, cx, pending);
+        Ok(Readied {
+            dataset,
+            warnings,
+            input: Some((input, planned, zero)),
         })
     }
 
