@@ -110,23 +110,12 @@ impl DatasetGraph {
         };
         // Nothing in memory and outputs to make: the decision is to lay out.
         let speculate = current.is_none() && self.slots.layout.last().is_none();
-        let decided = if speculate {
-            None
-        } else {
-            let memory = self.slots.layout.last().map(|(k, laid)| start::Memory {
-                inputs: k.inputs,
-                settings: k.settings,
-                computed: &laid.computed,
-            });
-            let facts = start::Facts { memory, ..facts };
-            let decision = start::decide(facts, || state::layout::read(d));
-            if let (Decision::UpToDate, Some(outputs), Some(record)) =
-                (&decision, current, manifest.layout.as_ref())
-            {
-                return Ok(self.up_to_date(d, record, outputs, stages));
-            }
-            Some(decision)
-        };
+        let decided = (!speculate).then(|| self.decide(d, facts));
+        if let (Some(Decision::UpToDate), Some(outputs), Some(record)) =
+            (&decided, current, manifest.layout.as_ref())
+        {
+            return Ok(self.up_to_date(d, record, outputs, stages));
+        }
         let mut pending = Pending::default();
         let mut cx = Cx {
             name: &d.name,
@@ -138,16 +127,7 @@ impl DatasetGraph {
             let readied = self.ready(job, files, key, lay_out, &mut cx, &mut pending)?;
             (decision, readied)
         } else {
-            // Nothing in memory and outputs to make: the decision is to lay
-            // out, so reading the stored layout (the warm start's previous,
-            // tens of megabytes at thousands of leaves) and readying the
-            // inputs (parse, prepare, constraints) need not wait for each
-            // other.
-            let (decision, readied) = rayon::join(
-                || start::decide(facts, || state::layout::read(d)),
-                || self.ready(job, files, key, true, &mut cx, &mut pending),
-            );
-            (decision, readied?)
+            self.decide_beside_ready(job, files, key, facts, &mut cx, &mut pending)?
         };
         let Readied {
             dataset,
@@ -188,6 +168,39 @@ impl DatasetGraph {
             stages,
             pending,
         })
+    }
+
+    /// Where the build starts ([`start::decide`]), with the layout in memory
+    /// if there is one.
+    fn decide(&self, d: &DatasetConfig, facts: start::Facts<'_>) -> Decision {
+        let memory = self.slots.layout.last().map(|(k, laid)| start::Memory {
+            inputs: k.inputs,
+            settings: k.settings,
+            computed: &laid.computed,
+        });
+        start::decide(start::Facts { memory, ..facts }, || state::layout::read(d))
+    }
+
+    /// The decision and the inputs readied at once, for a build with nothing
+    /// in memory and outputs to make: the decision is then to lay out, so
+    /// reading the stored layout (the warm start's previous, tens of
+    /// megabytes at thousands of leaves) and readying the inputs (parse,
+    /// prepare, constraints) need not wait for each other.
+    fn decide_beside_ready(
+        &mut self,
+        job: &Job<'_>,
+        files: &[InputFile],
+        key: LayoutKey,
+        facts: start::Facts<'_>,
+        cx: &mut Cx<'_>,
+        pending: &mut Pending,
+    ) -> Result<(Decision, Readied), BuildError> {
+        let d = job.dataset;
+        let (decision, readied) = rayon::join(
+            || start::decide(facts, || state::layout::read(d)),
+            || self.ready(job, files, key, true, cx, pending),
+        );
+        Ok((decision, readied?))
     }
 
     /// Parse: the input files into a dataset.

@@ -47,6 +47,7 @@ pub struct Chosen {
 }
 
 /// The graph's last layout and what it was made from.
+#[derive(Clone, Copy)]
 pub struct Memory<'a> {
     /// Its inputs' fingerprint.
     pub inputs: Fingerprint,
@@ -57,6 +58,7 @@ pub struct Memory<'a> {
 }
 
 /// What [`decide`] decides from.
+#[derive(Clone, Copy)]
 pub struct Facts<'a> {
     /// Why nothing may be reused, if so ([`refusal`]).
     pub refusal: Option<&'static str>,
