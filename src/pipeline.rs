@@ -477,8 +477,17 @@ pub fn warnings(files: &[InputFile], dataset: &Dataset) -> Vec<String> {
 pub fn write_outputs(outputs: &[Rendered]) -> Written {
     let _writing = store::writing();
     let mut out = Written::default();
-    for r in outputs {
-        match store::write_if_changed(&r.path, &r.bytes) {
+    // Each file is compared, written and synced on its own (tens of
+    // megabytes at thousands of leaves); the lists keep the outputs' order.
+    let results: Vec<std::io::Result<bool>> = {
+        use rayon::prelude::*;
+        outputs
+            .par_iter()
+            .map(|r| store::write_if_changed(&r.path, &r.bytes))
+            .collect()
+    };
+    for (r, result) in outputs.iter().zip(results) {
+        match result {
             Ok(true) => out.written.push(r.path.clone()),
             Ok(false) => out.unchanged.push(r.path.clone()),
             Err(source) => out.failed.push(BuildError::Write {

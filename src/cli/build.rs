@@ -110,6 +110,9 @@ pub(crate) fn build(args: &BuildArgs) -> anyhow::Result<()> {
             ));
         }
     }
+    // The process exits next and its memory goes back with it: freeing the
+    // graphs piece by piece took 40 ms at 6,000 C headers.
+    std::mem::forget(built);
     Ok(())
 }
 
