@@ -282,6 +282,26 @@ impl Dataset {
         self.similarity_hint
     }
 
+    /// This dataset with each node's own weight replaced by `weights`
+    /// (indexed like [`Dataset::nodes`]) and every value summed again, as
+    /// [`DatasetBuilder::build`] sums them: for a caller that changes weights
+    /// only (a warm rebuild after a weight edit), without building the tree
+    /// again. Errors as `build` would on the same weights.
+    pub fn with_weights(&self, weights: &[Option<f64>]) -> Result<Dataset, ModelError> {
+        let mut out = self.clone();
+        for (node, &weight) in out.nodes.iter_mut().zip(weights) {
+            if let Some(w) = weight.filter(|w| !is_valid_weight(*w)) {
+                return Err(ModelError::InvalidWeight {
+                    id: node.id.clone(),
+                    value: w,
+                });
+            }
+            node.weight = weight;
+        }
+        sum_values(&mut out.nodes)?;
+        Ok(out)
+    }
+
     /// What the reader found suspicious but read anyway, in input order: the
     /// first [`Warnings::KEPT`] of each kind and input, then a line "and N
     /// more ..." for each kind and input that had more.

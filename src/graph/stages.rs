@@ -23,7 +23,7 @@ use crate::fingerprint::{Fingerprint, Fingerprinter};
 use crate::layout::compute::{lay_out_planned, plan, Plan, Prepared};
 use crate::layout::zero::{self, ZeroItems};
 use crate::layout::{Computed, LayoutError, Start, ZeroWeights};
-use crate::neighborhood::{build_constraints, prepare, Constraint, SimilarityKind};
+use crate::neighborhood::{build_constraints, prepare, reweigh, Constraint, SimilarityKind};
 use crate::pipeline::{self, BuildError, InputFile};
 use crate::render::{self, Style};
 use crate::state::manifest::{self, LayoutRecord, Manifest, OutputRecord};
@@ -36,6 +36,9 @@ pub(super) struct Slots {
     parsed: Memo<Fingerprint, Arc<Dataset>>,
     /// Prepare: virtual nodes and aggregated vectors, by [`prepared`].
     prepared: Memo<Fingerprint, Arc<Dataset>>,
+    /// What the prepared dataset in the slot was made from, so that a
+    /// weight edit reweighs it instead of preparing again.
+    prepared_from: Option<(SimilarityKind, Arc<Dataset>)>,
     /// Constraints, by [`similarity`].
     constraints: Memo<Fingerprint, Arc<Vec<Constraint>>>,
     /// Layout: the last layout, by the inputs and settings it was made
@@ -283,14 +286,24 @@ impl DatasetGraph {
     fn prepare(
         &mut self,
         source: Fingerprint,
-        dataset: &Dataset,
+        dataset: &Arc<Dataset>,
         kind: SimilarityKind,
         cx: &mut Cx<'_>,
     ) -> Arc<Dataset> {
         let key = prepared(source, kind);
+        let last = self.slots.prepared.last().map(|(_, p)| Arc::clone(p));
+        let from = self.slots.prepared_from.replace((kind, Arc::clone(dataset)));
         let made = self.slots.prepared.get_or(key, cx, Stage::Prepare, "dataset unchanged", || {
-            let prepared = prepare(dataset);
-            let note = format!("{} nodes", prepared.len());
+            // A weight edit: the last prepared tree with the new weights.
+            let reweighed = match (&last, &from) {
+                (Some(last), Some((k, before))) if *k == kind => reweigh(last, before, dataset),
+                _ => None,
+            };
+            let (prepared, how) = match reweighed {
+                Some(p) => (p, "; weights only"),
+                None => (prepare(dataset), ""),
+            };
+            let note = format!("{} nodes{how}", prepared.len());
             Ok::<_, std::convert::Infallible>(Made::Ran(Arc::new(prepared), note))
         });
         match made {

@@ -40,5 +40,5 @@ mod sparse_rows;
 mod stages;
 
 pub use constraints::{build_constraints, Constraint};
-pub use prepare::prepare;
+pub use prepare::{prepare, reweigh};
 pub use similarity::SimilarityKind;
