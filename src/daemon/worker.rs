@@ -201,6 +201,8 @@ fn serve(name: &str, jobs: &Receiver<Task>, shared: &Shared, run: &mut Run<'_>) 
         if shared.done.send(done).is_err() || shared.wake.send(Message::Wake).is_err() {
             return;
         }
+        // Reported: now, before the next batch, what its warm start needs.
+        let _ = catch_unwind(AssertUnwindSafe(|| state.graph.ready_next()));
     }
 }
 

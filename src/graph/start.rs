@@ -120,7 +120,7 @@ pub fn decide(facts: Facts<'_>, stored: impl FnOnce() -> StoredLayout) -> Decisi
             return Decision::Same;
         }
         return Decision::LayOut(Chosen {
-            previous: Some(Arc::new(memory.computed.previous())),
+            previous: Some(memory.computed.previous()),
             ..Chosen::default()
         });
     }

@@ -50,6 +50,9 @@ pub struct Computed {
     /// most once: by [`compute`] when there are constraints to flag, else on
     /// first use ([`Computed::adjacency`]).
     adjacency: OnceLock<Vec<LevelAdjacency>>,
+    /// The previous layout this computation becomes for the next warm start
+    /// ([`Computed::previous`]), made at most once.
+    previous: OnceLock<Arc<Previous>>,
 }
 
 impl Computed {
@@ -63,8 +66,12 @@ impl Computed {
 
     /// The previous layout this computation becomes for the next warm start:
     /// every node's id, parent, weight, site, power weight and cell, and the
-    /// id pairs of its realised constraints.
-    pub fn previous(&self) -> Previous {
+    /// id pairs of its realised constraints. Made at most once and shared.
+    pub fn previous(&self) -> Arc<Previous> {
+        Arc::clone(self.previous.get_or_init(|| Arc::new(self.make_previous())))
+    }
+
+    fn make_previous(&self) -> Previous {
         let ds = &self.dataset;
         let realized = self
             .constraints
@@ -298,6 +305,7 @@ pub(crate) fn lay_out_planned(
         settings: request.settings(),
         zero,
         adjacency: OnceLock::from(adjacency),
+        previous: OnceLock::new(),
     })
 }
 
@@ -328,6 +336,7 @@ fn lay_out_plain(
         settings: request.settings(),
         zero,
         adjacency: OnceLock::new(),
+        previous: OnceLock::new(),
     })
 }
 
