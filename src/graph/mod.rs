@@ -39,6 +39,8 @@
 
 /// One stage's memo slot.
 pub mod memo;
+/// The outputs of a build: render keys, the files on disk, the render stage.
+mod outputs;
 /// What the stages did.
 pub mod report;
 /// The stages: slots, keys and methods, and the chain that runs them.

@@ -16,7 +16,7 @@ use nptreemap_formats::{Dataset, Features};
 
 use super::memo::{ms_since, Cx, Made, Memo};
 use super::start::{self, Chosen, Decision};
-use super::{DatasetBuild, DatasetGraph, Job, LayoutStep, OnDisk, OutputBuild, Pending};
+use super::{DatasetBuild, DatasetGraph, Job, LayoutStep, OnDisk, Pending};
 use super::{Stage, StageReport};
 use crate::config::{DatasetConfig, OutputConfig};
 use crate::fingerprint::{Fingerprint, Fingerprinter};
@@ -26,7 +26,7 @@ use crate::layout::{Computed, LayoutError, Start, ZeroWeights};
 use crate::neighborhood::{build_constraints, prepare, reweigh, Constraint, SimilarityKind};
 use crate::pipeline::{self, BuildError, InputFile};
 use crate::render::{self, Style};
-use crate::state::manifest::{self, LayoutRecord, Manifest, OutputRecord};
+use crate::state::manifest;
 use crate::state;
 
 /// The memo slots of the stages.
@@ -95,7 +95,12 @@ impl DatasetGraph {
         let manifest = self.manifest_of(d);
         // A new render: the labels of the one before last are dropped.
         self.parts.next_render();
-        let disk: Vec<Option<OnDisk>> = d.outputs.iter().map(|o| super::on_disk(&o.path)).collect();
+        // Each output file is read and hashed on its own thread (tens of
+        // megabytes at thousands of leaves).
+        let disk: Vec<Option<OnDisk>> = {
+            use rayon::prelude::*;
+            d.outputs.par_iter().map(|o| super::on_disk(&o.path)).collect()
+        };
         // The group colours of the last build are kept (issue 32): they are
         // part of the style every render key names.
         let mut style = job.style.clone();
@@ -154,7 +159,7 @@ impl DatasetGraph {
         style.cells.kept = colors.clone();
         let outputs = self.render(job, &style, key, &out.laid, &manifest, &disk, &mut cx)?;
         let records = outputs.iter().map(|(r, _)| r.clone()).collect();
-        let next = next_manifest(key, &out.laid, &dataset, records, &colors);
+        let next = Self::next_manifest(key, &out.laid, &dataset, records, &colors);
         let realized = next.layout.as_ref().map_or(0, |r| r.realized);
         pending.manifest = Some(next);
         Ok(DatasetBuild {
@@ -437,219 +442,6 @@ impl DatasetGraph {
         })
     }
 
-    /// Render: each output whose file does not hold its bytes already, all
-    /// of them at once ([`render_in_parallel`]).
-    #[allow(clippy::too_many_arguments)]
-    fn render(
-        &self,
-        job: &Job<'_>,
-        style: &Style,
-        key: LayoutKey,
-        laid: &Laid,
-        manifest: &Manifest,
-        disk: &[Option<OnDisk>],
-        cx: &mut Cx<'_>,
-    ) -> Result<Vec<(OutputRecord, OutputBuild)>, BuildError> {
-        let d = job.dataset;
-        // The past layouts are one more input of the HTML page's render,
-        // keyed by their stored layouts' fingerprints (as the current one
-        // is): a page is rendered again when its history changed, and the
-        // other outputs, which do not show it, are not.
-        let past: Vec<Arc<Computed>> = self.past.iter().map(|(_, c)| Arc::clone(c)).collect();
-        let past_states: Vec<Fingerprint> = self.past.iter().map(|(s, _)| *s).collect();
-        let t = Instant::now();
-        let keys: Vec<Fingerprint> = d
-            .outputs
-            .iter()
-            .map(|out| output_key(key, laid.state, style, out, &past_states))
-            .collect();
-        let known: Vec<Option<OutputBuild>> = d
-            .outputs
-            .iter()
-            .zip(disk)
-            .zip(&keys)
-            .map(|((out, disk), &render_key)| self.known(d, manifest, out, render_key, *disk))
-            .collect();
-        let needed: Vec<&OutputConfig> = d
-            .outputs
-            .iter()
-            .zip(&known)
-            .filter(|(_, k)| k.is_none())
-            .map(|(out, _)| out)
-            .collect();
-        let mut drawn =
-            render_in_parallel(&laid.computed, style, &needed, &past, &self.parts)?.into_iter();
-        let labels = self.parts.counts();
-        let mut noted = false;
-        let mut outputs = Vec::with_capacity(d.outputs.len());
-        for (((out, disk), render_key), known) in d.outputs.iter().zip(disk).zip(keys).zip(known) {
-            let shown = super::shown(d, &out.path);
-            let built = match known {
-                Some(built) => {
-                    cx.record_output(Stage::Render, shown, false, t, "file up to date");
-                    built
-                }
-                None => {
-                    let (bytes, ms) = drawn.next().expect("one rendering per output needed");
-                    // The labels' counts go with the first output that drew any.
-                    let note = if out.kind().styled() && !noted && labels.reused + labels.fitted > 0 {
-                        noted = true;
-                        format!(
-                            "{}; labels: {} fitted, {} reused",
-                            out.kind().name(),
-                            labels.fitted,
-                            labels.reused
-                        )
-                    } else {
-                        out.kind().name().to_string()
-                    };
-                    cx.record_output_ms(Stage::Render, shown, ms, note);
-                    OutputBuild::made(out.path.clone(), bytes, *disk)
-                }
-            };
-            let record = OutputRecord {
-                path: manifest::relative(d, &out.path),
-                render: render_key,
-                bytes: built.fingerprint,
-            };
-            outputs.push((record, built));
-        }
-        Ok(outputs)
-    }
-
-    /// The output as its file holds it, when the manifest vouches that the
-    /// file holds what `render_key` renders.
-    fn known(
-        &self,
-        d: &DatasetConfig,
-        manifest: &Manifest,
-        out: &OutputConfig,
-        render_key: Fingerprint,
-        disk: Option<OnDisk>,
-    ) -> Option<OutputBuild> {
-        let record = manifest
-            .output(d, &out.path)
-            .filter(|r| self.options.cache && r.render == render_key)?;
-        let disk = disk.filter(|f| f.fingerprint == record.bytes)?;
-        Some(OutputBuild::on_disk(out.path.clone(), disk))
-    }
-
-    /// Every output as its file holds it, when the manifest records these
-    /// inputs and settings and vouches for every file: the facts of the
-    /// "nothing changed" decision.
-    fn current_outputs(
-        &self,
-        job: &Job<'_>,
-        style: &Style,
-        manifest: &Manifest,
-        key: LayoutKey,
-        disk: &[Option<OnDisk>],
-    ) -> Option<Vec<OutputBuild>> {
-        let d = job.dataset;
-        let record = manifest
-            .layout
-            .as_ref()
-            .filter(|r| r.inputs == Some(key.inputs) && r.settings == key.settings)?;
-        let past: Vec<Fingerprint> = self.past.iter().map(|(s, _)| *s).collect();
-        d.outputs
-            .iter()
-            .zip(disk)
-            .map(|(out, disk)| {
-                let render_key = output_key(key, record.state, style, out, &past);
-                self.known(d, manifest, out, render_key, *disk)
-            })
-            .collect()
-    }
-}
-
-/// The manifest a build leaves for the next: what the layout was made from,
-/// each output's render key and bytes, and the colours drawn (kept next).
-fn next_manifest(
-    key: LayoutKey,
-    laid: &Laid,
-    dataset: &Dataset,
-    outputs: Vec<OutputRecord>,
-    colors: &render::Kept,
-) -> Manifest {
-    let record = LayoutRecord {
-        inputs: Some(key.inputs),
-        settings: key.settings,
-        state: laid.state,
-        constraints: laid.computed.constraints.len(),
-        realized: laid.computed.realized.iter().filter(|r| **r).count(),
-        warnings: dataset
-            .warnings()
-            .iter()
-            .map(|w| (w.role.clone(), w.to_string()))
-            .collect(),
-    };
-    Manifest {
-        format: manifest::FORMAT.to_string(),
-        layout: Some(record),
-        outputs,
-        colors: colors.groups.iter().map(|(id, c)| (id.clone(), c.to_hex())).collect(),
-        shades: colors.main.clone(),
-    }
-}
-
-/// Renders `outputs` of one layout at once, each with the milliseconds it
-/// took: the picture's SVG text, which the SVG and the PNG both draw, beside
-/// the outputs that do not show it (the page, the layout JSON), then the
-/// pictures from that text. The bytes are those of rendering them one by
-/// one; only the order of the work changes. The SVG text's time counts
-/// towards the first picture.
-fn render_in_parallel(
-    computed: &Computed,
-    style: &Style,
-    outputs: &[&OutputConfig],
-    past: &[Arc<Computed>],
-    parts: &render::Parts,
-) -> Result<Vec<(Vec<u8>, f64)>, BuildError> {
-    use rayon::prelude::*;
-    let pictured = |out: &OutputConfig| out.kind().draws_picture();
-    let styled = outputs.iter().position(|o| o.kind().styled());
-    let t = Instant::now();
-    if styled.is_some() {
-        render::fit_labels(computed, style, parts);
-    }
-    // The labels' time counts towards the first output that draws them.
-    let labels_ms = ms_since(t);
-    let timed = |out: &OutputConfig, text: Option<String>| {
-        let t = Instant::now();
-        let mut text = text;
-        pipeline::render_output(computed, style, out, past, &mut text, parts)
-            .map(|b| (b, ms_since(t)))
-    };
-    let (text, plain) = rayon::join(
-        || {
-            outputs.iter().any(|o| pictured(o)).then(|| {
-                let t = Instant::now();
-                (render::picture_with(computed, style, parts), ms_since(t))
-            })
-        },
-        || {
-            outputs
-                .par_iter()
-                .map(|out| (!pictured(out)).then(|| timed(out, None)).transpose())
-                .collect::<Result<Vec<_>, _>>()
-        },
-    );
-    let first = outputs.iter().position(|o| pictured(o));
-    outputs
-        .par_iter()
-        .zip(plain?)
-        .enumerate()
-        .map(|(k, (out, done))| match (done, &text) {
-            (Some(done), _) => Ok(done),
-            (None, Some((text, picture_ms))) => {
-                let (bytes, ms) = timed(out, Some(text.clone()))?;
-                Ok((bytes, ms + if Some(k) == first { *picture_ms } else { 0.0 }))
-            }
-            (None, None) => timed(out, None),
-        })
-        .enumerate()
-        .map(|(k, done)| done.map(|(b, ms)| (b, ms + if Some(k) == styled { labels_ms } else { 0.0 })))
-        .collect()
 }
 
 /// A warning per `render.colors` entry that names no top-level group: a
