@@ -40,5 +40,7 @@ mod sparse_rows;
 mod stages;
 
 pub use constraints::{build_constraints, Constraint};
-pub use prepare::{prepare, reweigh};
+pub use prepare::prepare;
+#[cfg(any(feature = "cli", feature = "watch", feature = "internals"))]
+pub use prepare::reweigh;
 pub use similarity::SimilarityKind;

@@ -116,6 +116,11 @@ pub fn prepare(dataset: &Dataset) -> Dataset {
 /// `prepare(after)`, bit for bit (tested), for a fraction of its cost (a
 /// weight edit of 6,000 C headers: the tree of 38,629 nodes is not built
 /// again). `None` when anything but weights differs.
+// Only the build's stage graph reweighs; the library alone has none.
+#[cfg_attr(
+    not(any(feature = "cli", feature = "watch", feature = "internals")),
+    allow(dead_code)
+)]
 pub fn reweigh(prepared: &Dataset, before: &Dataset, after: &Dataset) -> Option<Dataset> {
     let same_but_weights = before.len() == after.len()
         && before.similarity_hint() == after.similarity_hint()
