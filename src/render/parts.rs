@@ -8,6 +8,13 @@
 //! last bits, so the key is the drawn cell, and the label is fitted to the
 //! drawn cell too (which is the cell the reader sees).
 //!
+//! The memo stores a 128-bit digest of each key (xxh3), not the key, and a
+//! label boxed: some 40 bytes for a leaf without a label (most leaves of a
+//! large map) instead of its text and its cell's corners, so two
+//! generations of 600,000 leaves take tens of megabytes, not hundreds (a
+//! collision, at 2⁻¹²⁸, is the same bet the state folder's fingerprints
+//! make).
+//!
 //! Two generations: what the current render asked for, and what the one
 //! before it did. [`Parts::next_render`] drops the older, so the memo holds
 //! at most two renders' labels however long a `watch` runs. Thread-safe: the
@@ -30,7 +37,7 @@ use crate::geom::{ConvexPolygon, Point};
 const DRAWN_PER_UNIT: f64 = 100.0;
 
 /// Everything that decides a leaf's label.
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub(crate) struct LabelKey {
     text: String,
     value: Option<String>,
@@ -40,7 +47,34 @@ pub(crate) struct LabelKey {
     sizes: (u64, u64),
 }
 
+/// A key's digest: what the memo stores.
+type Digest = u128;
+
 impl LabelKey {
+    /// The key's digest (xxh3, 128 bits) over its fields, each with its
+    /// length, so no two keys share their bytes.
+    fn digest(&self) -> Digest {
+        let mut h = xxhash_rust::xxh3::Xxh3::new();
+        let mut field = |bytes: &[u8]| {
+            h.update(&(bytes.len() as u64).to_le_bytes());
+            h.update(bytes);
+        };
+        field(self.text.as_bytes());
+        match &self.value {
+            Some(v) => field(v.as_bytes()),
+            None => field(&[0xff]),
+        }
+        let corners: Vec<u8> = self
+            .cell
+            .iter()
+            .flat_map(|&(x, y)| x.to_le_bytes().into_iter().chain(y.to_le_bytes()))
+            .collect();
+        field(&corners);
+        field(&self.sizes.0.to_le_bytes());
+        field(&self.sizes.1.to_le_bytes());
+        h.digest128()
+    }
+
     /// The key of a leaf with `text` (and value line `value`) in `polygon`,
     /// fitted between `min` and `max`.
     pub(crate) fn new(
@@ -88,8 +122,8 @@ pub struct Parts {
 
 #[derive(Debug, Default)]
 struct Generations {
-    current: HashMap<LabelKey, Option<Placed>>,
-    previous: HashMap<LabelKey, Option<Placed>>,
+    current: HashMap<Digest, Option<Box<Placed>>>,
+    previous: HashMap<Digest, Option<Box<Placed>>>,
     /// Labels found and fitted since the last [`Parts::next_render`].
     reused: usize,
     fitted: usize,
@@ -137,10 +171,12 @@ impl Parts {
     /// whose label does not fit): from the memo where it has them, the rest
     /// fitted in parallel and kept.
     pub(crate) fn labels(&self, keys: Vec<(usize, LabelKey)>) -> Vec<Option<Placed>> {
+        let digests: Vec<Digest> = keys.par_iter().map(|(_, key)| key.digest()).collect();
         let mut found: Vec<Option<Option<Placed>>> = {
             let mut g = self.lock();
             keys.iter()
-                .map(|(node, key)| g.take(key).map(|p| p.map(|p| Placed { node: *node, ..p })))
+                .zip(&digests)
+                .map(|((node, _), d)| g.take(*d).map(|p| p.map(|p| Placed { node: *node, ..*p })))
                 .collect()
         };
         let missing: Vec<usize> = (0..keys.len()).filter(|&k| found[k].is_none()).collect();
@@ -152,7 +188,7 @@ impl Parts {
         g.fitted += missing.len();
         g.reused += keys.len() - missing.len();
         for (&k, placed) in missing.iter().zip(fitted) {
-            g.current.insert(keys[k].1.clone(), placed.clone());
+            g.current.insert(digests[k], placed.clone().map(Box::new));
             found[k] = Some(placed);
         }
         found.into_iter().map(Option::flatten).collect()
@@ -166,12 +202,12 @@ impl Parts {
 
 impl Generations {
     /// The entry of `key` from either generation, kept in the current one.
-    fn take(&mut self, key: &LabelKey) -> Option<Option<Placed>> {
-        if let Some(p) = self.current.get(key) {
+    fn take(&mut self, key: Digest) -> Option<Option<Box<Placed>>> {
+        if let Some(p) = self.current.get(&key) {
             return Some(p.clone());
         }
-        let p = self.previous.remove(key)?;
-        self.current.insert(key.clone(), p.clone());
+        let p = self.previous.remove(&key)?;
+        self.current.insert(key, p.clone());
         Some(p)
     }
 }
