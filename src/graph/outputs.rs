@@ -192,7 +192,9 @@ fn render_in_parallel(
     let pictured = |out: &OutputConfig| out.kind().draws_picture();
     let styled = outputs.iter().position(|o| o.kind().styled());
     let t = Instant::now();
-    if styled.is_some() {
+    // Fitted ahead unless the layout step already did it for this render
+    // (beside the stored layout's text): a second pass would only find them.
+    if styled.is_some() && parts.counts() == render::LabelCounts::default() {
         render::fit_labels(computed, style, parts);
     }
     // The labels' time counts towards the first output that draws them.
