@@ -234,6 +234,10 @@ pub struct DatasetGraph {
     /// The labels of the last render, for the next (issue 32: an edit fits
     /// only the labels of the cells it moved).
     parts: crate::render::Parts,
+    /// The last layout as the next warm start's previous one, made ahead
+    /// ([`DatasetGraph::ready_next`]), by the layout's state fingerprint.
+    /// One only: the past layouts kept for the page's history hold none.
+    next_previous: Option<(Fingerprint, Arc<Previous>)>,
 }
 
 /// An output's file as the build found it.
@@ -265,9 +269,12 @@ impl DatasetGraph {
     /// previous one, tens of milliseconds at thousands of leaves), so that
     /// a daemon's next rebuild does not wait for it: the daemon calls this
     /// while it waits for the next batch of events.
-    pub fn ready_next(&self) {
-        if let Some((_, laid)) = self.slots.layout.last() {
-            laid.computed.previous();
+    pub fn ready_next(&mut self) {
+        let Some((_, laid)) = self.slots.layout.last() else {
+            return;
+        };
+        if self.next_previous.as_ref().is_none_or(|(s, _)| *s != laid.state) {
+            self.next_previous = Some((laid.state, laid.computed.previous()));
         }
     }
 

@@ -185,6 +185,11 @@ impl DatasetGraph {
             inputs: k.inputs,
             settings: k.settings,
             computed: &laid.computed,
+            previous: self
+                .next_previous
+                .as_ref()
+                .filter(|(state, _)| *state == laid.state)
+                .map(|(_, p)| p),
         });
         start::decide(start::Facts { memory, ..facts }, || state::layout::read(d))
     }

@@ -55,6 +55,8 @@ pub struct Memory<'a> {
     pub settings: Fingerprint,
     /// The layout.
     pub computed: &'a Computed,
+    /// Its previous-layout form, when made ahead (`DatasetGraph::ready_next`).
+    pub previous: Option<&'a Arc<Previous>>,
 }
 
 /// What [`decide`] decides from.
@@ -120,7 +122,11 @@ pub fn decide(facts: Facts<'_>, stored: impl FnOnce() -> StoredLayout) -> Decisi
             return Decision::Same;
         }
         return Decision::LayOut(Chosen {
-            previous: Some(memory.computed.previous()),
+            previous: Some(
+                memory
+                    .previous
+                    .map_or_else(|| memory.computed.previous(), Arc::clone),
+            ),
             ..Chosen::default()
         });
     }

@@ -50,9 +50,6 @@ pub struct Computed {
     /// most once: by [`compute`] when there are constraints to flag, else on
     /// first use ([`Computed::adjacency`]).
     adjacency: OnceLock<Vec<LevelAdjacency>>,
-    /// The previous layout this computation becomes for the next warm start
-    /// ([`Computed::previous`]), made at most once.
-    previous: OnceLock<Arc<Previous>>,
 }
 
 impl Computed {
@@ -66,9 +63,9 @@ impl Computed {
 
     /// The previous layout this computation becomes for the next warm start:
     /// every node's id, parent, weight, site, power weight and cell, and the
-    /// id pairs of its realised constraints. Made at most once and shared.
+    /// id pairs of its realised constraints.
     pub fn previous(&self) -> Arc<Previous> {
-        Arc::clone(self.previous.get_or_init(|| Arc::new(self.make_previous())))
+        Arc::new(self.make_previous())
     }
 
     fn make_previous(&self) -> Previous {
@@ -305,7 +302,6 @@ pub(crate) fn lay_out_planned(
         settings: request.settings(),
         zero,
         adjacency: OnceLock::from(adjacency),
-        previous: OnceLock::new(),
     })
 }
 
@@ -336,7 +332,6 @@ fn lay_out_plain(
         settings: request.settings(),
         zero,
         adjacency: OnceLock::new(),
-        previous: OnceLock::new(),
     })
 }
 
