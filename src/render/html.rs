@@ -25,7 +25,10 @@ use super::text::ascent_em;
 use crate::layout::zero::HiddenUnder;
 use crate::layout::{Computed, Layout};
 
+mod patch;
 mod view;
+
+pub use patch::page_patch;
 
 use view::RealView;
 

@@ -54,8 +54,8 @@ pub mod metrics {
 
 pub use color_by::{ColorBy, ColorScale};
 pub use html::{
-    html, html_page, html_page_with_history, html_page_with_parts, HtmlData, HtmlEmpty, HtmlFrame,
-    HtmlLayout, HtmlNode,
+    html, html_page, html_page_with_history, html_page_with_parts, page_patch, HtmlData, HtmlEmpty,
+    HtmlFrame, HtmlLayout, HtmlNode,
 };
 pub use label_text::{DisplayNames, LabelText};
 pub use labels::LabelStyle;

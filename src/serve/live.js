@@ -1,13 +1,19 @@
 // The live preview's browser side: the page follows each rebuild in place.
 // src/serve/mod.rs serves it; the page as served loads it, the page on disk
 // never does. It listens to the server's event stream; when its dataset is
-// rebuilt it fetches the page again and morphs every cell of the picture from
+// rebuilt it asks the server for what changed since the page it shows
+// (`?since=KEY`, issue 32: src/serve/pages.rs) and patches the map in place:
+// only the changed cells morph, the changed labels and tabs fade across, and
+// the map's script reads the changed nodes again (page/patch.js), so the
+// view stays as it is at any size. When the server cannot patch (a node
+// added or removed, another legend, a page it no longer has) it fetches the
+// page again and morphs every cell of the picture from
 // its old polygon to its new one (matched by node id; new cells grow from
 // their most similar sibling and fade in, removed ones fade out; labels and
 // tabs fade across) in under half a second, then puts the new map in place of
 // the old one in the same document (no reload) and carries the view over:
 // zoom, search text, hovered or focused cell. With prefers-reduced-motion, or
-// on a big map, it swaps at once. A failed rebuild shows its message over the
+// past BIG cells, it swaps at once. A failed rebuild shows its message over the
 // last good picture until the next good one, or until the config reloads. A
 // small panel gives the last update's stability figures (as `eval --previous`
 // defines them: leaf centroid displacement as a share of the canvas diagonal,
@@ -41,7 +47,11 @@ var MORPH_MS = 360, FADE_MS = 120;
 var BIG = 3000;
 // Test hooks and counters: `slow` stretches the animation (screenshots
 // of the morph midway), `frames` counts this script's animation frames.
-var live = window.npLive = { updates: 0, frames: 0, slow: 1, figures: null, errors: 0, animating: 0 };
+// `loads` counts whole pages fetched, `patches` patches applied, `patched`
+// the cells the last patch changed; `whole` turns the patch off (a
+// benchmark's baseline, benches/live.py).
+var live = window.npLive = { updates: 0, frames: 0, slow: 1, figures: null, errors: 0, animating: 0,
+  loads: 0, patches: 0, patched: 0, whole: false };
 
 function container() { return document.querySelector(".nptreemap"); }
 function pictureOf(c) { return c ? c.querySelector(".np-map > svg:not(.np-hover)") : null; }
@@ -268,18 +278,79 @@ function swap(old, next, fadeIn) {
 }
 function cssEscape(s) { return window.CSS && CSS.escape ? CSS.escape(s) : s.replace(/["\\]/g, "\\$&"); }
 
-// One update at a time; a newer one waiting replaces an older one.
-var waiting = null, busy = false;
-function show(html) {
-  waiting = html;
+// ---- the patch ----
+// What changed since the page shown, applied in place (issue 32): only the
+// cells the patch names morph (at once past BIG of them), the picture's
+// changed parts fade across, and the map's own script takes the rest
+// (page/patch.js: `root.npPatch`). False when the map cannot take it: the
+// whole page is loaded instead.
+function patchIn(patch, done) {
+  var c = container();
+  var api = c && c.npPatch;
+  var ready = api ? api.check(patch) : null;
+  if (!ready) { return false; }
+  var svg = pictureOf(c);
+  var full = (svg.getAttribute("viewBox") || "0 0 1 1").split(/[\s,]+/).map(Number);
+  var diag = Math.hypot(full[2], full[3]) || 1, sum = 0, max = 0, maxId = null;
+  ready.cells.forEach(function (cell) {
+    if (cell[2] === "none") { return; }
+    var a = centroid(points(cell[0].getAttribute("d"))), b = centroid(points(cell[1]));
+    var moved = Math.hypot(b[0] - a[0], b[1] - a[1]) / diag;
+    sum += moved;
+    if (moved > max) { max = moved; maxId = cell[0].getAttribute("data-id"); }
+  });
+  var olds = ready.parts.map(function (p) { return p[0]; });
+  var news = ready.parts.map(function (p) { return p[1]; });
+  function finish() {
+    root().removeAttribute("data-np-morphing");
+    var f = api.apply(ready, patch);
+    fade(news, 0, 0, 0);
+    f.mean = f.leaves ? sum / f.leaves : 0;
+    f.max = max;
+    f.largest = maxId;
+    showFigures(f);
+    KEY = patch.key;
+    live.patches++;
+    live.patched = ready.cells.length;
+    live.updates++;
+    root().setAttribute("data-np-live-updates", String(live.updates));
+    if (still()) {
+      fade(news, 1, 1, 1);
+      done();
+      return;
+    }
+    animate(FADE_MS, function (k) { fade(news, 0, 1, k); }, function () {
+      news.forEach(function (el) { el.style.opacity = ""; });
+      done();
+    });
+  }
+  if (still() || ready.cells.length > BIG) { finish(); return true; }
+  var tracks = [];
+  ready.cells.forEach(function (cell) {
+    var t = track(cell[0], cell[0].getAttribute("d"), cell[1], cell[0].getAttribute("fill"), cell[2]);
+    if (t) { tracks.push(t); }
+  });
+  root().setAttribute("data-np-morphing", "");
+  animate(MORPH_MS, function (k) {
+    draw(tracks, k);
+    fade(olds, 1, 0, k);
+  }, finish);
+  return true;
+}
+
+// One update at a time, in order; a whole page replaces whatever waits
+// before it, a patch waits its turn (it builds on what came before it).
+var waiting = [], busy = false;
+function show(item) {
+  if (item.html !== undefined) { waiting = [item]; } else { waiting.push(item); }
   if (!busy) { pump(); }
 }
 function pump() {
-  if (waiting === null) { busy = false; return; }
+  if (!waiting.length) { busy = false; return; }
   busy = true;
-  var html = waiting;
-  waiting = null;
-  apply(html, pump);
+  var item = waiting.shift();
+  if (item.html !== undefined) { apply(item.html, pump); return; }
+  if (!patchIn(item.patch, pump)) { busy = false; load(); }
 }
 
 // ---- the stream ----
@@ -298,9 +369,26 @@ function load() {
     .then(function (html) {
       if (mine !== fetches) { return; }
       KEY = keyOf(html);
-      show(html);
+      live.loads++;
+      show({ html: html });
     })
     .catch(function (err) { statusLine.textContent = "live: cannot fetch the page (" + err.message + ")"; });
+}
+// Asks for what changed since the page shown (or waiting to be); a server
+// that cannot say (it no longer has that page, or the change is more than
+// cells, parts and nodes: 204) gets the whole page asked for.
+function update() {
+  var mine = ++fetches;
+  var since = KEY;
+  return fetch(location.pathname + "?since=" + encodeURIComponent(since), { cache: "no-store", credentials: "same-origin" })
+    .then(function (r) { return r.status === 200 ? r.json() : null; })
+    .then(function (patch) {
+      if (mine !== fetches) { return; }
+      if (!patch || since !== KEY) { load(); return; }
+      KEY = patch.key;
+      show({ patch: patch });
+    })
+    .catch(function () { if (mine === fetches) { load(); } });
 }
 var source = new EventSource(EVENTS);
 source.onopen = function () { statusLine.textContent = "live: following " + DATASET; };
@@ -326,6 +414,6 @@ source.onmessage = function (m) {
     problems.delete(DATASET);
     problems.delete("config");
     showProblems();
-    if (e.key !== KEY) { load(); }
+    if (e.key !== KEY) { if (live.whole) { load(); } else { update(); } }
   }
 };

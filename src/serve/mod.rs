@@ -38,6 +38,8 @@ pub(crate) mod events;
 pub(crate) mod host;
 /// The index page, the served page's rewriting and the security policy.
 pub(crate) mod index;
+/// The pages served lately, for patches.
+pub(crate) mod pages;
 /// Which file a request path names.
 pub(crate) mod paths;
 
@@ -289,6 +291,7 @@ pub fn start(addr: &str, config_path: &Path) -> Result<Preview, ServeError> {
             .map_or_else(|| "nptreemap".to_string(), |n| n.to_string_lossy().into_owned()),
         port: local.port(),
         budget: Arc::new(Semaphore::new(body::BUDGET_KIB as usize)),
+        pages: Mutex::new(pages::Pages::default()),
     });
     std::thread::Builder::new()
         .name("np-serve".to_string())
@@ -310,6 +313,8 @@ pub(crate) struct Shared {
     port: u16,
     /// Room for bodies in memory, in KiB ([`body::BUDGET_KIB`]).
     budget: Arc<Semaphore>,
+    /// The pages served lately, which patches start from.
+    pages: Mutex<pages::Pages>,
 }
 
 type Answer = Response<Body>;
@@ -383,6 +388,9 @@ struct FileAnswer {
     kind: OutputKind,
     dataset: String,
     key: String,
+    /// For a page: the key of the page the asker has, when it asks for
+    /// the changes since (`?since=KEY`) instead of the whole page.
+    since: Option<String>,
 }
 
 enum Routed {
@@ -426,6 +434,9 @@ fn route(target: &str, shared: &Shared) -> Routed {
         Some((file, len)) => Routed::File(FileAnswer {
             file,
             len,
+            since: pages::since(target)
+                .filter(|_| route.kind == OutputKind::Html)
+                .map(str::to_string),
             kind: route.kind,
             dataset: route.dataset,
             key,
@@ -434,8 +445,11 @@ fn route(target: &str, shared: &Shared) -> Routed {
     }
 }
 
-/// Reads an output within the body budget and answers with it.
-async fn load(file: FileAnswer, shared: &Shared) -> Answer {
+/// Reads an output within the body budget and answers with it: a page
+/// with the live script, and noted for later patches; or, asked `since` a
+/// page it noted, the patch from that page to this one (204 when only
+/// the whole page will do).
+async fn load(file: FileAnswer, shared: &Arc<Shared>) -> Answer {
     let share = body::share(file.len);
     let waited = tokio::time::timeout(
         BUDGET_WAIT,
@@ -445,14 +459,32 @@ async fn load(file: FileAnswer, shared: &Shared) -> Answer {
     let Ok(Ok(permit)) = waited else {
         return plain(503, "busy: too many large answers under way");
     };
+    let shared = shared.clone();
     let read = tokio::task::spawn_blocking(move || {
         let nonce = nonce();
         let bytes = read(file.file)?;
         Some(match file.kind {
             OutputKind::Html => {
-                let text = String::from_utf8_lossy(&bytes);
-                let page = index::live_page(&text, &file.dataset, &nonce, &file.key);
-                ok(page, OutputKind::Html.content_type(), &nonce)
+                let text: Arc<str> = String::from_utf8_lossy(&bytes).into();
+                let before = {
+                    let mut pages = shared.pages.lock().unwrap_or_else(PoisonError::into_inner);
+                    let before = file.since.as_deref().and_then(|k| pages.get(&file.dataset, k));
+                    pages.remember(&file.dataset, &file.key, &text);
+                    before
+                };
+                match (&file.since, before) {
+                    (Some(_), Some(before)) => {
+                        match crate::render::page_patch(&before, &text, &file.key) {
+                            Some(patch) => ok(patch, "application/json", "none"),
+                            None => plain(204, ""),
+                        }
+                    }
+                    (Some(_), None) => plain(204, ""),
+                    (None, _) => {
+                        let page = index::live_page(&text, &file.dataset, &nonce, &file.key);
+                        ok(page, OutputKind::Html.content_type(), &nonce)
+                    }
+                }
             }
             kind => ok(bytes, kind.content_type(), &nonce),
         })

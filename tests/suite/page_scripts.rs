@@ -172,6 +172,7 @@ const GLOBALS: &[&str] = &[
     "String",
     "Uint8Array",
     "document",
+    "encodeURIComponent",
     "fetch",
     "location",
     "parseFloat",

@@ -6,13 +6,14 @@
 //! methods other than GET and HEAD), that it binds loopback by default, that
 //! a bad edit and its fix reach the event stream, and that SIGTERM ends it
 //! with a stream open. `serve/live.rs` drives a real browser through an
-//! update.
+//! update, `serve/patch.rs` through a patch of a 20,000-leaf map.
 
 mod hardening;
 mod history;
 mod live;
 mod memory;
 mod mirror;
+mod patch;
 mod restart;
 
 use std::io::{BufRead, BufReader, Read, Write};

@@ -351,7 +351,7 @@ fn label_texts_count_the_leaf_label_group_only() {
 }
 
 /// `uneven()` with hostile ids on two leaves and `w` as the weight of g1.
-fn hostile_uneven(w: f64) -> crate::layout::Computed {
+pub(super) fn hostile_uneven(w: f64) -> crate::layout::Computed {
     let mut b = DatasetBuilder::new();
     b.similarity_hint(nptreemap_formats::SimilarityHint::Cosine);
     b.add(NodeSpec::new("root"))
@@ -375,7 +375,7 @@ fn hostile_uneven(w: f64) -> crate::layout::Computed {
 }
 
 /// The picture's cells in a page: id (unescaped), path data, fill.
-fn drawn_cells(page: &str) -> Vec<(String, String, String)> {
+pub(super) fn drawn_cells(page: &str) -> Vec<(String, String, String)> {
     let attr = |s: &str, name: &str| -> String {
         let at = s.find(&format!(" {name}=\"")).expect("attribute") + name.len() + 3;
         s[at..at + s[at..].find('"').expect("quote")].to_owned()

@@ -30,6 +30,8 @@ function staticLabel(i) {
   }
   return staticLabels.get(i);
 }
+// The picture's label group was replaced (page/patch.js): found again.
+export function forgetStaticLabels() { staticLabels = null; }
 
 function textWidth(s) {
   var w = widthCache.get(s);

@@ -12,7 +12,8 @@ import {
   svg, weights
 } from "./model.js";
 import { clear, highlight, hovered, hushed, place, placeAt } from "./hover.js";
-import { forgetUnitPx } from "./lod.js";
+import { forgetStaticLabels, forgetUnitPx } from "./lod.js";
+import { patcher } from "./patch.js";
 import { isOutside, isZoomed, refitLabels, view, zoomDeepest, zoomInto, zoomOut, zoomToAtOnce } from "./zoom.js";
 import { searchBox } from "./search.js";
 import { legendControls } from "./legend.js";
@@ -147,8 +148,9 @@ globally(document, "keydown", function (e) {
 
 // The unrealised links: dashed lines between the centres of similar cells
 // that do not touch, drawn from the data into the picture's (empty) group
-// the first time the checkbox asks for them.
-(function () {
+// the first time the checkbox asks for them; drawn again on demand after a
+// live patch (`redraw`).
+var unrealized = (function () {
   var toggleBox = part("unrealized-toggle");
   var group = svg.querySelector(".np-unrealized");
   var drawn = false;
@@ -173,6 +175,14 @@ globally(document, "keydown", function (e) {
   }
   toggleBox.addEventListener("change", toggle);
   toggle();
+  return {
+    redraw: function () {
+      group = svg.querySelector(".np-unrealized");
+      while (group && group.firstChild) { group.removeChild(group.firstChild); }
+      drawn = false;
+      toggle();
+    }
+  };
 })();
 
 // As wide as the container allows, and no wider than keeps the whole
@@ -212,5 +222,16 @@ root.npView = {
 // glue: issue 30. The live preview calls this on the map it replaces, so
 // that nothing outside the map keeps the old one alive.
 root.npRetire = retire;
+
+// glue: issue 32. The live preview patches this map in place (page/patch.js).
+// The hovered or focused cell stays so, drawn again with its new outline
+// and neighbours.
+root.npPatch = patcher(function () {
+  var shown = hovered();
+  forgetStaticLabels();
+  unrealized.redraw();
+  refitLabels();
+  if (shown >= 0) { highlight(shown, false); }
+});
 
 if (window.performance && performance.mark) { performance.mark("nptreemap-ready"); }

@@ -47,17 +47,38 @@ export const EMPTY = [];
     partners[i] = EMPTY;
     index.set(n.id, i);
   }
-  function add(list, k, v) {
-    if (list[k] === EMPTY) { list[k] = []; }
-    list[k].push(v);
-  }
   for (i = 0; i < N; i++) {
-    n = data.nodes[i];
     if (parents[i] >= 0) { add(kids, parents[i], i); }
+  }
+  relate();
+})();
+function add(list, k, v) {
+  if (list[k] === EMPTY) { list[k] = []; }
+  list[k].push(v);
+}
+// The relations of the data, made symmetric: written once per pair, at the
+// lower index (src/render/html.rs).
+function relate() {
+  var i;
+  for (i = 0; i < N; i++) { near[i] = EMPTY; partners[i] = EMPTY; }
+  for (i = 0; i < N; i++) {
+    var n = data.nodes[i];
     (n.near || EMPTY).forEach(function (j) { add(near, i, j); add(near, j, i); });
     (n.partners || EMPTY).forEach(function (p) { add(partners, i, p); add(partners, p[0], [i, p[1]]); });
   }
-})();
+}
+// A live patch changed these nodes (page/patch.js: [index, node], the
+// tree's shape the same): what is read from them is read again.
+export function renew(changed) {
+  changed.forEach(function (c) {
+    var i = c[0], n = c[1];
+    data.nodes[i] = n;
+    labels[i] = typeof n.label === "string" ? n.label : n.id;
+    weights[i] = n.weight;
+  });
+  if (changed.length) { relate(); }
+  forgetOutlines();
+}
 export function isLeaf(i) { return kids[i].length === 0; }
 
 // Pre-order positions: node k lies in the subtree of g when

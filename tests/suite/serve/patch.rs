@@ -1,0 +1,193 @@
+//! The live preview's patch on a big map (issue 32): `watch --serve` on a
+//! hierarchy of 20,000 leaves; one leaf's weight is edited; the page asks
+//! for what changed and patches itself in place: no reload and no fetch of
+//! the whole page, only the cells the patch names change in the document
+//! (counted by a MutationObserver, against the cells whose outline or fill
+//! differs between the two pages on disk), and afterwards every cell's
+//! outline and fill are the new page's. A page opened after the edit gets
+//! the whole current page. Without Chromium the test reports itself
+//! skipped, unless `NPTREEMAP_REQUIRE_BROWSER=1`.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Duration;
+
+use serde_json::{json, Value};
+
+use super::live::chromium_or_skip;
+use super::Served;
+use crate::browser::cdp::Browser;
+use crate::support;
+
+/// Leaves of the map: the size the issue asks the patch to handle.
+const LEAVES: usize = 20_000;
+/// Top-level groups, and groups under each.
+const GROUPS: usize = 20;
+const SUBGROUPS: usize = 10;
+
+const BUDGET: Duration = Duration::from_secs(600);
+
+const CONFIG: &str = "layout: {method: plain}
+render: {labels: {show: false}}
+datasets:
+  - name: big
+    format: hierarchy-json
+    files: {hierarchy: data/tree.json}
+    outputs: [out/big.html]
+";
+
+/// The tree with leaf `n0`'s weight `first` (the others fixed, uneven).
+fn tree(first: f64) -> String {
+    let mut groups = Vec::new();
+    let per = LEAVES / (GROUPS * SUBGROUPS);
+    for g in 0..GROUPS {
+        let mut subs = Vec::new();
+        for s in 0..SUBGROUPS {
+            let leaves: Vec<Value> = (0..per)
+                .map(|k| {
+                    let i = (g * SUBGROUPS + s) * per + k;
+                    let w = if i == 0 {
+                        first
+                    } else {
+                        1.0 + (i * 37 % 101) as f64
+                    };
+                    json!({"id": format!("n{i}"), "value": w})
+                })
+                .collect();
+            subs.push(json!({"id": format!("g{g}s{s}"), "children": leaves}));
+        }
+        groups.push(json!({"id": format!("g{g}"), "children": subs}));
+    }
+    json!({"id": "root", "children": groups}).to_string()
+}
+
+fn write_tree(dir: &Path, first: f64) {
+    let tmp = dir.join("data/.tree.json.tmp");
+    std::fs::write(&tmp, tree(first)).expect("write tree");
+    std::fs::rename(&tmp, dir.join("data/tree.json")).expect("rename tree");
+}
+
+/// Every cell of a page's picture as written: id to (path data, fill).
+fn cells_on_disk(page: &str) -> BTreeMap<String, (String, String)> {
+    let attr = |line: &str, name: &str| -> String {
+        let key = format!(" {name}=\"");
+        let at = line.find(&key).expect("attribute") + key.len();
+        line[at..at + line[at..].find('"').expect("quote")].to_owned()
+    };
+    let map = &page[page.find("class=\"np-map\"").expect("map")..];
+    map.lines()
+        .take_while(|l| !l.starts_with("</svg>"))
+        .filter(|l| l.starts_with("<path data-id=\""))
+        .map(|l| (attr(l, "data-id"), (attr(l, "d"), attr(l, "fill"))))
+        .collect()
+}
+
+/// Every cell of the page shown: id to [path data, fill].
+const CELLS: &str = "(function () {
+  var s = document.querySelector('.nptreemap .np-map > svg:not(.np-hover)'), o = {};
+  s.querySelectorAll('path[data-id]').forEach(function (p) { o[p.getAttribute('data-id')] = [p.getAttribute('d'), p.getAttribute('fill')]; });
+  return o;
+})()";
+
+/// Records the ids of the cells whose outline or fill the document changes.
+const WATCH_CELLS: &str = "window.__touched = new Set();
+new MutationObserver(function (rs) {
+  rs.forEach(function (r) { var id = r.target.getAttribute && r.target.getAttribute('data-id'); if (id !== null) { __touched.add(id); } });
+}).observe(document.querySelector('.nptreemap .np-map > svg:not(.np-hover)'),
+  { attributes: true, subtree: true, attributeFilter: ['d', 'fill'] });
+true";
+
+fn shown(browser: &mut Browser) -> BTreeMap<String, (String, String)> {
+    let v: BTreeMap<String, Vec<String>> =
+        serde_json::from_value(browser.eval(CELLS)).expect("cells");
+    v.into_iter()
+        .map(|(k, mut v)| {
+            let fill = v.pop().expect("fill");
+            (k, (v.pop().expect("d"), fill))
+        })
+        .collect()
+}
+
+#[test]
+fn a_big_map_patches_only_the_changed_cells() {
+    let Some(chromium) = chromium_or_skip("the live preview's patch test") else {
+        return;
+    };
+    let dir = support::temp_dir("serve_patch");
+    std::fs::create_dir_all(dir.join("data")).expect("data dir");
+    write_tree(&dir, 50.0);
+    let config = dir.join("nptreemap.yaml");
+    std::fs::write(&config, CONFIG).expect("config");
+    let mut served = Served::start(&config, None);
+    served.expect(&["big", "wrote"]);
+    let page = dir.join("out/big.html");
+    let before = cells_on_disk(&std::fs::read_to_string(&page).expect("page"));
+    assert_eq!(
+        before.values().filter(|c| c.1 != "none").count(),
+        LEAVES,
+        "every leaf is drawn"
+    );
+
+    let mut browser = Browser::launch(&chromium, &dir, BUDGET);
+    browser.call("Page.enable", json!({}));
+    browser.open(&served.url("/out/big.html"));
+    super::live::wait_true(
+        &mut browser,
+        "the event stream to open",
+        "document.querySelector('.np-live-status').textContent === 'live: following big'",
+    );
+    let origin = browser.eval("performance.timeOrigin");
+    assert_eq!(browser.eval(WATCH_CELLS), json!(true));
+
+    // One leaf's weight, +10%: a small change the layout settles locally.
+    write_tree(&dir, 55.0);
+    served.expect(&["big: data", "wrote"]);
+    super::live::wait_true(
+        &mut browser,
+        "the patch",
+        "npLive.patches === 1 && npLive.animating === 0",
+    );
+    let after = cells_on_disk(&std::fs::read_to_string(&page).expect("page"));
+    let changed: Vec<&String> = after
+        .iter()
+        .filter(|(id, c)| before.get(*id) != Some(c))
+        .map(|(id, _)| id)
+        .collect();
+    assert!(!changed.is_empty(), "the edit changed cells");
+    assert!(
+        changed.len() < LEAVES / 2,
+        "a local edit: {} cells changed",
+        changed.len()
+    );
+    assert_eq!(
+        browser.eval("npLive.loads"),
+        json!(0),
+        "no whole page fetched"
+    );
+    assert_eq!(browser.eval("performance.timeOrigin"), origin, "no reload");
+    assert_eq!(browser.eval("npLive.patched"), json!(changed.len()));
+    let touched: Vec<String> =
+        serde_json::from_value(browser.eval("Array.from(__touched).sort()")).expect("touched");
+    let mut want: Vec<String> = changed.iter().map(|s| s.to_string()).collect();
+    want.sort();
+    assert_eq!(touched, want, "only the changed cells were touched");
+    assert!(
+        shown(&mut browser) == after,
+        "the page shows the new page's cells"
+    );
+    // The map's own script read the new weight (its tooltip's source).
+    let weight = browser.eval(
+        "JSON.parse(document.querySelector('.nptreemap .np-data').textContent).nodes
+           .filter(function (n) { return n.id === 'n0'; })[0].weight",
+    );
+    assert_eq!(weight, json!("55"));
+
+    // A page opened now gets the whole current page.
+    browser.open(&served.url("/out/big.html"));
+    assert!(
+        shown(&mut browser) == after,
+        "a new page is the current one"
+    );
+    drop(browser);
+    served.terminate();
+}
