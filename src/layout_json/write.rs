@@ -40,7 +40,10 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
             .collect();
         precision::choose(dataset, layout, &pairs)
     };
-    let mut out = String::with_capacity(256 + 200 * layout.cells.len());
+    // About what a node and a constraint take (a 6,000-leaf tree: 16 MB
+    // for 38,629 nodes and 27,000 constraints), so the text grows rarely.
+    let mut out =
+        String::with_capacity(256 + 330 * layout.cells.len() + 110 * extra.constraints.len());
     out.push_str("{\n");
     out.push_str(&format!("  \"format\": {},\n", to_json(&FORMAT)));
     let canvas = CanvasOut {
@@ -146,9 +149,15 @@ fn push_metrics(out: &mut String, metrics: &[(String, f64)]) {
 fn push_array<T: Serialize>(out: &mut String, name: &str, items: impl Iterator<Item = T>) {
     out.push_str(&format!("  \"{name}\": ["));
     let mut any = false;
+    // One buffer for every element: a String allocated and freed per node
+    // was a fifth of the writer's time on 38,000 nodes.
+    let mut buf = Vec::with_capacity(512);
     for item in items {
         out.push_str(if any { ",\n" } else { "\n" });
-        out.push_str(&to_json(&item));
+        buf.clear();
+        serde_json::to_writer(&mut buf, &item)
+            .expect("plain structs of strings and numbers serialise");
+        out.push_str(std::str::from_utf8(&buf).expect("serde_json writes UTF-8"));
         any = true;
     }
     out.push_str(if any { "\n  ]" } else { "]" });
