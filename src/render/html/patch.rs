@@ -1,9 +1,11 @@
 //! The live preview's patch from one page of a map to the next (issue 32):
 //! the cells whose outline or fill changed, the picture's other parts that
-//! changed (each whole), and the nodes of the page's data that changed, as
+//! changed (each whole), the nodes of the page's data that changed and the
+//! legend when it changed (whole: it lists the groups by weight), as
 //! the page's script applies them in place (`page/patch.js`). `None` when
 //! the two pages differ in anything else (a node added, removed or moved,
-//! another legend, title, script, history or optimisation frames): the
+//! a legend that comes or goes, another title, script, history or
+//! optimisation frames): the
 //! page then loads whole, as before. It reads only the markup `html()` and
 //! `svg.rs` write, so it lives beside them; a page it cannot read gets no
 //! patch rather than a wrong one.
@@ -37,6 +39,10 @@ struct PagePatch<'a> {
     /// The data's `labels` when it changed.
     #[serde(skip_serializing_if = "Option::is_none")]
     labels: Option<&'a RawValue>,
+    /// The legend's new markup when it changed (a group outgrew another,
+    /// and the legend lists groups by weight).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    legend: Option<String>,
 }
 
 /// A page cut into the parts a patch compares.
@@ -47,11 +53,14 @@ struct Page<'a> {
     svg: &'a str,
     /// The data block's JSON.
     data: &'a str,
-    /// Where `svg` and `data` start and end in the page.
-    cuts: [usize; 4],
+    /// Where the legend, `svg` and `data` start and end in the page (the
+    /// legend empty when the page has none).
+    cuts: [usize; 6],
 }
 
 const CONTAINER: &str = "<div class=\"nptreemap";
+const LEGEND: &str = "<ul class=\"np-legend\" id=";
+const CONTROLS: &str = "<div class=\"np-controls\">";
 const MAP: &str = "<div class=\"np-map\"";
 const DATA: &str = "class=\"np-data\"";
 
@@ -59,6 +68,9 @@ fn cut(html: &str) -> Option<Page<'_>> {
     let at = html.find(CONTAINER)?;
     let id = at + html[at..].find(" id=\"")? + 5;
     let key = &html[id..id + html[id..].find('"')?];
+    let controls = html.find(CONTROLS)?;
+    // The legend ends where the controls start (`html()` writes them so).
+    let legend = html[..controls].find(LEGEND).unwrap_or(controls);
     let map = html.find(MAP)?;
     let svg_start = map + html[map..].find("<svg")?;
     let tooltip = svg_start + html[svg_start..].find("<div class=\"np-tooltip\"")?;
@@ -66,18 +78,23 @@ fn cut(html: &str) -> Option<Page<'_>> {
     let data_tag = tooltip + html[tooltip..].find(DATA)?;
     let data_start = data_tag + html[data_tag..].find(">\n")? + 2;
     let data_end = data_start + html[data_start..].find("\n</script>")?;
-    Some(Page {
+    (map > controls).then_some(Page {
         key,
         svg: &html[svg_start..svg_end],
         data: &html[data_start..data_end],
-        cuts: [svg_start, svg_end, data_start, data_end],
+        cuts: [legend, controls, svg_start, svg_end, data_start, data_end],
     })
 }
 
-/// The page's text apart from its picture and data.
-fn frame<'a>(html: &'a str, page: &Page<'_>) -> [&'a str; 3] {
-    let [a, b, c, d] = page.cuts;
-    [&html[..a], &html[b..c], &html[d..]]
+/// The page's text apart from its legend, picture and data.
+fn frame<'a>(html: &'a str, page: &Page<'_>) -> [&'a str; 4] {
+    let [l, m, a, b, c, d] = page.cuts;
+    [&html[..l], &html[m..a], &html[b..c], &html[d..]]
+}
+
+/// The page's legend (empty when it has none).
+fn legend<'a>(html: &'a str, page: &Page<'_>) -> &'a str {
+    &html[page.cuts[0]..page.cuts[1]]
 }
 
 /// The patch that turns page `old` into page `new` (both as `html()`
@@ -102,6 +119,15 @@ pub fn page_patch<'a>(old: &str, new: &'a str, key: &'a str) -> Option<String> {
         .map(|(class, markup)| (class, markup.replace(n.key, o.key)))
         .collect();
     let (nodes, labels) = data_patch(o.data, n.data)?;
+    let (lo, ln) = (legend(old, &o), legend(new, &n));
+    // A legend that comes or goes changes what stands above the map: the
+    // page's script lays out its controls once.
+    if lo.is_empty() != ln.is_empty() {
+        return None;
+    }
+    let legend = (lo != ln)
+        .then(|| ln.replace(n.key, o.key))
+        .filter(|l| *l != lo);
     let patch = PagePatch {
         key,
         cells,
@@ -109,6 +135,7 @@ pub fn page_patch<'a>(old: &str, new: &'a str, key: &'a str) -> Option<String> {
         parts,
         nodes,
         labels,
+        legend,
     };
     serde_json::to_string(&patch)
         .ok()
@@ -475,6 +502,31 @@ mod tests {
     }
 
     #[test]
+    fn a_legend_reordered_by_an_edit_is_sent_whole() {
+        let style = Style::default();
+        let before = map(10.0, None);
+        let old = html_page(&before, &style);
+        // Leaf a0 grows until its group is the heaviest: the legend, by
+        // weight, lists it first.
+        let new = html_page(&map(400.0, Some(&before)), &style);
+        let (o, n) = (cut(&old).expect("old"), cut(&new).expect("new"));
+        assert_ne!(legend(&old, &o), legend(&new, &n).replace(n.key, o.key));
+        let patch = parse(&page_patch(&old, &new, "k").expect("a reorder patches"));
+        let sent = patch["legend"].as_str().expect("the legend is sent");
+        assert_eq!(sent, legend(&new, &n).replace(n.key, o.key));
+        assert!(sent.starts_with(LEGEND) && sent.ends_with("</ul>\n"));
+        let first = sent.find("data-id=\"").expect("an entry") + 9;
+        assert_eq!(&sent[first..first + 2], "a\"", "the heaviest group first");
+        // Everything else as before: the picture and the data apply.
+        let (svg, data) = apply(&old, &patch);
+        assert_eq!(svg, n.svg.replace(n.key, o.key));
+        assert_eq!(
+            data,
+            serde_json::from_str::<serde_json::Value>(n.data).expect("data")
+        );
+    }
+
+    #[test]
     fn the_same_page_patches_to_nothing() {
         let page = html_page(&hostile_uneven(10.0), &Style::default());
         let patch = parse(&page_patch(&page, &page, "k").expect("patch"));
@@ -482,6 +534,7 @@ mod tests {
             assert_eq!(patch[list].as_array().map(Vec::len), Some(0), "{list}");
         }
         assert!(patch.get("labels").is_none());
+        assert!(patch.get("legend").is_none());
     }
 
     #[test]

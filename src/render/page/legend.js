@@ -157,3 +157,14 @@ export function legendControls(refit) {
   }
   folds(refit);
 }
+
+// The live preview's patch brought a new legend (page/patch.js): it takes
+// the old one's place, and its entries and list work as the old ones did.
+export function renewLegend(fresh) {
+  if (!legend || !fresh) { return; }
+  unlight();
+  legend.parentNode.replaceChild(fresh, legend);
+  legend = fresh;
+  entries();
+  filterList();
+}

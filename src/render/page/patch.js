@@ -3,7 +3,8 @@
 // server sends what changed since the page the browser has
 // (src/render/html/patch.rs writes it): cells by position among the
 // picture's `path[data-id]`s with their new outline and fill, the picture's
-// other changed parts whole (by class), and the changed nodes of the data.
+// other changed parts whole (by class), the changed nodes of the data, and
+// the legend when it changed (whole; legend.js binds it as it bound the old).
 // `check` finds everything a patch names and parses its parts, or says no
 // (the live preview then loads the whole page); `apply` puts it in place,
 // reads the changed nodes again (model.js `renew`) and says what the
@@ -11,6 +12,7 @@
 // realised constraints kept. Only the cells the patch names are touched:
 // on a map of 20,000 leaves an edit that moved 30 cells costs 30 cells.
 import { EMPTY, N, NS, data, isLeaf, leafCells, part, partners, renew, svg } from "./model.js";
+import { renewLegend } from "./legend.js";
 
 // A part's markup as an element of this document, or null.
 function parsed(markup) {
@@ -18,6 +20,13 @@ function parsed(markup) {
   if (doc.getElementsByTagName("parsererror").length) { return null; }
   var el = doc.documentElement.firstElementChild;
   return el ? document.importNode(el, true) : null;
+}
+
+// The legend's markup (our own HTML, its text escaped) as an element of
+// this document, or null; a parsed document runs nothing it holds.
+function parsedLegend(markup) {
+  var el = new DOMParser().parseFromString(markup, "text/html").body.firstElementChild;
+  return el && el.classList.contains("np-legend") ? document.importNode(el, true) : null;
 }
 
 // The picture's top-level element of class `cls` (exactly), or null.
@@ -57,7 +66,12 @@ function check(patch) {
     var n = patch.nodes[k];
     if (!(n[0] < N) || !data.nodes[n[0]] || data.nodes[n[0]].id !== n[1].id) { return null; }
   }
-  return { cells: cells, parts: parts };
+  var legend = null;
+  if (typeof patch.legend === "string") {
+    legend = parsedLegend(patch.legend);
+    if (!legend || !part("legend")) { return null; }
+  }
+  return { cells: cells, parts: parts, legend: legend };
 }
 
 // Puts a checked patch in place; `after` runs once the map is whole again
@@ -68,6 +82,7 @@ function apply(ready, patch, after) {
     c[0].setAttribute("fill", c[2]);
   });
   ready.parts.forEach(function (p) { p[0].parentNode.replaceChild(p[1], p[0]); });
+  if (ready.legend) { renewLegend(ready.legend); }
   var changed = 0;
   patch.nodes.forEach(function (n) {
     if (isLeaf(n[0]) && data.nodes[n[0]].weight !== n[1].weight) { changed++; }

@@ -4,8 +4,10 @@
 //! the whole page, only the cells the patch names change in the document
 //! (counted by a MutationObserver, against the cells whose outline or fill
 //! differs between the two pages on disk), and afterwards every cell's
-//! outline and fill are the new page's. A page opened after the edit gets
-//! the whole current page. Without Chromium the test reports itself
+//! outline and fill are the new page's. A second edit makes the last group
+//! the heaviest: the legend (by weight) comes whole in the patch, and its
+//! entries answer. A page opened after the edits gets the whole current
+//! page. Without Chromium the test reports itself
 //! skipped, unless `NPTREEMAP_REQUIRE_BROWSER=1`.
 
 use std::collections::BTreeMap;
@@ -36,8 +38,9 @@ datasets:
     outputs: [out/big.html]
 ";
 
-/// The tree with leaf `n0`'s weight `first` (the others fixed, uneven).
-fn tree(first: f64) -> String {
+/// The tree with the first leaf's weight `first` and the last one's
+/// `last` (the others fixed, uneven).
+fn tree(first: f64, last: f64) -> String {
     let mut groups = Vec::new();
     let per = LEAVES / (GROUPS * SUBGROUPS);
     for g in 0..GROUPS {
@@ -46,10 +49,10 @@ fn tree(first: f64) -> String {
             let leaves: Vec<Value> = (0..per)
                 .map(|k| {
                     let i = (g * SUBGROUPS + s) * per + k;
-                    let w = if i == 0 {
-                        first
-                    } else {
-                        1.0 + (i * 37 % 101) as f64
+                    let w = match i {
+                        0 => first,
+                        i if i == LEAVES - 1 => last,
+                        i => 1.0 + (i * 37 % 101) as f64,
                     };
                     json!({"id": format!("n{i}"), "value": w})
                 })
@@ -61,9 +64,9 @@ fn tree(first: f64) -> String {
     json!({"id": "root", "children": groups}).to_string()
 }
 
-fn write_tree(dir: &Path, first: f64) {
+fn write_tree(dir: &Path, first: f64, last: f64) {
     let tmp = dir.join("data/.tree.json.tmp");
-    std::fs::write(&tmp, tree(first)).expect("write tree");
+    std::fs::write(&tmp, tree(first, last)).expect("write tree");
     std::fs::rename(&tmp, dir.join("data/tree.json")).expect("rename tree");
 }
 
@@ -115,7 +118,7 @@ fn a_big_map_patches_only_the_changed_cells() {
     };
     let dir = support::temp_dir("serve_patch");
     std::fs::create_dir_all(dir.join("data")).expect("data dir");
-    write_tree(&dir, 50.0);
+    write_tree(&dir, 50.0, 60.0);
     let config = dir.join("nptreemap.yaml");
     std::fs::write(&config, CONFIG).expect("config");
     let mut served = Served::start(&config, None);
@@ -140,7 +143,7 @@ fn a_big_map_patches_only_the_changed_cells() {
     assert_eq!(browser.eval(WATCH_CELLS), json!(true));
 
     // One leaf's weight, +10%: a small change the layout settles locally.
-    write_tree(&dir, 55.0);
+    write_tree(&dir, 55.0, 60.0);
     served.expect(&["big: data", "wrote"]);
     super::live::wait_true(
         &mut browser,
@@ -182,12 +185,48 @@ fn a_big_map_patches_only_the_changed_cells() {
     );
     assert_eq!(weight, json!("55"));
 
-    // A page opened now gets the whole current page.
-    browser.open(&served.url("/out/big.html"));
-    assert!(
-        shown(&mut browser) == after,
-        "a new page is the current one"
+    // An edit that makes the last group the heaviest: the legend, by
+    // weight, lists it first; the page still patches (the legend whole).
+    let first_entry =
+        "document.querySelector('.nptreemap .np-legend li[data-id]').getAttribute('data-id')";
+    let heavy = format!("g{}", GROUPS - 1);
+    assert_ne!(browser.eval(first_entry), json!(heavy));
+    write_tree(&dir, 55.0, 5_000.0);
+    served.expect(&["big: data", "wrote"]);
+    super::live::wait_true(
+        &mut browser,
+        "the second patch",
+        "npLive.patches === 2 && npLive.animating === 0",
     );
+    assert_eq!(
+        browser.eval("npLive.loads"),
+        json!(0),
+        "no whole page fetched"
+    );
+    assert_eq!(
+        browser.eval(first_entry),
+        json!(heavy),
+        "the legend reordered"
+    );
+    let now = cells_on_disk(&std::fs::read_to_string(&page).expect("page"));
+    assert!(
+        shown(&mut browser) == now,
+        "the page shows the newest page's cells"
+    );
+    // The new legend answers as the old did: an entry lights its group.
+    browser.eval(
+        "document.querySelector('.nptreemap .np-legend li[data-id]').dispatchEvent(new FocusEvent('focusin', { bubbles: true }))",
+    );
+    super::live::wait_true(
+        &mut browser,
+        "the legend to light its group",
+        "document.querySelectorAll('.nptreemap .np-hover .np-near').length > 0",
+    );
+
+    // A page opened now gets the whole current page (another URL of it,
+    // so that the navigation is not mistaken for the page already open).
+    browser.open(&served.url("/out/big.html?opened=later"));
+    assert!(shown(&mut browser) == now, "a new page is the current one");
     drop(browser);
     served.terminate();
 }
