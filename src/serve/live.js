@@ -350,7 +350,14 @@ function pump() {
   busy = true;
   var item = waiting.shift();
   if (item.html !== undefined) { apply(item.html, pump); return; }
-  if (!patchIn(item.patch, pump)) { busy = false; load(); }
+  if (!patchIn(item.patch, pump)) {
+    // The map could not take it: what waits builds on it, so it goes too,
+    // and no patch is asked for until the whole page is here (`update`).
+    waiting = [];
+    KEY = "";
+    busy = false;
+    load();
+  }
 }
 
 // ---- the stream ----
@@ -378,6 +385,7 @@ function load() {
 // that cannot say (it no longer has that page, or the change is more than
 // cells, parts and nodes: 204) gets the whole page asked for.
 function update() {
+  if (!KEY) { return load(); }
   var mine = ++fetches;
   var since = KEY;
   return fetch(location.pathname + "?since=" + encodeURIComponent(since), { cache: "no-store", credentials: "same-origin" })

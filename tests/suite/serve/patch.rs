@@ -6,8 +6,9 @@
 //! differs between the two pages on disk), and afterwards every cell's
 //! outline and fill are the new page's. A second edit makes the last group
 //! the heaviest: the legend (by weight) comes whole in the patch, and its
-//! entries answer. A page opened after the edits gets the whole current
-//! page. Without Chromium the test reports itself
+//! entries answer. A patch the map refuses loads the whole page, and the
+//! next edit patches again. A page opened after the edits gets the whole
+//! current page. Without Chromium the test reports itself
 //! skipped, unless `NPTREEMAP_REQUIRE_BROWSER=1`.
 
 use std::collections::BTreeMap;
@@ -221,6 +222,31 @@ fn a_big_map_patches_only_the_changed_cells() {
         &mut browser,
         "the legend to light its group",
         "document.querySelectorAll('.nptreemap .np-hover .np-near').length > 0",
+    );
+
+    // A patch the map cannot take (forced here) loads the whole page, and
+    // the edit after it patches again, from the page loaded.
+    browser
+        .eval("document.querySelector('.nptreemap').npPatch.check = function () { return null; }");
+    write_tree(&dir, 60.0, 5_000.0);
+    served.expect(&["big: data", "wrote"]);
+    super::live::wait_true(
+        &mut browser,
+        "the whole page",
+        "npLive.loads === 1 && npLive.updates === 3 && npLive.animating === 0",
+    );
+    write_tree(&dir, 66.0, 5_000.0);
+    served.expect(&["big: data", "wrote"]);
+    super::live::wait_true(
+        &mut browser,
+        "a patch again",
+        "npLive.patches === 3 && npLive.updates === 4 && npLive.animating === 0",
+    );
+    assert_eq!(browser.eval("npLive.loads"), json!(1));
+    let now = cells_on_disk(&std::fs::read_to_string(&page).expect("page"));
+    assert!(
+        shown(&mut browser) == now,
+        "the page shows the newest page's cells"
     );
 
     // A page opened now gets the whole current page (another URL of it,
