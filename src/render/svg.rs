@@ -7,6 +7,7 @@
 
 use nptreemap_formats::Dataset;
 use std::collections::BTreeMap;
+use std::fmt::Write as _;
 
 use super::label_text::display_name;
 use rayon::prelude::*;
@@ -352,8 +353,8 @@ pub(crate) fn push_num(out: &mut String, v: f64) {
         out.push('-');
     }
     let (whole, cents) = (n / 100, n % 100);
-    out.push_str(&whole.to_string());
-    out.push('.');
+    // Writing into a String cannot fail.
+    let _ = write!(out, "{whole}.");
     out.push(char::from(b'0' + (cents / 10) as u8));
     out.push(char::from(b'0' + (cents % 10) as u8));
 }
@@ -500,9 +501,33 @@ pub(crate) fn escape(text: &str) -> String {
     out
 }
 
+/// The text [`escape`] was given back, as a browser's `getAttribute` reads
+/// it: the five entities `escape` writes (the characters it drops stay
+/// dropped). `&amp;` last, so that `&amp;lt;` gives `&lt;`.
+pub(crate) fn unescape(text: &str) -> String {
+    text.replace("&quot;", "\"")
+        .replace("&apos;", "'")
+        .replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&amp;", "&")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn unescape_gives_back_what_escape_was_given() {
+        for text in [
+            "plain",
+            "a & b",
+            "<script>\"x\" 'y'</script>",
+            "&amp;lt; stays text",
+            "&",
+        ] {
+            assert_eq!(unescape(&escape(text)), text);
+        }
+    }
 
     #[test]
     fn push_num_spells_as_num() {

@@ -20,6 +20,8 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 use serde_json::value::RawValue;
 
+use crate::render::svg::unescape;
+
 /// What changed from one page to the next, for the page to apply.
 #[derive(Debug, Serialize)]
 struct PagePatch<'a> {
@@ -189,17 +191,6 @@ fn attr<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
     let key = format!(" {name}=\"");
     let start = tag.find(&key)? + key.len();
     Some(&tag[start..start + tag[start..].find('"')?])
-}
-
-/// The text of an attribute value as `getAttribute` reads it: the inverse
-/// of `svg::escape` (which writes only these five entities).
-fn unescape(value: &str) -> String {
-    value
-        .replace("&quot;", "\"")
-        .replace("&apos;", "'")
-        .replace("&lt;", "<")
-        .replace("&gt;", ">")
-        .replace("&amp;", "&")
 }
 
 type CellChange<'a> = (usize, String, &'a str, &'a str);

@@ -71,6 +71,27 @@ fn write_tree(dir: &Path, first: f64, last: f64) {
     std::fs::rename(&tmp, dir.join("data/tree.json")).expect("rename tree");
 }
 
+/// Writes the tree with `first` and `last`, waits for the daemon to write
+/// the page and then for the page to reach `state` (a JS condition on
+/// `npLive`, the live script's counters) with its animations ended; the
+/// page's cells on disk then.
+fn edit(
+    served: &mut Served,
+    browser: &mut Browser,
+    dir: &Path,
+    (first, last): (f64, f64),
+    state: &str,
+) -> BTreeMap<String, (String, String)> {
+    write_tree(dir, first, last);
+    served.expect(&["big: data", "wrote"]);
+    super::live::wait_true(
+        browser,
+        state,
+        &format!("{state} && npLive.animating === 0"),
+    );
+    cells_on_disk(&std::fs::read_to_string(dir.join("out/big.html")).expect("page"))
+}
+
 /// Every cell of a page's picture as written: id to (path data, fill).
 fn cells_on_disk(page: &str) -> BTreeMap<String, (String, String)> {
     let attr = |line: &str, name: &str| -> String {
@@ -144,14 +165,13 @@ fn a_big_map_patches_only_the_changed_cells() {
     assert_eq!(browser.eval(WATCH_CELLS), json!(true));
 
     // One leaf's weight, +10%: a small change the layout settles locally.
-    write_tree(&dir, 55.0, 60.0);
-    served.expect(&["big: data", "wrote"]);
-    super::live::wait_true(
+    let after = edit(
+        &mut served,
         &mut browser,
-        "the patch",
-        "npLive.patches === 1 && npLive.animating === 0",
+        &dir,
+        (55.0, 60.0),
+        "npLive.patches === 1",
     );
-    let after = cells_on_disk(&std::fs::read_to_string(&page).expect("page"));
     let changed: Vec<&String> = after
         .iter()
         .filter(|(id, c)| before.get(*id) != Some(c))
@@ -192,12 +212,12 @@ fn a_big_map_patches_only_the_changed_cells() {
         "document.querySelector('.nptreemap .np-legend li[data-id]').getAttribute('data-id')";
     let heavy = format!("g{}", GROUPS - 1);
     assert_ne!(browser.eval(first_entry), json!(heavy));
-    write_tree(&dir, 55.0, 5_000.0);
-    served.expect(&["big: data", "wrote"]);
-    super::live::wait_true(
+    let now = edit(
+        &mut served,
         &mut browser,
-        "the second patch",
-        "npLive.patches === 2 && npLive.animating === 0",
+        &dir,
+        (55.0, 5_000.0),
+        "npLive.patches === 2",
     );
     assert_eq!(
         browser.eval("npLive.loads"),
@@ -209,7 +229,6 @@ fn a_big_map_patches_only_the_changed_cells() {
         json!(heavy),
         "the legend reordered"
     );
-    let now = cells_on_disk(&std::fs::read_to_string(&page).expect("page"));
     assert!(
         shown(&mut browser) == now,
         "the page shows the newest page's cells"
@@ -228,22 +247,21 @@ fn a_big_map_patches_only_the_changed_cells() {
     // the edit after it patches again, from the page loaded.
     browser
         .eval("document.querySelector('.nptreemap').npPatch.check = function () { return null; }");
-    write_tree(&dir, 60.0, 5_000.0);
-    served.expect(&["big: data", "wrote"]);
-    super::live::wait_true(
+    edit(
+        &mut served,
         &mut browser,
-        "the whole page",
-        "npLive.loads === 1 && npLive.updates === 3 && npLive.animating === 0",
+        &dir,
+        (60.0, 5_000.0),
+        "npLive.loads === 1 && npLive.updates === 3",
     );
-    write_tree(&dir, 66.0, 5_000.0);
-    served.expect(&["big: data", "wrote"]);
-    super::live::wait_true(
+    let now = edit(
+        &mut served,
         &mut browser,
-        "a patch again",
-        "npLive.patches === 3 && npLive.updates === 4 && npLive.animating === 0",
+        &dir,
+        (66.0, 5_000.0),
+        "npLive.patches === 3 && npLive.updates === 4",
     );
     assert_eq!(browser.eval("npLive.loads"), json!(1));
-    let now = cells_on_disk(&std::fs::read_to_string(&page).expect("page"));
     assert!(
         shown(&mut browser) == now,
         "the page shows the newest page's cells"
