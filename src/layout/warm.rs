@@ -15,10 +15,12 @@
 //!   areas meet the target: no CVT, matching, swaps or attraction, so the
 //!   arrangement, and with it the realised neighbourhoods, survives.
 //!
-//! A diagram whose parent cell, children and weights are all unchanged starts
-//! exactly at its previous sites and weights, already meets the area target,
-//! and is taken over with no tick ([`Report::reused`](crate::layout::Report::reused)); so is, level by
-//! level, every subtree below it. From a [`Previous`](crate::layout::Previous) kept in memory this
+//! A diagram whose parent cell and children are unchanged, and whose weights
+//! are unchanged or moved so little that its old cells still meet the area
+//! target (no child's share moved by more than that target), is taken over
+//! verbatim with no tick ([`Report::reused`](crate::layout::Report::reused)); so is, level by
+//! level, every subtree below it whose weights allow it. A weight edit
+//! therefore moves the cells of the diagrams it visibly changes and no others. From a [`Previous`](crate::layout::Previous) kept in memory this
 //! reproduces the previous layout bit for bit; from layout JSON, up to the
 //! rounding of its coordinates (a second warm run from that output then gives
 //! the same bytes again). A diagram whose inputs changed settles to a
@@ -118,10 +120,12 @@ pub(crate) fn layout_warm_with(
     })
 }
 
-/// The previous cells of `parent`'s children, verbatim, when nothing about
-/// the diagram changed: the very same parent cell (bit for bit, as it is when
-/// its own diagram was reused), the same children with the same weights, and
-/// every power weight known. Issue 6: "unchanged subtrees are reused", and a
+/// The previous cells of `parent`'s children, verbatim, when the diagram did
+/// not change beyond what its areas may show: the very same parent cell (bit
+/// for bit, as it is when its own diagram was reused), the same children with
+/// every power weight known, and either the same weights or weights whose
+/// shares each moved by at most the convergence target ([`shares_kept`])
+/// while the old cells still meet that target against the new weights. Issue 6: "unchanged subtrees are reused", and a
 /// rebuild of unchanged data gives unchanged bytes (recomputing the power
 /// diagram of the same sites in another order of operations would move the
 /// last bits of the cells).
@@ -141,11 +145,10 @@ fn reused(
         return None;
     }
     let mut cells = Vec::with_capacity(children.len());
+    let mut olds = Vec::with_capacity(children.len());
     for &c in children {
         let old = previous.survivor(dataset, c)?;
-        if old.weight != dataset.node(c).value {
-            return None;
-        }
+        olds.push(old.weight);
         cells.push((
             c,
             LayoutCell {
@@ -154,6 +157,11 @@ fn reused(
                 polygon: old.polygon.clone(),
             },
         ));
+    }
+    let news: Vec<f64> = children.iter().map(|&c| dataset.node(c).value).collect();
+    let edited = olds != news;
+    if edited && !shares_kept(&olds, &news, params.convergence_ratio) {
+        return None;
     }
     let (targets, slack) = child_targets(dataset, parent, polygon, params);
     let area = polygon.area();
@@ -167,13 +175,41 @@ fn reused(
     } else {
         0.0
     };
+    let converged = error + slack <= params.convergence_ratio;
+    if edited && !converged {
+        return None;
+    }
     Some(Division {
         cells,
         iterations: 0,
         error,
-        converged: error + slack <= params.convergence_ratio,
+        converged,
         optimized: true,
         degenerate: 0,
+    })
+}
+
+/// Whether no child's share of its parent moved by more than `most`
+/// (relative) between the weights `old` and `new`, a child of no share keeping
+/// none. A diagram whose shares barely moved is kept verbatim by [`reused`]:
+/// settling it would move every cell below it by a fraction of a pixel for an
+/// area change the picture cannot show, and a weight edit would redraw the
+/// whole map (issue 32: draw what moved). The run's convergence target is the
+/// bound because it is the error the method promises per diagram (method
+/// reference §5.9, `convergenceRatio`): a share moved by 1% changes the
+/// cell's side by 0.5%.
+fn shares_kept(old: &[f64], new: &[f64], most: f64) -> bool {
+    let (old_total, new_total) = (old.iter().sum::<f64>(), new.iter().sum::<f64>());
+    if !(old_total > 0.0 && new_total > 0.0) {
+        return false;
+    }
+    old.iter().zip(new).all(|(&o, &n)| {
+        let (so, sn) = (o / old_total, n / new_total);
+        if so > 0.0 {
+            (sn / so - 1.0).abs() <= most
+        } else {
+            sn == 0.0
+        }
     })
 }
 
@@ -367,7 +403,7 @@ mod tests {
     }
 
     #[test]
-    fn a_ten_percent_edit_moves_unchanged_leaves_very_little() {
+    fn a_ten_percent_edit_moves_only_its_diagram_and_that_little() {
         // 6 × 6 × 9 = 324 leaves.
         let before = hierarchy(6, 6, 9, 100, 1.0);
         let after = hierarchy(6, 6, 9, 100, 1.1);
@@ -393,6 +429,34 @@ mod tests {
         let (cold, _) = layout(&after, &params).expect("cold");
         let cold_moved = displacement(&before, &old, &after, &cold);
         assert!(moved < cold_moved, "warm {moved}, cold {cold_moved}");
+
+        // Leaf 100 (weight 5) is in g1s5; +10% moves its share of g1s5 by
+        // about 9%, of g1 by under 1% and g1's share of the root by 0.15%:
+        // only g1s5's diagram may settle, every other cell stays bit for bit
+        // (issue 32: draw what moved).
+        let edited_parent = after.find("g1s5").expect("g1s5");
+        let mut changed = Vec::new();
+        for i in 0..after.len() {
+            let node = after.node(i);
+            let j = before.find(&node.id).expect("same nodes");
+            if warm.cells[i].polygon != old.cells[j].polygon {
+                changed.push(node.id.clone());
+                assert_eq!(node.parent, Some(edited_parent), "{} moved", node.id);
+            }
+        }
+        assert!(changed.contains(&"l100".to_string()), "{changed:?}");
+        // The edited cell shows its new weight: its share of g1s5's area is
+        // its share of the weight within the diagram's target.
+        let leaf = after.find("l100").expect("l100");
+        let share = warm.cells[leaf].polygon.area() / warm.cells[edited_parent].polygon.area();
+        let weights = &after.node(edited_parent).children;
+        let total: f64 = weights.iter().map(|&c| after.node(c).value).sum();
+        let want = after.node(leaf).value / total;
+        assert!(
+            (share - want).abs() / want < 0.02,
+            "share {share}, weight share {want}"
+        );
+        assert!(report.reused > 0, "{report:?}");
     }
 
     #[test]
