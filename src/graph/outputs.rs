@@ -64,6 +64,8 @@ impl DatasetGraph {
             render_in_parallel(&laid.computed, style, &needed, &past, &self.parts)?.into_iter();
         let labels = self.parts.counts();
         let mut noted = false;
+        #[cfg(feature = "png")]
+        let mut bands_noted = false;
         let mut outputs = Vec::with_capacity(d.outputs.len());
         for (((out, disk), render_key), known) in d.outputs.iter().zip(disk).zip(keys).zip(known) {
             let shown = super::shown(d, &out.path);
@@ -74,18 +76,25 @@ impl DatasetGraph {
                 }
                 None => {
                     let (bytes, ms) = drawn.next().expect("one rendering per output needed");
+                    let mut note = out.kind().name().to_string();
                     // The labels' counts go with the first output that drew any.
-                    let note = if out.kind().styled() && !noted && labels.reused + labels.fitted > 0 {
+                    if out.kind().styled() && !noted && labels.reused + labels.fitted > 0 {
                         noted = true;
-                        format!(
-                            "{}; labels: {} fitted, {} reused",
-                            out.kind().name(),
-                            labels.fitted,
-                            labels.reused
-                        )
-                    } else {
-                        out.kind().name().to_string()
-                    };
+                        note += &format!(
+                            "; labels: {} fitted, {} reused",
+                            labels.fitted, labels.reused
+                        );
+                    }
+                    // The PNGs' bands, summed over this render's PNGs.
+                    #[cfg(feature = "png")]
+                    if out.kind() == render::OutputKind::Png && !bands_noted {
+                        bands_noted = true;
+                        let b = self.parts.band_counts();
+                        note += &format!(
+                            "; bands: {} painted, {} kept; usvg documents: {}",
+                            b.painted, b.kept, b.documents
+                        );
+                    }
                     cx.record_output_ms(Stage::Render, shown, ms, note);
                     OutputBuild::made(out.path.clone(), bytes, *disk)
                 }

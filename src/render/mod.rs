@@ -5,9 +5,6 @@
 //! identical bytes for identical input. Only PNG can fail, and then on a bug
 //! (its input is our own SVG) or an absurd pixel size.
 
-/// The map's cells painted straight onto the PNG's pixels.
-#[cfg(feature = "png")]
-mod cell_paint;
 /// Colour by a numeric field: the scales and the values.
 pub mod color_by;
 /// CIELAB and the CIEDE2000 colour difference.
@@ -26,15 +23,24 @@ pub mod legend;
 pub mod output;
 /// Interlocking tabs and unrealised-link markers drawn over the treemap.
 pub mod overlay;
+/// One element as the PNG paints it: path, fill, stroke, rows, digest.
+#[cfg(feature = "png")]
+mod paint;
 /// Colours: hex parsing, the Tableau palettes, lightness variations for children.
 pub mod palette;
 /// What one render keeps for the next: each leaf's label by its drawn cell.
 pub mod parts;
 /// The framed picture: map, overlay, title, legend, border; its [`Style`].
 pub mod picture;
-/// PNG from the SVG text through usvg and resvg, with a built-in font.
+/// PNG from the SVG text, painted with tiny-skia and a built-in font.
 #[cfg(feature = "png")]
 pub mod png;
+/// The PNG's pixels in bands, and the repaint of the bands an edit touched.
+#[cfg(feature = "png")]
+mod png_bands;
+/// The SVG writer's text read back into what the PNG paints.
+#[cfg(feature = "png")]
+mod png_plan;
 /// The SVG picture: filled cells, level-weighted outlines, fitted labels.
 pub mod svg;
 /// The built-in font: metrics, shaping and glyph outlines, cached.

@@ -115,7 +115,7 @@ impl OutputKind {
             #[cfg(feature = "png")]
             OutputKind::Png => {
                 let text = svg_text.get_or_insert_with(|| picture_with(computed, style, parts));
-                super::png(text, scale)?
+                parts.png(text, scale)?
             }
             #[cfg(not(feature = "png"))]
             OutputKind::Png => {

@@ -1,5 +1,5 @@
-//! What one render keeps for the next (issue 32, "draw what moved"): each
-//! leaf's label, by everything that decides it: its text and value line, its
+//! What one render keeps for the next (issue 32, "draw what moved"): the
+//! PNG's last picture (`png_bands`), and each leaf's label, by everything that decides it: its text and value line, its
 //! size range and its cell as drawn (the SVG's two decimals). The picture,
 //! the page's picture and the page's label list of one build share one
 //! placement per leaf, and a render after an edit fits only the labels of
@@ -114,10 +114,27 @@ impl LabelKey {
     }
 }
 
-/// The label memo of the renders of one dataset (see the module docs).
+/// The label memo of the renders of one dataset (see the module docs), and
+/// the PNG's last picture at each scale (its pixels and its bands'
+/// digests, for a repaint of the rows an edit touched).
 #[derive(Debug, Default)]
 pub struct Parts {
     labels: Mutex<Generations>,
+    #[cfg(feature = "png")]
+    pictures: Mutex<Pictures>,
+}
+
+/// The PNGs' last pictures: those the last render painted (`last`), those
+/// this render painted (`current`), and this render's band counts. A
+/// render takes a picture of its scale from either; [`Parts::next_render`]
+/// drops what the render before last painted, so at most two renders'
+/// pictures are held (one per PNG output in practice).
+#[cfg(feature = "png")]
+#[derive(Debug, Default)]
+struct Pictures {
+    current: Vec<super::png::Painted>,
+    last: Vec<super::png::Painted>,
+    counts: super::png::BandCounts,
 }
 
 #[derive(Debug, Default)]
@@ -155,7 +172,46 @@ impl Parts {
         g.previous = std::mem::take(&mut g.current);
         g.reused = 0;
         g.fitted = 0;
+        #[cfg(feature = "png")]
+        {
+            let mut p = self.pictures();
+            p.last = std::mem::take(&mut p.current);
+            p.counts = super::png::BandCounts::default();
+        }
         counts
+    }
+
+    /// [`super::png()`] of `svg` at `scale`, repainting over the last
+    /// picture of that scale (this render's or the last one's) only the
+    /// bands that changed; the bytes are those of a whole paint.
+    #[cfg(feature = "png")]
+    pub fn png(&self, svg: &str, scale: f64) -> Result<Vec<u8>, super::PngError> {
+        let last = {
+            let mut p = self.pictures();
+            let Pictures { current, last, .. } = &mut *p;
+            let take = |v: &mut Vec<super::png::Painted>| {
+                let k = v.iter().position(|x| x.scale() == scale)?;
+                Some(v.swap_remove(k))
+            };
+            take(current).or_else(|| take(last))
+        };
+        let (bytes, keep, counts) = super::png::png_with(svg, scale, last)?;
+        let mut p = self.pictures();
+        p.counts += counts;
+        p.current.extend(keep);
+        Ok(bytes)
+    }
+
+    /// The band counts of the PNGs of the render under way.
+    #[cfg(feature = "png")]
+    pub fn band_counts(&self) -> super::png::BandCounts {
+        self.pictures().counts
+    }
+
+    #[cfg(feature = "png")]
+    fn pictures(&self) -> std::sync::MutexGuard<'_, Pictures> {
+        // A panic while the lock was held leaves whole entries only.
+        self.pictures.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// The counts of the render under way.
