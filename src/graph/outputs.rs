@@ -85,6 +85,12 @@ impl DatasetGraph {
                             labels.fitted, labels.reused
                         );
                     }
+                    // The node lines of the layout JSON written in this
+                    // build (this output's and the stored layout's).
+                    if out.kind() == render::OutputKind::Json {
+                        let l = self.parts.node_lines().counts();
+                        note += &format!("; node lines: {} written, {} reused", l.written, l.reused);
+                    }
                     // The PNGs' bands, summed over this render's PNGs.
                     #[cfg(feature = "png")]
                     if out.kind() == render::OutputKind::Png && !bands_noted {

@@ -6,6 +6,8 @@
 
 /// What a document carries beyond the geometry: constraints and metrics.
 pub mod extras;
+/// The node lines of the documents written before, by what they spell.
+pub mod lines;
 /// How precisely each cell is spelled: a grid from the canvas, refined where
 /// the checker's rules need it.
 mod precision;
@@ -17,8 +19,9 @@ pub mod write;
 use crate::layout::{Computed, Previous};
 
 pub use extras::{ConstraintOut, JsonExtras};
+pub use lines::{LineCounts, NodeLines};
 pub use read::ReadError;
-pub use write::layout_json;
+pub use write::{layout_json, layout_json_with};
 
 /// The value of the `format` field.
 pub const FORMAT: &str = "nptreemap-layout/1";
@@ -27,10 +30,16 @@ pub const FORMAT: &str = "nptreemap-layout/1";
 /// constraints and quality figures, coordinates rounded to a grid chosen from
 /// the canvas (four places on 1000 × 1000) and finer where a cell needs it.
 pub fn document(computed: &Computed) -> String {
-    layout_json(
+    document_with(computed, None)
+}
+
+/// [`document`] with the node lines of the documents written before.
+pub fn document_with(computed: &Computed, lines: Option<&NodeLines>) -> String {
+    layout_json_with(
         &computed.dataset,
         &computed.layout,
         &JsonExtras::of(computed),
+        lines,
     )
 }
 
@@ -38,9 +47,14 @@ pub fn document(computed: &Computed) -> String {
 /// [`document`] but in full precision, so the cells come back bit for bit
 /// (a rebuild that reuses every diagram then writes the same bytes).
 pub fn state(computed: &Computed) -> String {
+    state_with(computed, None)
+}
+
+/// [`state`] with the node lines of the documents written before.
+pub fn state_with(computed: &Computed, lines: Option<&NodeLines>) -> String {
     let mut extras = JsonExtras::of(computed);
     extras.exact = true;
-    layout_json(&computed.dataset, &computed.layout, &extras)
+    layout_json_with(&computed.dataset, &computed.layout, &extras, lines)
 }
 
 /// Reads a document (as written by [`document`] or [`state`], or by another

@@ -10,8 +10,11 @@
 use nptreemap_formats::Dataset;
 use serde::{Serialize, Serializer};
 
+use rayon::prelude::*;
+
 use super::extras::JsonExtras;
-use super::precision::{self, Spelled};
+use super::lines::{Line, NodeLines};
+use super::precision;
 use super::FORMAT;
 use crate::geom::Point;
 use crate::layout::{Layout, ZeroItems};
@@ -29,6 +32,18 @@ const SIMILARITY_DECIMALS: i32 = 4;
 /// full precision when `extra.exact`. An only child's `power_weight` is left
 /// out: its cell is its parent's whatever the weight (always 0).
 pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> String {
+    layout_json_with(dataset, layout, extra, None)
+}
+
+/// [`layout_json`] taking the node lines it can from `lines` (the lines of
+/// the documents written before, [`NodeLines`]) and keeping those it
+/// writes there; the bytes are the same.
+pub fn layout_json_with(
+    dataset: &Dataset,
+    layout: &Layout,
+    extra: &JsonExtras,
+    lines: Option<&NodeLines>,
+) -> String {
     debug_assert_eq!(dataset.len(), layout.cells.len(), "one cell per node");
     let spelled = if extra.exact {
         precision::exact(layout)
@@ -54,7 +69,7 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
 
     let nodes = dataset
         .nodes()
-        .iter()
+        .par_iter()
         .zip(&layout.cells)
         .zip(&spelled)
         .enumerate()
@@ -78,10 +93,16 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
                 site: point(spelled.site),
                 power_weight: (!only_child)
                     .then(|| Num(precision::round(cell.power_weight, spelled.places))),
-                polygon: polygon(spelled),
+                polygon: Points(&spelled.polygon),
             }
         });
-    push_array(&mut out, "nodes", nodes);
+    match lines {
+        Some(lines) => push_nodes(&mut out, nodes.collect(), extra.exact, lines),
+        None => {
+            let nodes: Vec<NodeOut<'_>> = nodes.collect();
+            push_array(&mut out, "nodes", nodes.iter());
+        }
+    }
     out.push(',');
     out.push('\n');
 
@@ -175,8 +196,44 @@ fn point(p: Point) -> [Num; 2] {
     [Num(p.x), Num(p.y)]
 }
 
-fn polygon(spelled: &Spelled) -> Vec<[Num; 2]> {
-    spelled.polygon.iter().map(|p| point(*p)).collect()
+/// The `nodes` array from `nodes`' lines: those in `lines` taken from it,
+/// the others serialised (in parallel) and kept there.
+fn push_nodes(out: &mut String, nodes: Vec<NodeOut<'_>>, exact: bool, lines: &NodeLines) {
+    let keys: Vec<u128> = nodes.par_iter().map(|n| n.digest(exact)).collect();
+    let mut found = lines.find(&keys);
+    let written: Vec<(usize, Line)> = found
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| f.is_none())
+        .map(|(k, _)| k)
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|k| (k, Line::from(to_json(&nodes[k]))))
+        .collect();
+    let kept = written
+        .iter()
+        .map(|(k, line)| (keys[*k], line.clone()))
+        .collect();
+    for (k, line) in written {
+        found[k] = Some(line);
+    }
+    out.push_str("  \"nodes\": [");
+    for (k, line) in found.iter().enumerate() {
+        out.push_str(if k == 0 { "\n" } else { ",\n" });
+        out.push_str(line.as_deref().expect("every line found or written"));
+    }
+    out.push_str(if found.is_empty() { "]" } else { "\n  ]" });
+    lines.keep(kept);
+}
+
+/// A polygon's vertices as `[[x, y], …]`, borrowed.
+#[derive(Clone, Copy)]
+struct Points<'a>(&'a [Point]);
+
+impl Serialize for Points<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.0.iter().map(|p| point(*p)))
+    }
 }
 
 #[derive(Serialize)]
@@ -206,7 +263,44 @@ struct NodeOut<'a> {
     /// the cells; left out for an only child, whose cell needs none.
     #[serde(skip_serializing_if = "Option::is_none")]
     power_weight: Option<Num>,
-    polygon: Vec<[Num; 2]>,
+    polygon: Points<'a>,
+}
+
+impl NodeOut<'_> {
+    /// A digest of everything the line spells, and of the document's
+    /// precision: two nodes with one digest have one line. Every field
+    /// above is fed here, in order.
+    fn digest(&self, exact: bool) -> u128 {
+        let mut h = xxhash_rust::xxh3::Xxh3::new();
+        let text = |h: &mut xxhash_rust::xxh3::Xxh3, t: &str| {
+            h.update(&t.len().to_le_bytes());
+            h.update(t.as_bytes());
+        };
+        let num = |h: &mut xxhash_rust::xxh3::Xxh3, n: Option<Num>| match n {
+            Some(Num(v)) => h.update(&v.to_bits().to_le_bytes()),
+            None => h.update(b"-"),
+        };
+        h.update(&[u8::from(exact)]);
+        text(&mut h, self.id);
+        text(&mut h, self.label);
+        match self.parent {
+            Some(p) => text(&mut h, p),
+            None => h.update(b"-"),
+        }
+        h.update(&self.depth.to_le_bytes());
+        num(&mut h, Some(self.weight));
+        num(&mut h, self.drawn_weight);
+        h.update(&[u8::from(self.is_virtual)]);
+        num(&mut h, Some(self.site[0]));
+        num(&mut h, Some(self.site[1]));
+        num(&mut h, self.power_weight);
+        h.update(&self.polygon.0.len().to_le_bytes());
+        for p in self.polygon.0 {
+            h.update(&p.x.to_bits().to_le_bytes());
+            h.update(&p.y.to_bits().to_le_bytes());
+        }
+        h.digest128()
+    }
 }
 
 /// The `zero_weights` object: the setting and how many items it applied to.
@@ -279,9 +373,48 @@ fn finite(v: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::super::extras::ConstraintOut;
+    use super::super::lines::LineCounts;
     use super::*;
     use crate::render::test_support::sample;
     use serde_json::Value;
+
+    /// Issue 32, item 2: a document written with the node lines of the one
+    /// before is byte for byte the document written from scratch, and
+    /// formats only the lines of the nodes that changed.
+    #[test]
+    fn node_lines_from_the_last_document_give_the_same_bytes() {
+        let (dataset, layout) = sample();
+        let lines = NodeLines::new();
+        for exact in [false, true] {
+            let extra = JsonExtras {
+                exact,
+                ..JsonExtras::default()
+            };
+            let plain = layout_json(&dataset, &layout, &extra);
+            assert_eq!(
+                layout_json_with(&dataset, &layout, &extra, Some(&lines)),
+                plain
+            );
+        }
+        let counts = lines.next_build();
+        assert_eq!((counts.reused, counts.written), (0, 2 * dataset.len()));
+        // One cell moved: only its line is written again.
+        let mut moved = layout.clone();
+        let leaf = dataset.find("A3").expect("A3");
+        moved.cells[leaf].site = Point::new(moved.cells[leaf].site.x + 1.0, 199.0);
+        let extra = JsonExtras::default();
+        assert_eq!(
+            layout_json_with(&dataset, &moved, &extra, Some(&lines)),
+            layout_json(&dataset, &moved, &extra)
+        );
+        assert_eq!(
+            lines.counts(),
+            LineCounts {
+                reused: dataset.len() - 1,
+                written: 1
+            }
+        );
+    }
 
     #[test]
     fn document_has_the_spec_fields_and_types() {

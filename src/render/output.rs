@@ -125,7 +125,9 @@ impl OutputKind {
                     feature: "png",
                 });
             }
-            OutputKind::Json => crate::layout_json::document(computed).into_bytes(),
+            OutputKind::Json => {
+                crate::layout_json::document_with(computed, Some(parts.node_lines())).into_bytes()
+            }
             OutputKind::Html => html_page_with_parts(computed, style, past, parts).into_bytes(),
         })
     }

@@ -120,6 +120,8 @@ impl LabelKey {
 #[derive(Debug, Default)]
 pub struct Parts {
     labels: Mutex<Generations>,
+    /// The layout JSON's node lines (the output's and the stored layout's).
+    lines: crate::layout_json::NodeLines,
     #[cfg(feature = "png")]
     pictures: Mutex<Pictures>,
 }
@@ -172,6 +174,7 @@ impl Parts {
         g.previous = std::mem::take(&mut g.current);
         g.reused = 0;
         g.fitted = 0;
+        self.lines.next_build();
         #[cfg(feature = "png")]
         {
             let mut p = self.pictures();
@@ -200,6 +203,11 @@ impl Parts {
         p.counts += counts;
         p.current.extend(keep);
         Ok(bytes)
+    }
+
+    /// The layout JSON's node lines of this render and the last.
+    pub fn node_lines(&self) -> &crate::layout_json::NodeLines {
+        &self.lines
     }
 
     /// The band counts of the PNGs of the render under way.

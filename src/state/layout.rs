@@ -67,8 +67,8 @@ const SETTINGS_FIELD: &str = "\"nptreemap_settings\": \"";
 
 /// The stored layout's text for a computation: layout JSON in full
 /// precision, with the fingerprint of its layout settings as the first field.
-pub fn text(computed: &Computed) -> String {
-    let doc = layout_json::state(computed);
+pub fn text(computed: &Computed, lines: Option<&layout_json::NodeLines>) -> String {
+    let doc = layout_json::state_with(computed, lines);
     let key = manifest::settings_key(&computed.settings);
     match doc.strip_prefix("{\n") {
         Some(rest) => format!("{{\n  {SETTINGS_FIELD}{key}\",\n{rest}"),
@@ -106,7 +106,7 @@ mod tests {
             b.add(NodeSpec::new(id).parent("r").weight(w));
         }
         let computed = compute(&b.build().expect("valid"), &Request::default()).expect("layout");
-        let text = text(&computed);
+        let text = text(&computed, None);
         assert_eq!(
             settings_of(&text),
             Some(manifest::settings_key(&computed.settings))

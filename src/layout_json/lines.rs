@@ -1,0 +1,127 @@
+//! The node lines of the documents written before (issue 32, item 2: draw
+//! what moved): each node's line of the `nodes` array by a digest of
+//! everything it spells (its ids, weights and coordinates as spelled, and
+//! the document's precision), so a document after a weight edit, whose
+//! cells are bit for bit those of the one before except in the diagrams the
+//! edit moved, formats only the lines of the nodes that moved. The stored
+//! layout (full precision) and the `.json` output (rounded) of one build
+//! have different lines and each finds its own.
+//!
+//! Two generations, as the labels' memo (`render::parts`): what the current
+//! build wrote and what the one before did; [`NodeLines::next_build`] drops
+//! the older, so the memo holds at most two builds' lines of each kind
+//! however long a `watch` runs (some 36 MB at 6,000 C headers). Digests of
+//! 128 bits (xxh3), as the state folder's fingerprints.
+//!
+//! Hand-written rather than a caching crate: the generations are the
+//! eviction rule a rebuild needs, and it is one map of our own keys.
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+use std::sync::{Arc, Mutex};
+
+/// A line, shared between the memo and the document being written.
+pub(super) type Line = Arc<str>;
+
+/// The memo's map: its keys are digests already, so the hasher takes their
+/// low bits instead of hashing them again (SipHash over 38,000 keys was a
+/// tenth of a document's node lines).
+type ByDigest = HashMap<u128, Line, BuildHasherDefault<DigestBits>>;
+
+/// The [`Hasher`] of [`ByDigest`]: the last 64 bits written.
+#[derive(Default)]
+struct DigestBits(u64);
+
+impl Hasher for DigestBits {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut b = [0u8; 8];
+            b[..chunk.len()].copy_from_slice(chunk);
+            self.0 ^= u64::from_le_bytes(b);
+        }
+    }
+
+    fn write_u128(&mut self, v: u128) {
+        self.0 = v as u64;
+    }
+}
+
+/// The node lines of the last two builds' documents (see the module docs).
+#[derive(Debug, Default)]
+pub struct NodeLines {
+    inner: Mutex<Generations>,
+}
+
+#[derive(Debug, Default)]
+struct Generations {
+    current: ByDigest,
+    previous: ByDigest,
+    counts: LineCounts,
+}
+
+/// How many node lines the documents of a build found and wrote.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LineCounts {
+    /// Found in the memo.
+    pub reused: usize,
+    /// Formatted anew.
+    pub written: usize,
+}
+
+impl NodeLines {
+    /// An empty memo.
+    pub fn new() -> NodeLines {
+        NodeLines::default()
+    }
+
+    /// Starts the next build: the lines of the build before last are
+    /// dropped. Returns the last build's counts.
+    pub fn next_build(&self) -> LineCounts {
+        let mut g = self.lock();
+        g.previous = std::mem::take(&mut g.current);
+        std::mem::take(&mut g.counts)
+    }
+
+    /// The counts of the build under way.
+    pub fn counts(&self) -> LineCounts {
+        self.lock().counts
+    }
+
+    /// The lines of `keys`, in order: `None` for those not in the memo
+    /// (found ones move to the current generation).
+    pub(super) fn find(&self, keys: &[u128]) -> Vec<Option<Line>> {
+        let mut g = self.lock();
+        let found: Vec<Option<Line>> = keys.iter().map(|k| g.take(*k)).collect();
+        let reused = found.iter().filter(|f| f.is_some()).count();
+        g.counts.reused += reused;
+        g.counts.written += keys.len() - reused;
+        found
+    }
+
+    /// Keeps the lines just written, by key.
+    pub(super) fn keep(&self, lines: Vec<(u128, Line)>) {
+        let mut g = self.lock();
+        g.current.extend(lines);
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Generations> {
+        // A panic while the lock was held leaves whole entries only.
+        self.inner.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+impl Generations {
+    /// The line of `key` from either generation, kept in the current one.
+    fn take(&mut self, key: u128) -> Option<Line> {
+        if let Some(line) = self.current.get(&key) {
+            return Some(line.clone());
+        }
+        let line = self.previous.remove(&key)?;
+        self.current.insert(key, line.clone());
+        Some(line)
+    }
+}
