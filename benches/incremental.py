@@ -18,8 +18,8 @@ included names, each a dimension of the Jaccard vectors; the default limit is
                 level) and then the leaf of median size (a typical file)
   similarity    one header includes one more name (one similarity row)
   render        render.border_width changed in the config
-  watch         `nptreemap -v watch`, twice: each of those headers' size
-                times 1.1 again,
+  watch         `nptreemap -v watch`, one daemon: each of those headers'
+                size times 1.1 again, the first leaf's then the median's,
                 saved atomically; the time from the end of the batch of file
                 events (the debounce) to the outputs on disk, as the daemon
                 logs it with -v, and the wall time from the save to the
@@ -127,11 +127,13 @@ def layout_line(stdout: str) -> str:
 ON_DISK = re.compile(r"headers: outputs on disk ([0-9.]+) ms after the batch \(data")
 
 
-def watch_edit(binary: Path, folder: Path, tree: dict, leaf: dict) -> dict:
-    """Starts `nptreemap -v watch`, waits for its start build, saves one
-    weight edit atomically, and waits (at most 10 minutes) for the rebuild's
-    status line. Returns the daemon's own figure (end of the batch to outputs
-    on disk) and the wall time from the save to the line."""
+def watch_edits(binary: Path, folder: Path, tree: dict, leaves: list[dict]) -> list[dict]:
+    """Starts `nptreemap -v watch`, waits for its start build, then for each
+    of `leaves` saves one weight edit (+10%) atomically and waits (at most 10
+    minutes) for the rebuild's status line, one daemon for all (the later
+    edits find what the earlier renders kept, as in a session). Returns per
+    edit the daemon's own figure (end of the batch to outputs on disk) and
+    the wall time from the save to the line."""
     err = open(folder / "watch-stderr.txt", "w")
     p = subprocess.Popen(
         [str(binary), "-v", "watch", "nptreemap.yaml"],
@@ -151,32 +153,32 @@ def watch_edit(binary: Path, folder: Path, tree: dict, leaf: dict) -> dict:
                 return line.strip()
         raise TimeoutError(f"no line with {words}")
 
+    edits = []
     try:
         start = wait_for("headers: ", "start")
-        leaf["size"] = round(leaf["size"] * 1.1) + 1
-        tmp = folder / ".tree.json.tmp"
-        tmp.write_text(json.dumps(tree, separators=(",", ":")))
-        t = time.perf_counter()
-        os.replace(tmp, folder / "tree.json")
-        line = wait_for("headers: ", "data: tree.json")
-        wall = time.perf_counter() - t
+        for leaf in leaves:
+            leaf["size"] = round(leaf["size"] * 1.1) + 1
+            tmp = folder / ".tree.json.tmp"
+            tmp.write_text(json.dumps(tree, separators=(",", ":")))
+            t = time.perf_counter()
+            os.replace(tmp, folder / "tree.json")
+            line = wait_for("headers: ", "data: tree.json")
+            edits.append({"start": start, "line": line, "wall_ms": (time.perf_counter() - t) * 1000})
+            # Past the debounce, so the next save is a batch of its own.
+            time.sleep(0.5)
     finally:
         p.send_signal(signal.SIGTERM)
         p.wait(timeout=30)
         err.close()
     stderr = (folder / "watch-stderr.txt").read_text()
-    found = ON_DISK.findall(stderr)
-    after = stderr[stderr.rfind("tree.json"):] if "tree.json" in stderr else ""
-    return {
-        "start": start,
-        "line": line,
-        "wall_ms": wall * 1000,
-        "on_disk_ms": float(found[-1]) if found else None,
-        # The stage lines of the edit's rebuild: between the start build's
-        # "outputs on disk" line and the edit's.
-        "stages": stages((stderr.split("outputs on disk")[-2:-1] or [""])[0]),
-        "stderr_tail": after[-2000:],
-    }
+    found = ON_DISK.findall(stderr)[-len(leaves):]
+    # The stage lines of each edit's rebuild: between one "outputs on disk"
+    # line and the next.
+    parts = stderr.split("outputs on disk")[-len(leaves) - 1:-1]
+    for k, e in enumerate(edits):
+        e["on_disk_ms"] = float(found[k]) if k < len(found) else None
+        e["stages"] = stages(parts[k]) if k < len(parts) else ""
+    return edits
 
 
 def first_leaf(node: dict) -> dict:
@@ -188,19 +190,32 @@ def first_leaf(node: dict) -> dict:
 def median_leaf(node: dict) -> dict:
     """The leaf of median size (ties by name) among those drawn at their own
     size: a typical file, where the first leaf of /usr/include (EGL/egl.h)
-    is most of its folder. A file under 1:1000 of its folder's largest is
-    drawn at that floor (`min_weight_ratio`), and 10% more of it changes
-    nothing."""
+    is most of its folder. A file under 1:1000 of the heaviest entry of its
+    folder (a file or a whole subfolder) is drawn at that floor
+    (`min_weight_ratio`), and 10% more of it changes nothing."""
+    def total(n: dict) -> float:
+        if n.get("children"):
+            n["_total"] = sum(total(c) for c in n["children"])
+        else:
+            n["_total"] = n.get("size", 0)
+        return n["_total"]
+
+    total(node)
     leaves, stack = [], [node]
     while stack:
         n = stack.pop()
         kids = n.get("children") or []
-        largest = max((c.get("size", 0) for c in kids if not c.get("children")), default=0)
+        heaviest = max((c["_total"] for c in kids), default=0)
         for c in kids:
             if c.get("children"):
                 stack.append(c)
-            elif c.get("size", 0) >= largest / 1000:
+            elif c["_total"] >= heaviest / 1000:
                 leaves.append(c)
+    stack = [node]
+    while stack:
+        n = stack.pop()
+        n.pop("_total", None)
+        stack.extend(n.get("children") or [])
     leaves.sort(key=lambda n: (n.get("size", 0), n.get("name", "")))
     return leaves[len(leaves) // 2]
 
@@ -263,9 +278,8 @@ def main() -> int:
         (folder / "nptreemap.yaml").write_text(CONFIG.format(border=3))
         step("`render:` change", ["build"])
 
-        watched = watch_edit(binary, folder, tree, leaf)
+        watched, watched_median = watch_edits(binary, folder, tree, [leaf, median])
         print(f"{case}: watch: {watched['line']}", file=sys.stderr)
-        watched_median = watch_edit(binary, folder, tree, median)
         print(f"{case}: watch (median leaf): {watched_median['line']}", file=sys.stderr)
 
         cold = steps[0]["wall_s"]

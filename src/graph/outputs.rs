@@ -87,8 +87,8 @@ impl DatasetGraph {
                     }
                     // The node lines of the layout JSON written in this
                     // build (this output's and the stored layout's).
-                    if out.kind() == render::OutputKind::Json {
-                        let l = self.parts.node_lines().counts();
+                    if out.kind() == render::OutputKind::Json && self.parts.node_lines().is_some() {
+                        let l = self.parts.line_counts();
                         note += &format!("; node lines: {} written, {} reused", l.written, l.reused);
                     }
                     // The PNGs' bands, summed over this render's PNGs.

@@ -364,7 +364,7 @@ impl DatasetGraph {
         }
         let (_, laid) = self.slots.layout.last().expect("decided Same: a layout in memory");
         if self.stored_at != state::layout_path(d) {
-            let text = state::layout::text(&laid.computed, Some(self.parts.node_lines()));
+            let text = state::layout::text(&laid.computed, self.parts.node_lines());
             pending.layout = Some((text, laid.state));
         }
         LayoutOut {
@@ -417,7 +417,7 @@ impl DatasetGraph {
         // pictures will draw (every core): neither waits for the other.
         let pictured = job.dataset.outputs.iter().any(|o| o.kind().styled());
         let (text, ()) = rayon::join(
-            || state::layout::text(&computed, Some(self.parts.node_lines())),
+            || state::layout::text(&computed, self.parts.node_lines()),
             || {
                 if pictured {
                     render::fit_labels(&computed, &job.style, &self.parts);

@@ -24,7 +24,9 @@
 //! reproduces the previous layout bit for bit; from layout JSON, up to the
 //! rounding of its coordinates (a second warm run from that output then gives
 //! the same bytes again). A diagram whose inputs changed settles to a
-//! tenth of the convergence target (`CHANGED_TARGET_SHARE`). A diagram in which
+//! tenth of the convergence target (`CHANGED_TARGET_SHARE`), and below
+//! that target times the smallest share among its children whose share
+//! moved (`shown_share`), so the edited cell shows its new area. A diagram in which
 //! nothing survives (a new parent, or all children new) is seeded cold.
 
 use super::map::{MapSettings, MapSimulation};
@@ -110,7 +112,14 @@ pub(crate) fn layout_warm_with(
                 let target = if start.unchanged {
                     sim.area_target()
                 } else {
-                    CHANGED_TARGET_SHARE * sim.area_target()
+                    let changed = CHANGED_TARGET_SHARE * sim.area_target();
+                    // The diagram's error sums all its cells: a cell whose
+                    // share moved shows its new area within the convergence
+                    // target only if the sum is below that share of it.
+                    shown_share(dataset, previous, parent, params.convergence_ratio)
+                        .map_or(changed, |share| {
+                            changed.min(share * params.convergence_ratio)
+                        })
                 };
                 settle(&mut sim, target);
                 division_of(children, sim, &polygon)
@@ -211,6 +220,31 @@ fn shares_kept(old: &[f64], new: &[f64], most: f64) -> bool {
             sn == 0.0
         }
     })
+}
+
+/// The smallest new share of its parent among `parent`'s surviving
+/// children whose share moved by more than `most` (relative), if any: a
+/// leaf of 1% of its diagram edited by 10% moves the diagram's summed error
+/// by only 0.002, below the changed target, and would not show.
+fn shown_share(dataset: &Dataset, previous: &Previous, parent: usize, most: f64) -> Option<f64> {
+    let children = &dataset.node(parent).children;
+    let olds: Vec<Option<f64>> = children
+        .iter()
+        .map(|&c| previous.survivor(dataset, c).map(|old| old.weight))
+        .collect();
+    let old_total: f64 = olds.iter().flatten().sum();
+    let new_total: f64 = children.iter().map(|&c| dataset.node(c).value).sum();
+    if !(old_total > 0.0 && new_total > 0.0) {
+        return None;
+    }
+    children
+        .iter()
+        .zip(&olds)
+        .filter_map(|(&c, old)| {
+            let (so, sn) = (old.as_ref()? / old_total, dataset.node(c).value / new_total);
+            (so > 0.0 && sn > 0.0 && (sn / so - 1.0).abs() > most).then_some(sn)
+        })
+        .min_by(f64::total_cmp)
 }
 
 /// Start sites and power weights of `parent`'s children in its new cell
@@ -457,6 +491,34 @@ mod tests {
             "share {share}, weight share {want}"
         );
         assert!(report.reused > 0, "{report:?}");
+    }
+
+    /// A leaf of a third of a percent of its diagram, edited by 10%, moves
+    /// the diagram's summed area error by under the changed target; it must
+    /// still show its new area (before, it kept its old one, 9% off).
+    #[test]
+    fn a_small_leafs_edit_shows_in_its_area() {
+        let flat = |factor: f64| {
+            let mut b = DatasetBuilder::new();
+            b.add(NodeSpec::new("root"));
+            for k in 0..300 {
+                let w = if k == 7 { 10.0 * factor } else { 10.0 };
+                b.add(NodeSpec::new(format!("l{k}")).parent("root").weight(w));
+            }
+            b.build().expect("valid")
+        };
+        let (before, after) = (flat(1.0), flat(1.1));
+        let params = Params::default();
+        let (old, _) = layout(&before, &params).expect("cold");
+        let prev = Previous::from_layout(&before, &old);
+        let (warm, _) = layout_warm(&after, &params, &prev, None).expect("warm");
+        let leaf = after.find("l7").expect("l7");
+        let share = warm.cells[leaf].polygon.area() / warm.cells[0].polygon.area();
+        let want = 11.0 / 3001.0;
+        assert!(
+            (share / want - 1.0).abs() < params.convergence_ratio,
+            "area share {share}, weight share {want}"
+        );
     }
 
     #[test]

@@ -122,6 +122,8 @@ pub struct Parts {
     labels: Mutex<Generations>,
     /// The layout JSON's node lines (the output's and the stored layout's).
     lines: crate::layout_json::NodeLines,
+    /// Renders started ([`Parts::next_render`]).
+    renders: std::sync::atomic::AtomicUsize,
     #[cfg(feature = "png")]
     pictures: Mutex<Pictures>,
 }
@@ -175,6 +177,8 @@ impl Parts {
         g.reused = 0;
         g.fitted = 0;
         self.lines.next_build();
+        self.renders
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         #[cfg(feature = "png")]
         {
             let mut p = self.pictures();
@@ -205,9 +209,17 @@ impl Parts {
         Ok(bytes)
     }
 
-    /// The layout JSON's node lines of this render and the last.
-    pub fn node_lines(&self) -> &crate::layout_json::NodeLines {
-        &self.lines
+    /// The layout JSON's node lines of this render and the last, from the
+    /// second render on: the first render of a process (every one-shot
+    /// build) has none to find, and keeping its lines would cost it a
+    /// third of the documents' time for nothing.
+    pub fn node_lines(&self) -> Option<&crate::layout_json::NodeLines> {
+        (self.renders.load(std::sync::atomic::Ordering::Relaxed) > 1).then_some(&self.lines)
+    }
+
+    /// How many node lines the layout JSON of this render wrote and found.
+    pub fn line_counts(&self) -> crate::layout_json::LineCounts {
+        self.lines.counts()
     }
 
     /// The band counts of the PNGs of the render under way.
@@ -336,6 +348,17 @@ mod tests {
         let counts = parts.next_render();
         assert_eq!(counts.fitted, 1, "only the moved cell's label is fitted");
         assert!(counts.reused >= 1);
+    }
+
+    /// The layout JSON's node lines are kept from a process's second render
+    /// on: a one-shot build (one render) would only pay for them.
+    #[test]
+    fn node_lines_are_kept_from_the_second_render() {
+        let parts = Parts::new();
+        parts.next_render();
+        assert!(parts.node_lines().is_none());
+        parts.next_render();
+        assert!(parts.node_lines().is_some());
     }
 
     #[test]
