@@ -9,9 +9,10 @@
 //!
 //! Two generations, as the labels' memo (`render::parts`): what the current
 //! build wrote and what the one before did; [`NodeLines::next_build`] drops
-//! the older, so the memo holds at most two builds' lines of each kind
-//! however long a `watch` runs (some 36 MB at 6,000 C headers). Digests of
-//! 128 bits (xxh3), as the state folder's fingerprints.
+//! the older, so the memo holds at most two builds' lines however long a
+//! `watch` runs, each generation bounded by `MAX_HELD` (some 23 MB at 6,000
+//! C headers). Digests of 128 bits (xxh3), as the state folder's
+//! fingerprints.
 //!
 //! Hand-written rather than a caching crate: the generations are the
 //! eviction rule a rebuild needs, and it is one map of our own keys.
@@ -60,8 +61,16 @@ pub struct NodeLines {
 struct Generations {
     current: ByDigest,
     previous: ByDigest,
+    /// Bytes of the lines the current generation holds.
+    held: usize,
     counts: LineCounts,
 }
+
+/// Most bytes of lines one generation keeps (the memo holds two): a
+/// document of 6,000 C headers and its stored layout keep some 23 MB; a
+/// hundred times that keeps lines until the bound and writes the rest
+/// anew each build, with the same bytes.
+const MAX_HELD: usize = 64 << 20;
 
 /// How many node lines the documents of a build found and wrote.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -83,6 +92,7 @@ impl NodeLines {
     pub fn next_build(&self) -> LineCounts {
         let mut g = self.lock();
         g.previous = std::mem::take(&mut g.current);
+        g.held = 0;
         std::mem::take(&mut g.counts)
     }
 
@@ -102,10 +112,16 @@ impl NodeLines {
         found
     }
 
-    /// Keeps the lines just written, by key.
+    /// Keeps the lines just written, by key, up to [`MAX_HELD`] bytes.
     pub(super) fn keep(&self, lines: Vec<(u128, Line)>) {
         let mut g = self.lock();
-        g.current.extend(lines);
+        for (key, line) in lines {
+            if g.held + line.len() > MAX_HELD {
+                break;
+            }
+            g.held += line.len();
+            g.current.insert(key, line);
+        }
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Generations> {
@@ -121,7 +137,39 @@ impl Generations {
             return Some(line.clone());
         }
         let line = self.previous.remove(&key)?;
-        self.current.insert(key, line.clone());
+        if self.held + line.len() <= MAX_HELD {
+            self.held += line.len();
+            self.current.insert(key, line.clone());
+        }
         Some(line)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A generation keeps lines up to its bound and no further; the lines
+    /// beyond it are written again next time (the bytes do not change).
+    #[test]
+    fn a_generation_keeps_lines_up_to_its_bound() {
+        let lines = NodeLines::new();
+        let mb: Line = Line::from("x".repeat(1 << 20));
+        let count = MAX_HELD / mb.len() + 6;
+        let keys: Vec<u128> = (0..count as u128).collect();
+        lines.keep(keys.iter().map(|&k| (k, Line::clone(&mb))).collect());
+        lines.next_build();
+        let found = lines.find(&keys);
+        let kept = found.iter().filter(|f| f.is_some()).count();
+        assert_eq!(kept, MAX_HELD / mb.len());
+        assert!(found[..kept].iter().all(Option::is_some));
+        assert!(found[kept..].iter().all(Option::is_none));
+        assert_eq!(
+            lines.counts(),
+            LineCounts {
+                reused: kept,
+                written: count - kept
+            }
+        );
     }
 }
