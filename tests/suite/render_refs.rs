@@ -226,3 +226,53 @@ fn the_pictures_are_resvgs_single_pass_of_their_svg() {
         );
     }
 }
+
+/// Issue 32, item 1: a PNG made without usvg. The examples' pictures and a
+/// real dataset's (tabs, markers, legend, labels, group names) are drawn
+/// entirely by the PNG's own items: the PNG's stage line counts no usvg
+/// document.
+#[test]
+fn the_pngs_of_real_pictures_use_no_usvg_document() {
+    let real = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real/debian-packages");
+    let copy = support::temp_dir("render_refs_usvg_debian");
+    for entry in std::fs::read_dir(&real).expect("the real dataset") {
+        let path = entry.expect("entry").path();
+        if path.is_file() {
+            std::fs::copy(&path, copy.join(path.file_name().expect("name"))).expect("copy");
+        }
+    }
+    let configs = [
+        support::example("countries", "usvg_countries"),
+        support::example("movies", "usvg_movies"),
+        copy.join("nptreemap.yaml"),
+    ];
+    for config in configs {
+        let out = support::bin()
+            .args(["-v", "build"])
+            .arg(&config)
+            .output()
+            .expect("run nptreemap");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let log = String::from_utf8_lossy(&out.stderr);
+        let pngs: Vec<&str> = log
+            .lines()
+            .filter(|l| l.contains("render ") && l.contains(".png ran"))
+            .collect();
+        assert!(
+            !pngs.is_empty(),
+            "{}: no PNG rendered:\n{log}",
+            config.display()
+        );
+        for line in pngs {
+            assert!(
+                line.contains("usvg documents: 0") && line.contains("0 kept"),
+                "{}: {line}",
+                config.display()
+            );
+        }
+    }
+}
