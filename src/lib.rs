@@ -116,6 +116,7 @@ pub mod cli;
 pub mod geom;
 pub mod layout;
 pub mod layout_json;
+pub mod line_memo;
 pub mod measure;
 pub mod render;
 

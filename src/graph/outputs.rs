@@ -87,6 +87,10 @@ impl DatasetGraph {
                     }
                     // The node lines of the layout JSON written in this
                     // build (this output's and the stored layout's).
+                    if out.kind() == render::OutputKind::Svg && self.parts.cell_lines().is_some() {
+                        let c = self.parts.cell_counts();
+                        note += &format!("; cells: {} written, {} reused", c.written, c.reused);
+                    }
                     if out.kind() == render::OutputKind::Json && self.parts.node_lines().is_some() {
                         let l = self.parts.line_counts();
                         note += &format!("; node lines: {} written, {} reused", l.written, l.reused);

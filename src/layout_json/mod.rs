@@ -6,8 +6,6 @@
 
 /// What a document carries beyond the geometry: constraints and metrics.
 pub mod extras;
-/// The node lines of the documents written before, by what they spell.
-pub mod lines;
 /// How precisely each cell is spelled: a grid from the canvas, refined where
 /// the checker's rules need it.
 mod precision;
@@ -17,9 +15,9 @@ pub mod read;
 pub mod write;
 
 use crate::layout::{Computed, Previous};
+use crate::line_memo::LineMemo;
 
 pub use extras::{ConstraintOut, JsonExtras};
-pub use lines::{LineCounts, NodeLines};
 pub use read::ReadError;
 pub use write::{layout_json, layout_json_with};
 
@@ -34,7 +32,7 @@ pub fn document(computed: &Computed) -> String {
 }
 
 /// [`document`] with the node lines of the documents written before.
-pub fn document_with(computed: &Computed, lines: Option<&NodeLines>) -> String {
+pub fn document_with(computed: &Computed, lines: Option<&LineMemo>) -> String {
     layout_json_with(
         &computed.dataset,
         &computed.layout,
@@ -51,7 +49,7 @@ pub fn state(computed: &Computed) -> String {
 }
 
 /// [`state`] with the node lines of the documents written before.
-pub fn state_with(computed: &Computed, lines: Option<&NodeLines>) -> String {
+pub fn state_with(computed: &Computed, lines: Option<&LineMemo>) -> String {
     let mut extras = JsonExtras::of(computed);
     extras.exact = true;
     layout_json_with(&computed.dataset, &computed.layout, &extras, lines)

@@ -13,11 +13,11 @@ use serde::{Serialize, Serializer};
 use rayon::prelude::*;
 
 use super::extras::JsonExtras;
-use super::lines::{Line, NodeLines};
 use super::precision;
 use super::FORMAT;
 use crate::geom::Point;
 use crate::layout::{Layout, ZeroItems};
+use crate::line_memo::{Line, LineMemo};
 
 /// Decimals of a constraint's `similarity`: the bins it fell into were
 /// chosen from the exact value; a reader sees which pairs are alike and how
@@ -36,13 +36,13 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
 }
 
 /// [`layout_json`] taking the node lines it can from `lines` (the lines of
-/// the documents written before, [`NodeLines`]) and keeping those it
+/// the documents written before, [`LineMemo`]) and keeping those it
 /// writes there; the bytes are the same.
 pub fn layout_json_with(
     dataset: &Dataset,
     layout: &Layout,
     extra: &JsonExtras,
-    lines: Option<&NodeLines>,
+    lines: Option<&LineMemo>,
 ) -> String {
     debug_assert_eq!(dataset.len(), layout.cells.len(), "one cell per node");
     let spelled = if extra.exact {
@@ -198,7 +198,7 @@ fn point(p: Point) -> [Num; 2] {
 
 /// The `nodes` array from `nodes`' lines: those in `lines` taken from it,
 /// the others serialised (in parallel) and kept there.
-fn push_nodes(out: &mut String, nodes: Vec<NodeOut<'_>>, exact: bool, lines: &NodeLines) {
+fn push_nodes(out: &mut String, nodes: Vec<NodeOut<'_>>, exact: bool, lines: &LineMemo) {
     let keys: Vec<u128> = nodes.par_iter().map(|n| n.digest(exact)).collect();
     let mut found = lines.find(&keys);
     let written: Vec<(usize, Line)> = found
@@ -373,8 +373,8 @@ fn finite(v: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::super::extras::ConstraintOut;
-    use super::super::lines::LineCounts;
     use super::*;
+    use crate::line_memo::LineCounts;
     use crate::render::test_support::sample;
     use serde_json::Value;
 
@@ -384,7 +384,7 @@ mod tests {
     #[test]
     fn node_lines_from_the_last_document_give_the_same_bytes() {
         let (dataset, layout) = sample();
-        let lines = NodeLines::new();
+        let lines = LineMemo::new();
         for exact in [false, true] {
             let extra = JsonExtras {
                 exact,

@@ -121,7 +121,9 @@ impl LabelKey {
 pub struct Parts {
     labels: Mutex<Generations>,
     /// The layout JSON's node lines (the output's and the stored layout's).
-    lines: crate::layout_json::NodeLines,
+    lines: crate::line_memo::LineMemo,
+    /// The SVG's cell elements (the picture's and the page's picture's).
+    cells: crate::line_memo::LineMemo,
     /// Renders started ([`Parts::next_render`]).
     renders: std::sync::atomic::AtomicUsize,
     #[cfg(feature = "png")]
@@ -177,6 +179,7 @@ impl Parts {
         g.reused = 0;
         g.fitted = 0;
         self.lines.next_build();
+        self.cells.next_build();
         self.renders
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         #[cfg(feature = "png")]
@@ -213,12 +216,23 @@ impl Parts {
     /// second render on: the first render of a process (every one-shot
     /// build) has none to find, and keeping its lines would cost it a
     /// third of the documents' time for nothing.
-    pub fn node_lines(&self) -> Option<&crate::layout_json::NodeLines> {
+    pub fn node_lines(&self) -> Option<&crate::line_memo::LineMemo> {
         (self.renders.load(std::sync::atomic::Ordering::Relaxed) > 1).then_some(&self.lines)
     }
 
+    /// The SVG's cell elements of this render and the last, from the second
+    /// render on (as [`Parts::node_lines`]).
+    pub fn cell_lines(&self) -> Option<&crate::line_memo::LineMemo> {
+        (self.renders.load(std::sync::atomic::Ordering::Relaxed) > 1).then_some(&self.cells)
+    }
+
+    /// How many cell elements the pictures of this render wrote and found.
+    pub fn cell_counts(&self) -> crate::line_memo::LineCounts {
+        self.cells.counts()
+    }
+
     /// How many node lines the layout JSON of this render wrote and found.
-    pub fn line_counts(&self) -> crate::layout_json::LineCounts {
+    pub fn line_counts(&self) -> crate::line_memo::LineCounts {
         self.lines.counts()
     }
 

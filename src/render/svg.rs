@@ -5,6 +5,7 @@
 //! alter geometry, fail, or do I/O. Output is deterministic: fixed two-decimal
 //! coordinates, nodes in dataset order.
 
+use crate::line_memo::{Line, LineMemo};
 use nptreemap_formats::Dataset;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -133,7 +134,7 @@ pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
         &style.group_colors,
         &style.kept,
     );
-    push_cells(&mut out, dataset, layout, style, &colors);
+    push_cells(&mut out, dataset, layout, style, &colors, None);
     let labels = leaf_labels(dataset, layout, &style.labels, &Parts::new());
     push_labels(&mut out, &labels, style);
     out.push_str("</svg>\n");
@@ -141,13 +142,16 @@ pub fn svg(dataset: &Dataset, layout: &Layout, style: &SvgStyle) -> String {
 }
 
 /// Appends every drawn cell, deepest level first, each level in its own group
-/// with its outline width (see [`svg`]).
+/// with its outline width (see [`svg`]). With `memo`, a cell's element is
+/// taken from the lines written before when its id, label, fill and outline
+/// (bit for bit) are the same, and kept there when written.
 pub(crate) fn push_cells(
     out: &mut String,
     dataset: &Dataset,
     layout: &Layout,
     style: &SvgStyle,
     colors: &[Option<Rgb>],
+    memo: Option<&LineMemo>,
 ) {
     let count = dataset.len().min(layout.cells.len());
     // Node indices per depth, each list in dataset order.
@@ -172,29 +176,104 @@ pub(crate) fn push_cells(
             "<g stroke-width=\"{}\">\n",
             num(stroke_width(style.stroke_width, depth))
         ));
-        for &i in nodes {
-            let node = dataset.node(i);
-            let fill = if dataset.is_leaf(i) {
-                colors[i].unwrap_or(palette::TABLEAU10[0]).to_string()
-            } else {
-                "none".to_owned()
-            };
-            out.push_str("<path data-id=\"");
-            out.push_str(&escape(&node.id));
-            out.push_str("\" d=\"");
-            path_data(out, &layout.cells[i].polygon);
-            out.push_str(&format!("\" fill=\"{fill}\"><title>"));
-            out.push_str(&escape(&node.label));
-            if node.id != node.label {
-                out.push_str(" (");
-                out.push_str(&escape(&node.id));
-                out.push(')');
+        match memo {
+            Some(memo) => push_remembered(out, dataset, layout, colors, nodes, memo),
+            None => {
+                for &i in nodes {
+                    push_cell(out, dataset, layout, colors, i);
+                }
             }
-            out.push_str("</title></path>\n");
         }
         out.push_str("</g>\n");
     }
     out.push_str("</g>\n");
+}
+
+/// The fill of cell `i`: its colour for a leaf, none for a group.
+fn cell_fill(dataset: &Dataset, colors: &[Option<Rgb>], i: usize) -> Option<Rgb> {
+    dataset
+        .is_leaf(i)
+        .then(|| colors[i].unwrap_or(palette::TABLEAU10[0]))
+}
+
+/// Appends cell `i`'s element: its path, fill and title.
+fn push_cell(
+    out: &mut String,
+    dataset: &Dataset,
+    layout: &Layout,
+    colors: &[Option<Rgb>],
+    i: usize,
+) {
+    let node = dataset.node(i);
+    let fill = cell_fill(dataset, colors, i).map_or("none".to_owned(), |c| c.to_string());
+    out.push_str("<path data-id=\"");
+    out.push_str(&escape(&node.id));
+    out.push_str("\" d=\"");
+    path_data(out, &layout.cells[i].polygon);
+    out.push_str(&format!("\" fill=\"{fill}\"><title>"));
+    out.push_str(&escape(&node.label));
+    if node.id != node.label {
+        out.push_str(" (");
+        out.push_str(&escape(&node.id));
+        out.push(')');
+    }
+    out.push_str("</title></path>\n");
+}
+
+/// Appends the elements of `nodes` from `memo` where it has them (keyed by
+/// everything [`push_cell`] writes: id, label, fill and the outline's
+/// bits), writing the others (in parallel) and keeping them there.
+fn push_remembered(
+    out: &mut String,
+    dataset: &Dataset,
+    layout: &Layout,
+    colors: &[Option<Rgb>],
+    nodes: &[usize],
+    memo: &LineMemo,
+) {
+    use rayon::prelude::*;
+    let keys: Vec<u128> = nodes
+        .par_iter()
+        .map(|&i| {
+            let node = dataset.node(i);
+            let mut h = xxhash_rust::xxh3::Xxh3::new();
+            for text in [&node.id, &node.label] {
+                h.update(&text.len().to_le_bytes());
+                h.update(text.as_bytes());
+            }
+            match cell_fill(dataset, colors, i) {
+                Some(c) => h.update(&[1, c.r, c.g, c.b]),
+                None => h.update(&[0]),
+            }
+            for p in layout.cells[i].polygon.points() {
+                h.update(&p.x.to_bits().to_le_bytes());
+                h.update(&p.y.to_bits().to_le_bytes());
+            }
+            h.digest128()
+        })
+        .collect();
+    let mut found = memo.find(&keys);
+    let missing: Vec<usize> = (0..nodes.len()).filter(|&k| found[k].is_none()).collect();
+    let written: Vec<(usize, Line)> = missing
+        .into_par_iter()
+        .map(|k| {
+            let mut line = String::with_capacity(256);
+            push_cell(&mut line, dataset, layout, colors, nodes[k]);
+            (k, Line::from(line))
+        })
+        .collect();
+    memo.keep(
+        written
+            .iter()
+            .map(|(k, l)| (keys[*k], Line::clone(l)))
+            .collect(),
+    );
+    for (k, line) in written {
+        found[k] = Some(line);
+    }
+    for line in found.iter().flatten() {
+        out.push_str(line);
+    }
 }
 
 /// Every non-root node is drawn; the root only when it is the whole dataset.
@@ -576,6 +655,43 @@ mod tests {
 
     fn count(hay: &str, needle: &str) -> usize {
         hay.matches(needle).count()
+    }
+
+    /// Issue 32, item 2: the cell elements written with the memo of the
+    /// render before are the bytes written without it, and only the moved
+    /// cell's element is written again.
+    #[test]
+    fn cell_elements_from_the_memo_are_the_bytes_written_without_it() {
+        use crate::geom::Point;
+        use crate::line_memo::{LineCounts, LineMemo};
+        let (dataset, mut layout) = sample();
+        let style = SvgStyle::default();
+        let colors = vec![Some(Rgb::new(0x4e, 0x79, 0xa7)); dataset.len()];
+        let cells = |layout: &Layout, memo: Option<&LineMemo>| {
+            let mut out = String::new();
+            push_cells(&mut out, &dataset, layout, &style, &colors, memo);
+            out
+        };
+        let memo = LineMemo::new();
+        assert_eq!(cells(&layout, Some(&memo)), cells(&layout, None));
+        let drawn = memo.next_build().written;
+        assert_eq!(drawn, dataset.len() - 1, "every cell but the root's");
+        let leaf = dataset.find("A3").expect("A3");
+        let moved: Vec<Point> = layout.cells[leaf]
+            .polygon
+            .points()
+            .iter()
+            .map(|p| Point::new(p.x + 0.5, p.y))
+            .collect();
+        layout.cells[leaf].polygon = ConvexPolygon::new(moved).expect("convex");
+        assert_eq!(cells(&layout, Some(&memo)), cells(&layout, None));
+        assert_eq!(
+            memo.counts(),
+            LineCounts {
+                reused: drawn - 1,
+                written: 1
+            }
+        );
     }
 
     #[test]

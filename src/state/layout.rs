@@ -67,7 +67,7 @@ const SETTINGS_FIELD: &str = "\"nptreemap_settings\": \"";
 
 /// The stored layout's text for a computation: layout JSON in full
 /// precision, with the fingerprint of its layout settings as the first field.
-pub fn text(computed: &Computed, lines: Option<&layout_json::NodeLines>) -> String {
+pub fn text(computed: &Computed, lines: Option<&crate::line_memo::LineMemo>) -> String {
     let doc = layout_json::state_with(computed, lines);
     let key = manifest::settings_key(&computed.settings);
     match doc.strip_prefix("{\n") {

@@ -1,14 +1,14 @@
-//! The node lines of the documents written before (issue 32, item 2: draw
-//! what moved): each node's line of the `nodes` array by a digest of
-//! everything it spells (its ids, weights and coordinates as spelled, and
-//! the document's precision), so a document after a weight edit, whose
-//! cells are bit for bit those of the one before except in the diagrams the
-//! edit moved, formats only the lines of the nodes that moved. The stored
-//! layout (full precision) and the `.json` output (rounded) of one build
-//! have different lines and each finds its own.
+//! Lines of text written before, kept by a digest of everything they spell
+//! (issue 32, item 2: draw what moved): a layout JSON node's line (its
+//! ids, weights and coordinates as spelled), an SVG cell's element. After a
+//! weight edit the cells are bit for bit those of the build before except in
+//! the diagrams the edit moved, so a writer that asks here first formats
+//! only the lines of what moved. Each writer keys its own lines (the stored
+//! layout's full precision and the `.json` output's rounding differ, and so
+//! their lines).
 //!
 //! Two generations, as the labels' memo (`render::parts`): what the current
-//! build wrote and what the one before did; [`NodeLines::next_build`] drops
+//! build wrote and what the one before did; [`LineMemo::next_build`] drops
 //! the older, so the memo holds at most two builds' lines however long a
 //! `watch` runs, each generation bounded by `MAX_HELD` (some 23 MB at 6,000
 //! C headers). Digests of 128 bits (xxh3), as the state folder's
@@ -22,7 +22,7 @@ use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::{Arc, Mutex};
 
 /// A line, shared between the memo and the document being written.
-pub(super) type Line = Arc<str>;
+pub(crate) type Line = Arc<str>;
 
 /// The memo's map: its keys are digests already, so the hasher takes their
 /// low bits instead of hashing them again (SipHash over 38,000 keys was a
@@ -51,9 +51,9 @@ impl Hasher for DigestBits {
     }
 }
 
-/// The node lines of the last two builds' documents (see the module docs).
+/// The lines of the last two builds (see the module docs).
 #[derive(Debug, Default)]
-pub struct NodeLines {
+pub struct LineMemo {
     inner: Mutex<Generations>,
 }
 
@@ -72,7 +72,7 @@ struct Generations {
 /// anew each build, with the same bytes.
 const MAX_HELD: usize = 64 << 20;
 
-/// How many node lines the documents of a build found and wrote.
+/// How many lines a build found and wrote.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LineCounts {
     /// Found in the memo.
@@ -81,10 +81,10 @@ pub struct LineCounts {
     pub written: usize,
 }
 
-impl NodeLines {
+impl LineMemo {
     /// An empty memo.
-    pub fn new() -> NodeLines {
-        NodeLines::default()
+    pub fn new() -> LineMemo {
+        LineMemo::default()
     }
 
     /// Starts the next build: the lines of the build before last are
@@ -103,7 +103,7 @@ impl NodeLines {
 
     /// The lines of `keys`, in order: `None` for those not in the memo
     /// (found ones move to the current generation).
-    pub(super) fn find(&self, keys: &[u128]) -> Vec<Option<Line>> {
+    pub(crate) fn find(&self, keys: &[u128]) -> Vec<Option<Line>> {
         let mut g = self.lock();
         let found: Vec<Option<Line>> = keys.iter().map(|k| g.take(*k)).collect();
         let reused = found.iter().filter(|f| f.is_some()).count();
@@ -113,7 +113,7 @@ impl NodeLines {
     }
 
     /// Keeps the lines just written, by key, up to [`MAX_HELD`] bytes.
-    pub(super) fn keep(&self, lines: Vec<(u128, Line)>) {
+    pub(crate) fn keep(&self, lines: Vec<(u128, Line)>) {
         let mut g = self.lock();
         for (key, line) in lines {
             if g.held + line.len() > MAX_HELD {
@@ -153,7 +153,7 @@ mod tests {
     /// beyond it are written again next time (the bytes do not change).
     #[test]
     fn a_generation_keeps_lines_up_to_its_bound() {
-        let lines = NodeLines::new();
+        let lines = LineMemo::new();
         let mb: Line = Line::from("x".repeat(1 << 20));
         let count = MAX_HELD / mb.len() + 6;
         let keys: Vec<u128> = (0..count as u128).collect();
