@@ -412,14 +412,8 @@ pub(crate) fn compose_noted(
     if let Some(lines) = &title {
         push_title(&mut out, lines, title_size, u, style);
     }
-    push_cells(
-        &mut out,
-        dataset,
-        layout,
-        &style.cells,
-        &colors,
-        parts.cell_lines(),
-    );
+    let memo = parts.cell_lines();
+    push_cells(&mut out, dataset, layout, &style.cells, &colors, memo);
     // Tabs on the edges, group names across the groups, then the leaf labels
     // over both, the markers last (they never overlap a label).
     if !tabs.is_empty() {
