@@ -85,8 +85,9 @@ impl DatasetGraph {
                             labels.fitted, labels.reused
                         );
                     }
-                    // The node lines of the layout JSON written in this
-                    // build (this output's and the stored layout's).
+                    // The cell elements of this build's pictures, and the
+                    // node lines of its layout JSON (this output's and the
+                    // stored layout's), when the memos are in use.
                     if out.kind() == render::OutputKind::Svg && self.parts.cell_lines().is_some() {
                         let c = self.parts.cell_counts();
                         note += &format!("; cells: {} written, {} reused", c.written, c.reused);

@@ -199,8 +199,8 @@ fn reused(
 }
 
 /// Whether no child's share of its parent moved by more than `most`
-/// (relative) between the weights `old` and `new`, a child of no share keeping
-/// none. A diagram whose shares barely moved is kept verbatim by [`reused`]:
+/// (relative) between the weights `old` and `new` ([`share_moved`]). A
+/// diagram whose shares barely moved is kept verbatim by [`reused`]:
 /// settling it would move every cell below it by a fraction of a pixel for an
 /// area change the picture cannot show, and a weight edit would redraw the
 /// whole map (issue 32: draw what moved). The run's convergence target is the
@@ -208,43 +208,48 @@ fn reused(
 /// reference §5.9, `convergenceRatio`): a share moved by 1% changes the
 /// cell's side by 0.5%.
 fn shares_kept(old: &[f64], new: &[f64], most: f64) -> bool {
-    let (old_total, new_total) = (old.iter().sum::<f64>(), new.iter().sum::<f64>());
-    if !(old_total > 0.0 && new_total > 0.0) {
-        return false;
-    }
-    old.iter().zip(new).all(|(&o, &n)| {
-        let (so, sn) = (o / old_total, n / new_total);
-        if so > 0.0 {
-            (sn / so - 1.0).abs() <= most
-        } else {
-            sn == 0.0
-        }
-    })
+    shares(old, new).is_some_and(|s| s.iter().all(|&(so, sn)| !share_moved(so, sn, most)))
 }
 
 /// The smallest new share of its parent among `parent`'s surviving
-/// children whose share moved by more than `most` (relative), if any: a
-/// leaf of 1% of its diagram edited by 10% moves the diagram's summed error
-/// by only 0.002, below the changed target, and would not show.
+/// children whose share moved by more than `most` ([`share_moved`]), if
+/// any: a leaf of 1% of its diagram edited by 10% moves the diagram's summed
+/// error by only 0.002, below the changed target, and would not show. New
+/// children (of no old share) are not counted.
 fn shown_share(dataset: &Dataset, previous: &Previous, parent: usize, most: f64) -> Option<f64> {
     let children = &dataset.node(parent).children;
-    let olds: Vec<Option<f64>> = children
+    let old: Vec<f64> = children
         .iter()
-        .map(|&c| previous.survivor(dataset, c).map(|old| old.weight))
+        .map(|&c| previous.survivor(dataset, c).map_or(0.0, |old| old.weight))
         .collect();
-    let old_total: f64 = olds.iter().flatten().sum();
-    let new_total: f64 = children.iter().map(|&c| dataset.node(c).value).sum();
-    if !(old_total > 0.0 && new_total > 0.0) {
-        return None;
-    }
-    children
-        .iter()
-        .zip(&olds)
-        .filter_map(|(&c, old)| {
-            let (so, sn) = (old.as_ref()? / old_total, dataset.node(c).value / new_total);
-            (so > 0.0 && sn > 0.0 && (sn / so - 1.0).abs() > most).then_some(sn)
-        })
+    let new: Vec<f64> = children.iter().map(|&c| dataset.node(c).value).collect();
+    shares(&old, &new)?
+        .into_iter()
+        .filter(|&(so, sn)| so > 0.0 && sn > 0.0 && share_moved(so, sn, most))
+        .map(|(_, sn)| sn)
         .min_by(f64::total_cmp)
+}
+
+/// Each child's (old, new) share of the parent's total weight; `None` when
+/// either total is not positive.
+fn shares(old: &[f64], new: &[f64]) -> Option<Vec<(f64, f64)>> {
+    let (old_total, new_total) = (old.iter().sum::<f64>(), new.iter().sum::<f64>());
+    (old_total > 0.0 && new_total > 0.0).then(|| {
+        old.iter()
+            .zip(new)
+            .map(|(o, n)| (o / old_total, n / new_total))
+            .collect()
+    })
+}
+
+/// Whether a share went from `old` to `new` by more than `most`, relative
+/// (a share of nothing moves when it becomes something).
+fn share_moved(old: f64, new: f64, most: f64) -> bool {
+    if old > 0.0 {
+        (new / old - 1.0).abs() > most
+    } else {
+        new != 0.0
+    }
 }
 
 /// Start sites and power weights of `parent`'s children in its new cell

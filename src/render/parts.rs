@@ -1,11 +1,11 @@
 //! What one render keeps for the next (issue 32, "draw what moved"): the
-//! PNG's last picture (`png_bands`), and each leaf's label, by everything that decides it: its text and value line, its
-//! size range and its cell as drawn (the SVG's two decimals). The picture,
-//! the page's picture and the page's label list of one build share one
-//! placement per leaf, and a render after an edit fits only the labels of
-//! the cells the edit moved: after one weight edit of 6,000 C headers, a few
-//! dozen of 38,629 cells move at two decimals, while every one moves in its
-//! last bits, so the key is the drawn cell, and the label is fitted to the
+//! PNG's last picture (`png_bands`), the layout JSON's node lines and the
+//! SVG's cell elements (`crate::line_memo`), and each leaf's label, by
+//! everything that decides it: its text and value line, its size range and
+//! its cell as drawn (the SVG's two decimals). The picture, the page's
+//! picture and the page's label list of one build share one placement per
+//! leaf, and a render after an edit fits only the labels of the cells the
+//! edit moved: the key is the drawn cell, and the label is fitted to the
 //! drawn cell too (which is the cell the reader sees).
 //!
 //! The memo stores a 128-bit digest of each key (xxh3), not the key, and a
@@ -114,9 +114,8 @@ impl LabelKey {
     }
 }
 
-/// The label memo of the renders of one dataset (see the module docs), and
-/// the PNG's last picture at each scale (its pixels and its bands'
-/// digests, for a repaint of the rows an edit touched).
+/// What the renders of one dataset keep for the next (see the module
+/// docs): labels, line memos and the PNG's last picture at each scale.
 #[derive(Debug, Default)]
 pub struct Parts {
     labels: Mutex<Generations>,

@@ -119,14 +119,11 @@ pub fn png_with(
         .view
         .as_ref()
         .map_or(Transform::identity(), View::transform);
-    let (pixmap, keep, counts) = paint(&layers, (w, h), scale, user, last).ok_or(too_big)?;
-    let bytes = encode(&pixmap)?;
-    let keep = keep.map(|mut p| {
-        p.svg = digest;
-        p.bytes = bytes.clone();
-        p
-    });
-    Ok((bytes, keep, counts))
+    let (mut painted, counts) = paint(&layers, (w, h), scale, user, last).ok_or(too_big)?;
+    let bytes = encode(painted.pixmap())?;
+    painted.svg = digest;
+    painted.bytes = bytes.clone();
+    Ok((bytes, painted.worth_keeping(), counts))
 }
 
 /// PNG bytes of a pixmap: straight (not premultiplied) RGBA, compressed with

@@ -67,6 +67,17 @@ impl Painted {
         f64::from_bits(self.scale)
     }
 
+    /// Its pixels.
+    pub(super) fn pixmap(&self) -> &tiny_skia::Pixmap {
+        &self.pixmap
+    }
+
+    /// Itself when small enough for a repaint to keep ([`KEEP_PIXELS`]).
+    pub(super) fn worth_keeping(self) -> Option<Painted> {
+        let (w, h) = (self.pixmap.width(), self.pixmap.height());
+        (u64::from(w) * u64::from(h) <= KEEP_PIXELS).then_some(self)
+    }
+
     /// The counts of painting it again from the same text: every band kept.
     pub(super) fn unchanged(&self) -> BandCounts {
         BandCounts {
@@ -101,8 +112,8 @@ impl std::ops::AddAssign for BandCounts {
 /// The pixels of `layers` (`user` maps the items' user units to the
 /// picture's, `scale` the picture's to pixels) in a `w` × `h` pixmap,
 /// painting only the bands that differ from `last` when it has the same
-/// scale and size. Returns the pixels, the picture to keep for the next
-/// repaint (when small enough) and the counts; `None` when a pixmap cannot
+/// scale and size. Returns the picture (its SVG digest and bytes left to
+/// the caller, who encodes it) and the counts; `None` when a pixmap cannot
 /// be made.
 pub(super) fn paint(
     layers: &[Drawn<'_>],
@@ -110,7 +121,7 @@ pub(super) fn paint(
     scale: f64,
     user: Transform,
     last: Option<Painted>,
-) -> Option<(tiny_skia::Pixmap, Option<Painted>, BandCounts)> {
+) -> Option<(Painted, BandCounts)> {
     let count = h.div_ceil(BAND) as usize;
     let s = scale as f32;
     let ts = Transform::from_scale(s, s).pre_concat(user);
@@ -173,14 +184,14 @@ pub(super) fn paint(
             .filter(|l| matches!(l, Drawn::Tree(..)))
             .count(),
     };
-    let keep = small.then(|| Painted {
+    let painted = Painted {
         scale: scale.to_bits(),
         bands,
-        pixmap: pixmap.clone(),
+        pixmap,
         svg: 0,
         bytes: Vec::new(),
-    });
-    Some((pixmap, keep, counts))
+    };
+    Some((painted, counts))
 }
 
 /// What a run is painted with: the layers, each item's first and last band
