@@ -475,7 +475,31 @@ pub fn warnings(files: &[InputFile], dataset: &Dataset) -> Vec<String> {
 /// [`store::writing`] throughout, so a forced exit never lands between two
 /// outputs of one set.
 pub fn write_outputs(outputs: &[Rendered]) -> Written {
-    let _writing = store::writing();
+    let files: Vec<(&Path, &[u8])> = outputs
+        .iter()
+        .map(|r| (r.path.as_path(), r.bytes.as_slice()))
+        .collect();
+    let writing = store::writing();
+    write_files(&files, &writing)
+}
+
+/// [`write_outputs`] of borrowed bytes (a build's outputs are written from
+/// where the render left them, not from a copy: tens of megabytes at
+/// thousands of leaves), with `beside` run at the same time (the build's
+/// state files, which vouch for no output). The write lock is taken here,
+/// on the caller's thread, never inside a rayon job: a pool thread that
+/// held it while waiting on the pool could take up another build's write
+/// and wait for the lock it holds itself.
+pub fn write_files_beside<R: Send>(
+    outputs: &[(&Path, &[u8])],
+    beside: impl FnOnce() -> R + Send,
+) -> (Written, R) {
+    let writing = store::writing();
+    rayon::join(|| write_files(outputs, &writing), beside)
+}
+
+/// The writes of [`write_outputs`]; the caller holds [`store::writing`].
+fn write_files(outputs: &[(&Path, &[u8])], _writing: &store::Writing) -> Written {
     let mut out = Written::default();
     // Each file is compared, written and synced on its own (tens of
     // megabytes at thousands of leaves); the lists keep the outputs' order.
@@ -483,15 +507,15 @@ pub fn write_outputs(outputs: &[Rendered]) -> Written {
         use rayon::prelude::*;
         outputs
             .par_iter()
-            .map(|r| store::write_if_changed(&r.path, &r.bytes))
+            .map(|(path, bytes)| store::write_if_changed(path, bytes))
             .collect()
     };
-    for (r, result) in outputs.iter().zip(results) {
+    for ((path, _), result) in outputs.iter().zip(results) {
         match result {
-            Ok(true) => out.written.push(r.path.clone()),
-            Ok(false) => out.unchanged.push(r.path.clone()),
+            Ok(true) => out.written.push(path.to_path_buf()),
+            Ok(false) => out.unchanged.push(path.to_path_buf()),
             Err(source) => out.failed.push(BuildError::Write {
-                path: r.path.clone(),
+                path: path.to_path_buf(),
                 source,
             }),
         }

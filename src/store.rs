@@ -28,9 +28,12 @@ const STEM_KEEP: usize = 200;
 /// PNG old.
 static WRITING: Mutex<()> = Mutex::new(());
 
+/// The write lock, held.
+pub type Writing = MutexGuard<'static, ()>;
+
 /// Takes the write lock (see `WRITING`): hold it while writing outputs that
 /// belong together, or before exiting the process while writes may be going on.
-pub fn writing() -> MutexGuard<'static, ()> {
+pub fn writing() -> Writing {
     // A panic while writing leaves no invariant behind this lock to protect.
     WRITING
         .lock()

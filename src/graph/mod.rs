@@ -60,7 +60,7 @@ use crate::fingerprint::Fingerprint;
 use crate::layout::compute::{lay_out_planned, plan, Plan, Prepared};
 use crate::layout::{zero, Computed, Previous, Request, Start, ZeroItems};
 use crate::neighborhood::Constraint;
-use crate::pipeline::{self, BuildError, Rendered, Written};
+use crate::pipeline::{self, BuildError, Written};
 use crate::render::Style;
 use crate::state::manifest::{self, Manifest};
 use crate::state::{self};
@@ -423,25 +423,29 @@ impl DatasetGraph {
     }
 
     /// Writes a build's stale outputs (atomically, all or none of a set
-    /// being under way at a forced exit), then its state: the stored layout,
-    /// the constraint cache and the manifest. A state file that cannot be
-    /// written only costs the next build its reuse (logged, and kept for
-    /// [`DatasetGraph::store_again`]).
+    /// being under way at a forced exit) and, beside them, its stored layout
+    /// and constraint cache (a warm start and a cache: neither vouches for
+    /// an output, so neither waits for them); then the manifest, which
+    /// vouches for the outputs and may only follow them. A state file that
+    /// cannot be written only costs the next build its reuse (logged, and
+    /// kept for [`DatasetGraph::store_again`]).
     pub fn commit(&mut self, job: &Job<'_>, build: &mut DatasetBuild) -> Written {
         let d = job.dataset;
         let t = Instant::now();
-        let stale: Vec<Rendered> = build
+        let cache = self.options.cache;
+        let mut pending = if cache {
+            std::mem::take(&mut build.pending)
+        } else {
+            Pending::default()
+        };
+        let stale: Vec<(&Path, &[u8])> = build
             .outputs
             .iter()
             .filter(|o| o.stale())
-            .filter_map(|o| {
-                o.bytes.as_ref().map(|bytes| Rendered {
-                    path: o.path.clone(),
-                    bytes: bytes.clone(),
-                })
-            })
+            .filter_map(|o| o.bytes.as_deref().map(|bytes| (o.path.as_path(), bytes)))
             .collect();
-        let mut written = pipeline::write_outputs(&stale);
+        let (mut written, stored) =
+            pipeline::write_files_beside(&stale, || store_warm_start(d, &pending));
         for o in build.outputs.iter().filter(|o| !o.stale()) {
             written.unchanged.push(o.path.clone());
         }
@@ -456,19 +460,26 @@ impl DatasetGraph {
                 .stages
                 .record_output(&d.name, Stage::Write, output, wrote, ms, note);
         }
-        if !self.options.cache {
+        if !cache {
             return written;
         }
-        let pending = std::mem::take(&mut build.pending);
-        if written.failed.is_empty() {
-            self.unstored = None;
-            if let Err(e) = self.store(d, pending) {
+        // Written now: a retry need not write the cache again.
+        pending.constraints = None;
+        match stored {
+            Err(e) => {
+                // The manifest may not vouch for a stored layout that is not
+                // there: both wait for the retry.
                 tracing::warn!(dataset = %d.name, error = %e, "cannot write the state folder");
+                self.unstored = Some(pending);
             }
-        } else {
+            Ok(()) if written.failed.is_empty() => {
+                self.unstored = None;
+                pending.layout = None;
+                self.store_manifest(d, pending);
+            }
             // The outputs come first: the manifest may not vouch for files
             // that were not written. Kept for the retry that writes them.
-            self.unstored = Some(pending);
+            Ok(()) => self.unstored = Some(pending),
         }
         written
     }
@@ -489,24 +500,20 @@ impl DatasetGraph {
     }
 
     /// Writes a build's state: the stored layout, the constraint cache and
-    /// the manifest. A constraint cache that cannot be written only costs
-    /// the next process its reuse (logged); a stored layout that cannot be
-    /// is kept for a retry with the manifest (which must not vouch for it).
-    fn store(&mut self, d: &DatasetConfig, pending: Pending) -> std::io::Result<()> {
-        if let Some((key, prepared, constraints)) = &pending.constraints {
-            if let Err(e) = state::constraints::write(d, *key, prepared, constraints) {
-                tracing::warn!(dataset = %d.name, error = %e, "cannot cache the constraints");
-            }
+    /// the manifest (the manifest only once the stored layout is written).
+    fn store(&mut self, d: &DatasetConfig, mut pending: Pending) -> std::io::Result<()> {
+        if let Err(e) = store_warm_start(d, &pending) {
+            pending.constraints = None;
+            self.unstored = Some(pending);
+            return Err(e);
         }
-        if let Some((text, _)) = &pending.layout {
-            if let Err(e) = state::layout::write(d, text) {
-                self.unstored = Some(Pending {
-                    constraints: None,
-                    ..pending
-                });
-                return Err(e);
-            }
-        }
+        self.store_manifest(d, pending);
+        Ok(())
+    }
+
+    /// Writes the manifest of `pending`, if any (a manifest that cannot be
+    /// written only costs the next build its reuse: logged).
+    fn store_manifest(&mut self, d: &DatasetConfig, pending: Pending) {
         if let Some(m) = pending.manifest {
             if let Err(e) = manifest::write(d, &m) {
                 tracing::warn!(dataset = %d.name, error = %e, "cannot write the state manifest");
@@ -514,8 +521,22 @@ impl DatasetGraph {
             self.manifest = Some(m);
         }
         self.stored_at = state::layout_path(d);
-        Ok(())
     }
+}
+
+/// Writes the state a next build starts from: the constraint cache (a
+/// failure only costs the next process its reuse: logged) and the stored
+/// layout (a failure is returned: the manifest must wait for it).
+fn store_warm_start(d: &DatasetConfig, pending: &Pending) -> std::io::Result<()> {
+    if let Some((key, prepared, constraints)) = &pending.constraints {
+        if let Err(e) = state::constraints::write(d, *key, prepared, constraints) {
+            tracing::warn!(dataset = %d.name, error = %e, "cannot cache the constraints");
+        }
+    }
+    if let Some((text, _)) = &pending.layout {
+        state::layout::write(d, text)?;
+    }
+    Ok(())
 }
 
 /// An output's path as `-v` names it: relative to the config's folder, as

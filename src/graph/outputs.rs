@@ -92,7 +92,7 @@ impl DatasetGraph {
                         let c = self.parts.cell_counts();
                         note += &format!("; cells: {} written, {} reused", c.written, c.reused);
                     }
-                    if out.kind() == render::OutputKind::Json && self.parts.node_lines().is_some() {
+                    if out.kind() == render::OutputKind::Json && self.parts.documents().lines().is_some() {
                         let l = self.parts.line_counts();
                         note += &format!("; node lines: {} written, {} reused", l.written, l.reused);
                     }
@@ -196,11 +196,11 @@ impl DatasetGraph {
 }
 
 /// Renders `outputs` of one layout at once, each with the milliseconds it
-/// took: the picture's SVG text, which the SVG and the PNG both draw, beside
-/// the outputs that do not show it (the page, the layout JSON), then the
-/// pictures from that text. The bytes are those of rendering them one by
-/// one; only the order of the work changes. The SVG text's time counts
-/// towards the first picture.
+/// took: the picture's SVG text and then the outputs that draw it (the SVG,
+/// the PNG) beside the outputs that do not show it (the page, the layout
+/// JSON), so a picture's painting never waits for the page or the JSON. The
+/// bytes are those of rendering them one by one; only the order of the work
+/// changes. The SVG text's time counts towards the first picture.
 fn render_in_parallel(
     computed: &Computed,
     style: &Style,
@@ -209,6 +209,7 @@ fn render_in_parallel(
     parts: &render::Parts,
 ) -> Result<Vec<(Vec<u8>, f64)>, BuildError> {
     use rayon::prelude::*;
+    type Drawn = Result<Vec<(usize, (Vec<u8>, f64))>, BuildError>;
     let pictured = |out: &OutputConfig| out.kind().draws_picture();
     let styled = outputs.iter().position(|o| o.kind().styled());
     let t = Instant::now();
@@ -225,34 +226,39 @@ fn render_in_parallel(
         pipeline::render_output(computed, style, out, past, &mut text, parts)
             .map(|b| (b, ms_since(t)))
     };
-    let (text, plain) = rayon::join(
+    let first = outputs.iter().position(|o| pictured(o));
+    let (drawn, plain): (Drawn, Drawn) = rayon::join(
         || {
-            outputs.iter().any(|o| pictured(o)).then(|| {
-                let t = Instant::now();
-                (render::picture_with(computed, style, parts), ms_since(t))
-            })
+            let Some(first) = first else {
+                return Ok(Vec::new());
+            };
+            let t = Instant::now();
+            let text = render::picture_with(computed, style, parts);
+            let picture_ms = ms_since(t);
+            outputs
+                .par_iter()
+                .enumerate()
+                .filter(|(_, out)| pictured(out))
+                .map(|(k, out)| {
+                    let (bytes, ms) = timed(out, Some(text.clone()))?;
+                    Ok((k, (bytes, ms + if k == first { picture_ms } else { 0.0 })))
+                })
+                .collect()
         },
         || {
             outputs
                 .par_iter()
-                .map(|out| (!pictured(out)).then(|| timed(out, None)).transpose())
-                .collect::<Result<Vec<_>, _>>()
+                .enumerate()
+                .filter(|(_, out)| !pictured(out))
+                .map(|(k, out)| Ok((k, timed(out, None)?)))
+                .collect()
         },
     );
-    let first = outputs.iter().position(|o| pictured(o));
-    outputs
-        .par_iter()
-        .zip(plain?)
-        .enumerate()
-        .map(|(k, (out, done))| match (done, &text) {
-            (Some(done), _) => Ok(done),
-            (None, Some((text, picture_ms))) => {
-                let (bytes, ms) = timed(out, Some(text.clone()))?;
-                Ok((bytes, ms + if Some(k) == first { *picture_ms } else { 0.0 }))
-            }
-            (None, None) => timed(out, None),
-        })
-        .enumerate()
-        .map(|(k, done)| done.map(|(b, ms)| (b, ms + if Some(k) == styled { labels_ms } else { 0.0 })))
-        .collect()
+    let mut all: Vec<(usize, (Vec<u8>, f64))> = drawn?;
+    all.extend(plain?);
+    all.sort_by_key(|(k, _)| *k);
+    Ok(all
+        .into_iter()
+        .map(|(k, (bytes, ms))| (bytes, ms + if Some(k) == styled { labels_ms } else { 0.0 }))
+        .collect())
 }
