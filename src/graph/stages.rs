@@ -364,7 +364,7 @@ impl DatasetGraph {
         }
         let (_, laid) = self.slots.layout.last().expect("decided Same: a layout in memory");
         if self.stored_at != state::layout_path(d) {
-            let text = state::layout::text(&laid.computed, self.parts.node_lines());
+            let text = state::layout::text(&laid.computed, Some(self.parts.documents()));
             pending.layout = Some((text, laid.state));
         }
         LayoutOut {
@@ -416,8 +416,11 @@ impl DatasetGraph {
         // The stored layout's text (one thread) beside the labels the
         // pictures will draw (every core): neither waits for the other.
         let pictured = job.dataset.outputs.iter().any(|o| o.kind().styled());
+        // Shared from here on: the stored layout's text keeps its extras
+        // for the `.json` output of this computation.
+        let computed = Arc::new(computed);
         let (text, ()) = rayon::join(
-            || state::layout::text(&computed, self.parts.node_lines()),
+            || state::layout::text(&computed, Some(self.parts.documents())),
             || {
                 if pictured {
                     render::fit_labels(&computed, &job.style, &self.parts);
@@ -428,10 +431,7 @@ impl DatasetGraph {
         if chosen.stored != Some(state) {
             pending.layout = Some((text, state));
         }
-        let laid = Laid {
-            state,
-            computed: Arc::new(computed),
-        };
+        let laid = Laid { state, computed };
         // The layout it replaces becomes history when it differs.
         if let Some((_, last)) = self.slots.layout.take().filter(|(_, l)| l.state != state) {
             self.past.push_back((last.state, last.computed));

@@ -19,8 +19,12 @@
 //! that refines no cell or a handful; full precision is the layout itself,
 //! which passes by construction.
 
+use std::sync::Arc;
+
 use nptreemap_formats::Dataset;
 
+use super::checks::{self, CheckCounts, Checked, Checks, Pass};
+use super::spelled::{exact, spell, Spelled};
 use crate::geom::{cross, shared_edge, ConvexPolygon, Point};
 use crate::layout::{Canvas, Layout};
 
@@ -54,17 +58,6 @@ const LEVELS: u8 = 3;
 /// the bound only keeps a pathological one from looping.
 const MAX_PASSES: usize = 8;
 
-/// One cell as the writer spells it.
-#[derive(Clone, Debug, PartialEq)]
-pub(super) struct Spelled {
-    /// Decimals of its numbers; `None` for full precision.
-    pub(super) places: Option<i32>,
-    /// Its polygon's vertices, rounded (repeated vertices dropped).
-    pub(super) polygon: Vec<Point>,
-    /// Its site, rounded.
-    pub(super) site: Point,
-}
-
 /// The decimals of the base grid for `canvas`: the fewest with a step of at
 /// most [`GRID_SHARE`] of its diagonal.
 pub(super) fn base_places(canvas: Canvas) -> i32 {
@@ -77,56 +70,60 @@ pub(super) fn base_places(canvas: Canvas) -> i32 {
     }
 }
 
-/// `v` rounded to `places` decimals (`None`: as is), never `-0.0`.
-///
-/// Dividing the rounded integer by the power of ten gives the double nearest
-/// to the decimal, so a shortest round-trip printer writes exactly that
-/// decimal (no `0.30000000000000004` tails).
-pub(super) fn round(v: f64, places: Option<i32>) -> f64 {
-    let Some(places) = places else {
-        return v + 0.0;
-    };
-    let scale = 10f64.powi(places);
-    let r = (v * scale).round() / scale;
-    // `+ 0.0` turns -0.0 into 0.0 (IEEE: -0 + +0 = +0).
-    if r.is_finite() {
-        r + 0.0
-    } else {
-        v + 0.0
-    }
-}
-
-/// Every cell of `layout` spelled in full precision (the stored state).
-pub(super) fn exact(layout: &Layout) -> Vec<Spelled> {
-    layout
-        .cells
-        .iter()
-        .map(|c| spell(&c.polygon, c.site, None))
-        .collect()
-}
-
 /// Every cell of `layout` (indexed like `dataset`'s nodes) spelled on the
 /// coarsest grid, from [`base_places`], under which the rounded document keeps
 /// every rule of the checker with ten times its margin; `pairs` are the
-/// constraints `(a, b, realized)` whose flags must survive.
+/// constraints `(a, b, realized)` whose flags must survive. With `memo`,
+/// the rules of cells spelled as in the last choice are taken over from it
+/// (`super::checks`); the choice is the same.
 pub(super) fn choose(
     dataset: &Dataset,
     layout: &Layout,
     pairs: &[(usize, usize, bool)],
-) -> Vec<Spelled> {
+    memo: Option<&Checks>,
+) -> Arc<Vec<Spelled>> {
+    let parents: Vec<Option<usize>> = dataset.nodes().iter().map(|n| n.parent).collect();
+    let last = memo.and_then(|m| m.take(&parents, pairs));
+    let mut checked = Checked {
+        parents,
+        pairs: pairs.to_vec(),
+        passes: Vec::new(),
+        counts: CheckCounts::default(),
+    };
+    let chosen = choose_passes(dataset, layout, pairs, last, &mut checked);
+    if let Some(memo) = memo {
+        memo.keep(checked);
+    }
+    chosen
+}
+
+/// The passes of [`choose`], each kept in `checked`.
+fn choose_passes(
+    dataset: &Dataset,
+    layout: &Layout,
+    pairs: &[(usize, usize, bool)],
+    last: Option<Checked>,
+    checked: &mut Checked,
+) -> Arc<Vec<Spelled>> {
     let base = base_places(layout.canvas);
     let n = layout.cells.len();
     let mut level = vec![0u8; n];
     let chain = chain_tops(dataset);
     let places_of = |l: u8| (l + 1 < LEVELS).then(|| base + REFINE_STEP * i32::from(l));
-    for _ in 0..MAX_PASSES {
-        let cells: Vec<Spelled> = layout
-            .cells
-            .iter()
-            .zip(&level)
-            .map(|(c, &l)| spell(&c.polygon, c.site, places_of(l)))
-            .collect();
-        let failing = failing(dataset, &cells, pairs);
+    for k in 0..MAX_PASSES {
+        let cells: Arc<Vec<Spelled>> = Arc::new(
+            layout
+                .cells
+                .iter()
+                .zip(&level)
+                .map(|(c, &l)| spell(&c.polygon, c.site, places_of(l)))
+                .collect(),
+        );
+        let before = last.as_ref().and_then(|l| l.passes.get(k));
+        let pass = check(dataset, cells, pairs, before, &mut checked.counts);
+        let failing = failing(dataset, &pass, pairs);
+        let cells = Arc::clone(&pass.cells);
+        checked.passes.push(pass);
         if failing.is_empty() {
             return cells;
         }
@@ -153,7 +150,7 @@ pub(super) fn choose(
             return cells;
         }
     }
-    exact(layout)
+    Arc::new(exact(layout))
 }
 
 /// Per node, the highest node of the chain of only children it belongs to
@@ -171,81 +168,190 @@ fn chain_tops(dataset: &Dataset) -> Vec<usize> {
     top
 }
 
-fn spell(polygon: &ConvexPolygon, site: Point, places: Option<i32>) -> Spelled {
-    let r = |p: Point| Point::new(round(p.x, places), round(p.y, places));
-    let mut points: Vec<Point> = Vec::with_capacity(polygon.len());
-    for p in polygon.points() {
-        let q = r(*p);
-        if points.last() != Some(&q) {
-            points.push(q);
+/// Every rule's outcome on the rounded `cells`: those of `last` (the same
+/// pass of the last choice) where the rule names no cell spelled
+/// differently and the diagonal is the same, the others checked.
+fn check(
+    dataset: &Dataset,
+    cells: Arc<Vec<Spelled>>,
+    pairs: &[(usize, usize, bool)],
+    last: Option<&Pass>,
+    counts: &mut CheckCounts,
+) -> Pass {
+    let n = cells.len();
+    let mut changed = checks::changed(&cells, last);
+    // Rule 1 and the boxes: each changed cell's rounded polygon.
+    let mut polygons: Vec<Option<Option<ConvexPolygon>>> = vec![None; n];
+    let mut boxes: Vec<Option<(Point, Point)>> = Vec::with_capacity(n);
+    for i in 0..n {
+        boxes.push(match last {
+            Some(l) if !changed[i] => l.boxes[i],
+            _ => {
+                let p = polygon(&cells[i]);
+                let b = p.as_ref().map(|p| p.bbox());
+                polygons[i] = Some(p);
+                b
+            }
+        });
+    }
+    let diagonal = checks::diagonal(&boxes);
+    let last = last.filter(|l| l.diagonal.to_bits() == diagonal.to_bits());
+    if last.is_none() {
+        changed.fill(true);
+    }
+    let family_again: Vec<bool> = dataset
+        .nodes()
+        .iter()
+        .enumerate()
+        .map(|(p, node)| {
+            !node.children.is_empty() && (changed[p] || node.children.iter().any(|&c| changed[c]))
+        })
+        .collect();
+    let pair_again: Vec<bool> = pairs
+        .iter()
+        .map(|&(a, b, _)| changed[a] || changed[b])
+        .collect();
+    // Every polygon those rules name (an unchanged member of a family or
+    // pair checked again too).
+    for (p, node) in dataset.nodes().iter().enumerate() {
+        if family_again[p] {
+            for i in std::iter::once(p).chain(node.children.iter().copied()) {
+                polygons[i].get_or_insert_with(|| polygon(&cells[i]));
+            }
         }
     }
-    while points.len() > 1 && points.first() == points.last() {
-        points.pop();
+    for (&(a, b, _), &again) in pairs.iter().zip(&pair_again) {
+        if again {
+            for i in [a, b] {
+                polygons[i].get_or_insert_with(|| polygon(&cells[i]));
+            }
+        }
     }
-    Spelled {
-        places,
-        polygon: points,
-        site: r(site),
+    let polygons: Vec<Option<&ConvexPolygon>> = polygons
+        .iter()
+        .map(|p| p.as_ref().and_then(|p| p.as_ref()))
+        .collect();
+    let mut rounded = Rounded {
+        polygons: &polygons,
+        diagonal,
+        last,
+        counts,
+    };
+    let family_bad = rounded.families(dataset, &family_again);
+    let pair_bad = rounded.contacts(pairs, &pair_again);
+    Pass {
+        cells,
+        boxes,
+        diagonal,
+        family_bad,
+        pair_bad,
     }
 }
 
-/// The cells that take part in a rule the rounded `cells` break.
-fn failing(dataset: &Dataset, cells: &[Spelled], pairs: &[(usize, usize, bool)]) -> Vec<usize> {
-    let mut bad = vec![false; cells.len()];
-    // Rule 1: each ring turns one way, once, with positive area.
-    let polygons: Vec<Option<ConvexPolygon>> = cells
-        .iter()
-        .map(|c| {
-            ring_ok(&c.polygon)
-                .then(|| ConvexPolygon::new(c.polygon.clone()).ok())
-                .flatten()
-        })
-        .collect();
-    for (i, p) in polygons.iter().enumerate() {
-        if p.is_none() && cells[i].places.is_some() {
-            bad[i] = true;
+/// The rounded cells a pass checks its rules on, with the last choice's
+/// same pass to take outcomes over from.
+struct Rounded<'a> {
+    /// Per cell, its rounded polygon where a rule to check names it (`None`
+    /// also when the ring breaks rule 1).
+    polygons: &'a [Option<&'a ConvexPolygon>],
+    diagonal: f64,
+    last: Option<&'a Pass>,
+    counts: &'a mut CheckCounts,
+}
+
+impl Rounded<'_> {
+    /// Rules 2-4 per family (containment, partition, overlap): checked where
+    /// `again`, else the outcome of `last`.
+    fn families(&mut self, dataset: &Dataset, again: &[bool]) -> Vec<bool> {
+        dataset
+            .nodes()
+            .iter()
+            .enumerate()
+            .map(|(parent, node)| {
+                if node.children.is_empty() {
+                    return false;
+                }
+                let kept = |l: &Pass| l.family_bad[parent];
+                self.outcome(again[parent], kept, |polygons, diagonal| {
+                    let children: Option<Vec<&ConvexPolygon>> =
+                        node.children.iter().map(|&c| polygons[c]).collect();
+                    match (polygons[parent], children) {
+                        (Some(outer), Some(children)) => !family_ok(outer, &children, diagonal),
+                        _ => true,
+                    }
+                })
+            })
+            .collect()
+    }
+
+    /// A rule's outcome: `kept` of the last choice's pass unless `again`,
+    /// else `check`ed on the rounded polygons and diagonal; counted.
+    fn outcome(
+        &mut self,
+        again: bool,
+        kept: impl FnOnce(&Pass) -> bool,
+        check: impl FnOnce(&[Option<&ConvexPolygon>], f64) -> bool,
+    ) -> bool {
+        if again {
+            self.counts.checked += 1;
+            check(self.polygons, self.diagonal)
+        } else {
+            self.counts.kept += 1;
+            self.last.is_some_and(kept)
         }
     }
-    let diagonal = shared_edge::extent_diagonal(polygons.iter().flatten()).unwrap_or(1.0);
-    // Rules 2-4, per family: containment, partition, overlap.
+
+    /// Rule 5 per constraint pair: whether its `realized` flag disagrees with
+    /// the rounded cells; checked where `again`, else the outcome of `last`.
+    fn contacts(&mut self, pairs: &[(usize, usize, bool)], again: &[bool]) -> Vec<bool> {
+        let tol = shared_edge::PERPENDICULAR_TOL * self.diagonal;
+        let threshold = shared_edge::MIN_SHARED * self.diagonal;
+        pairs
+            .iter()
+            .zip(again)
+            .enumerate()
+            .map(|(k, (&(a, b, realized), &again))| {
+                self.outcome(
+                    again,
+                    |l| l.pair_bad[k],
+                    |polygons, _| {
+                        let agrees = match (polygons[a], polygons[b]) {
+                            (Some(pa), Some(pb)) => {
+                                let shared = shared_edge::shared_length(pa, pb, tol);
+                                if realized {
+                                    shared >= threshold * (1.0 + CONTACT_BAND)
+                                } else {
+                                    shared < threshold * (1.0 - CONTACT_BAND)
+                                }
+                            }
+                            _ => false,
+                        };
+                        !agrees
+                    },
+                )
+            })
+            .collect()
+    }
+}
+
+/// The cells that take part in a rule the rounded cells of `pass` break.
+fn failing(dataset: &Dataset, pass: &Pass, pairs: &[(usize, usize, bool)]) -> Vec<usize> {
+    let mut bad: Vec<bool> = pass
+        .boxes
+        .iter()
+        .zip(pass.cells.iter())
+        .map(|(b, c)| b.is_none() && c.places.is_some())
+        .collect();
     for (parent, node) in dataset.nodes().iter().enumerate() {
-        if node.children.is_empty() {
-            continue;
-        }
-        let family_bad = match (
-            &polygons[parent],
-            node.children
-                .iter()
-                .map(|&c| polygons[c].as_ref())
-                .collect::<Option<Vec<_>>>(),
-        ) {
-            (Some(outer), Some(children)) => !family_ok(outer, &children, diagonal),
-            _ => true,
-        };
-        if family_bad {
+        if pass.family_bad[parent] {
             bad[parent] = true;
             for &c in &node.children {
                 bad[c] = true;
             }
         }
     }
-    // Rule 5: every `realized` flag agrees with the rounded cells.
-    let tol = shared_edge::PERPENDICULAR_TOL * diagonal;
-    let threshold = shared_edge::MIN_SHARED * diagonal;
-    for &(a, b, realized) in pairs {
-        let agrees = match (&polygons[a], &polygons[b]) {
-            (Some(pa), Some(pb)) => {
-                let shared = shared_edge::shared_length(pa, pb, tol);
-                if realized {
-                    shared >= threshold * (1.0 + CONTACT_BAND)
-                } else {
-                    shared < threshold * (1.0 - CONTACT_BAND)
-                }
-            }
-            _ => false,
-        };
-        if !agrees {
+    for (&(a, b, _), &pair_bad) in pairs.iter().zip(&pass.pair_bad) {
+        if pair_bad {
             bad[a] = true;
             bad[b] = true;
         }
@@ -257,9 +363,17 @@ fn failing(dataset: &Dataset, cells: &[Spelled], pairs: &[(usize, usize, bool)])
         .collect()
 }
 
+/// The rounded polygon of a spelled cell, `None` when its ring breaks
+/// rule 1 (see [`ring_ok`]).
+fn polygon(cell: &Spelled) -> Option<ConvexPolygon> {
+    ring_ok(&cell.polygon)
+        .then(|| ConvexPolygon::new(cell.polygon.clone()).ok())
+        .flatten()
+}
+
 /// A ring both checkers take as convex: at least three vertices, every turn
 /// to the left or straight ahead (never back), winding once, positive area.
-fn ring_ok(points: &[Point]) -> bool {
+pub(super) fn ring_ok(points: &[Point]) -> bool {
     let n = points.len();
     if n < 3 {
         return false;
@@ -345,6 +459,104 @@ fn overlap(a: &ConvexPolygon, b: &ConvexPolygon) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::layout::LayoutCell;
+    use nptreemap_formats::{DatasetBuilder, NodeSpec};
+
+    /// A 1000 × 1000 canvas: `A` below (`A1` left of `split`, `A2` right),
+    /// `B` a strip `h` tall along the top (`B1`, `B2` its halves). A strip
+    /// thinner than the base grid's step rounds flat, so its family needs
+    /// a second pass on a finer grid.
+    fn strips(split: f64, h: f64) -> (Dataset, Layout) {
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("root"));
+        for (id, parent) in [("A", "root"), ("B", "root"), ("A1", "A"), ("A2", "A")] {
+            b.add(NodeSpec::new(id).parent(parent));
+        }
+        for id in ["B1", "B2"] {
+            b.add(NodeSpec::new(id).parent("B").weight(1.0));
+        }
+        let dataset = b.build().expect("valid");
+        let top = 1000.0 - h;
+        let rect = |id: &str| match id {
+            "root" => (0.0, 0.0, 1000.0, 1000.0),
+            "A" => (0.0, 0.0, 1000.0, top),
+            "A1" => (0.0, 0.0, split, top),
+            "A2" => (split, 0.0, 1000.0 - split, top),
+            "B" => (0.0, top, 1000.0, h),
+            "B1" => (0.0, top, 500.0, h),
+            _ => (500.0, top, 500.0, h),
+        };
+        let cells = dataset
+            .nodes()
+            .iter()
+            .map(|node| {
+                let (x, y, w, h) = rect(&node.id);
+                let polygon = ConvexPolygon::rectangle(x, y, w, h).expect("rectangle");
+                LayoutCell {
+                    site: polygon.centroid(),
+                    power_weight: 0.0,
+                    polygon,
+                }
+            })
+            .collect();
+        let canvas = Canvas {
+            width: 1000.0,
+            height: 1000.0,
+        };
+        (dataset, Layout { canvas, cells })
+    }
+
+    /// Issue 32, item 2: a choice that takes over the last choice's checks
+    /// spells every cell as a fresh choice does, across edits that move a
+    /// cell, that make a strip need the finer grid and that undo it, and
+    /// checks again only the rules of the cells that moved.
+    #[test]
+    fn kept_checks_choose_as_a_fresh_check() {
+        let memo = Checks::default();
+        let pairs_of = |d: &Dataset| {
+            let f = |id: &str| d.find(id).expect("node");
+            vec![
+                (f("A1"), f("A2"), true),
+                (f("A1"), f("B1"), true),
+                (f("A2"), f("B1"), true),
+                (f("A1"), f("B2"), false),
+            ]
+        };
+        let mut kept_any = false;
+        for (split, h) in [
+            (400.0, 3e-5),
+            (400.5, 3e-5),
+            (400.5, 0.25),
+            (400.5, 3e-5),
+            (400.5, 3e-5),
+        ] {
+            let (dataset, layout) = strips(split, h);
+            let pairs = pairs_of(&dataset);
+            let fresh = choose(&dataset, &layout, &pairs, None);
+            let kept = choose(&dataset, &layout, &pairs, Some(&memo));
+            assert_eq!(kept, fresh, "split {split}, h {h}");
+            let refined = fresh.iter().filter(|c| c.places != Some(4)).count();
+            assert_eq!(
+                refined > 0,
+                h < 1e-4,
+                "a strip under the grid step is refined"
+            );
+            let counts = memo.counts();
+            kept_any |= counts.kept > 0;
+        }
+        assert!(kept_any);
+        // The last two choices are of the same layout: nothing is checked.
+        assert_eq!(memo.counts().checked, 0);
+        assert!(
+            memo.counts().kept >= 2 * 2 + 2 * 4,
+            "two passes of 2 families and 4 pairs"
+        );
+        // One moved cell: only the rules naming it are checked again.
+        let (dataset, layout) = strips(401.0, 3e-5);
+        choose(&dataset, &layout, &pairs_of(&dataset), Some(&memo));
+        let counts = memo.counts();
+        assert!(counts.checked > 0 && counts.kept > 0, "{counts:?}");
+    }
 
     #[test]
     fn the_grid_follows_the_canvas() {
@@ -361,15 +573,6 @@ mod tests {
             let diagonal = Point::new(w, h).length();
             assert!(step <= 1e-7 * diagonal && step * 10.0 > 1e-7 * diagonal);
         }
-    }
-
-    #[test]
-    fn rounding_is_to_decimals_and_never_negative_zero() {
-        assert_eq!(round(1.0 / 3.0, Some(4)), 0.3333);
-        assert_eq!(round(-1e-9, Some(4)).to_string(), "0");
-        assert_eq!(round(-0.0, None).to_string(), "0");
-        assert_eq!(round(0.1 + 0.2, Some(4)), 0.3);
-        assert_eq!(round(1.0 / 3.0, None), 1.0 / 3.0);
     }
 
     #[test]

@@ -12,8 +12,12 @@ use serde::{Serialize, Serializer};
 
 use rayon::prelude::*;
 
+use std::sync::Arc;
+
 use super::extras::JsonExtras;
 use super::precision;
+use super::spelled;
+use super::DocumentMemo;
 use super::FORMAT;
 use crate::geom::Point;
 use crate::layout::{Layout, ZeroItems};
@@ -35,26 +39,40 @@ pub fn layout_json(dataset: &Dataset, layout: &Layout, extra: &JsonExtras) -> St
     layout_json_with(dataset, layout, extra, None)
 }
 
-/// [`layout_json`] taking the node lines it can from `lines` (the lines of
-/// the documents written before, [`LineMemo`]) and keeping those it
-/// writes there; the bytes are the same.
+/// [`layout_json`] with the memo of the documents written before
+/// ([`DocumentMemo`]): the node lines it can take from there are taken, and
+/// the precision choice takes over the checks of cells spelled as before;
+/// the bytes are the same.
 pub fn layout_json_with(
     dataset: &Dataset,
     layout: &Layout,
     extra: &JsonExtras,
-    lines: Option<&LineMemo>,
+    memo: Option<&DocumentMemo>,
+) -> String {
+    write_document(dataset, layout, extra, extra.exact, memo)
+}
+
+/// [`layout_json_with`], in full precision when `exact` whatever
+/// `extra.exact` says (the stored layout shares the output's extras).
+pub(super) fn write_document(
+    dataset: &Dataset,
+    layout: &Layout,
+    extra: &JsonExtras,
+    exact: bool,
+    memo: Option<&DocumentMemo>,
 ) -> String {
     debug_assert_eq!(dataset.len(), layout.cells.len(), "one cell per node");
-    let spelled = if extra.exact {
-        precision::exact(layout)
+    let spelled = if exact {
+        Arc::new(spelled::exact(layout))
     } else {
         let pairs: Vec<(usize, usize, bool)> = extra
             .constraints
             .iter()
             .filter_map(|c| Some((dataset.find(&c.a)?, dataset.find(&c.b)?, c.realized)))
             .collect();
-        precision::choose(dataset, layout, &pairs)
+        precision::choose(dataset, layout, &pairs, memo.map(|m| &m.checks))
     };
+    let lines = memo.and_then(DocumentMemo::lines);
     // About what a node and a constraint take (a 6,000-leaf tree: 16 MB
     // for 38,629 nodes and 27,000 constraints), so the text grows rarely.
     let mut out =
@@ -71,7 +89,7 @@ pub fn layout_json_with(
         .nodes()
         .par_iter()
         .zip(&layout.cells)
-        .zip(&spelled)
+        .zip(spelled.par_iter())
         .enumerate()
         .map(|(index, ((node, cell), spelled))| {
             let only_child = node
@@ -92,12 +110,12 @@ pub fn layout_json_with(
                 is_virtual: node.is_virtual,
                 site: point(spelled.site),
                 power_weight: (!only_child)
-                    .then(|| Num(precision::round(cell.power_weight, spelled.places))),
+                    .then(|| Num(spelled::round(cell.power_weight, spelled.places))),
                 polygon: Points(&spelled.polygon),
             }
         });
     match lines {
-        Some(lines) => push_nodes(&mut out, nodes.collect(), extra.exact, lines),
+        Some(lines) => push_nodes(&mut out, nodes.collect(), exact, lines),
         None => {
             let nodes: Vec<NodeOut<'_>> = nodes.collect();
             push_array(&mut out, "nodes", nodes.iter());
@@ -109,7 +127,7 @@ pub fn layout_json_with(
     let constraints = extra.constraints.iter().map(|c| ConstraintRow {
         a: &c.a,
         b: &c.b,
-        similarity: Num(precision::round(c.similarity, Some(SIMILARITY_DECIMALS))),
+        similarity: Num(spelled::round(c.similarity, Some(SIMILARITY_DECIMALS))),
         strength: c.strength,
         realized: c.realized,
         also_above: (c.also_above > 0).then_some(c.also_above),
@@ -384,7 +402,8 @@ mod tests {
     #[test]
     fn node_lines_from_the_last_document_give_the_same_bytes() {
         let (dataset, layout) = sample();
-        let lines = LineMemo::new();
+        let memo = DocumentMemo::with_lines();
+        let lines = &memo.lines;
         for exact in [false, true] {
             let extra = JsonExtras {
                 exact,
@@ -392,7 +411,7 @@ mod tests {
             };
             let plain = layout_json(&dataset, &layout, &extra);
             assert_eq!(
-                layout_json_with(&dataset, &layout, &extra, Some(&lines)),
+                layout_json_with(&dataset, &layout, &extra, Some(&memo)),
                 plain
             );
         }
@@ -404,7 +423,7 @@ mod tests {
         moved.cells[leaf].site = Point::new(moved.cells[leaf].site.x + 1.0, 199.0);
         let extra = JsonExtras::default();
         assert_eq!(
-            layout_json_with(&dataset, &moved, &extra, Some(&lines)),
+            layout_json_with(&dataset, &moved, &extra, Some(&memo)),
             layout_json(&dataset, &moved, &extra)
         );
         assert_eq!(

@@ -126,7 +126,7 @@ impl OutputKind {
                 });
             }
             OutputKind::Json => {
-                crate::layout_json::document_with(computed, parts.node_lines()).into_bytes()
+                crate::layout_json::document_with(computed, Some(parts.documents())).into_bytes()
             }
             OutputKind::Html => html_page_with_parts(computed, style, past, parts).into_bytes(),
         })

@@ -119,8 +119,9 @@ impl LabelKey {
 #[derive(Debug, Default)]
 pub struct Parts {
     labels: Mutex<Generations>,
-    /// The layout JSON's node lines (the output's and the stored layout's).
-    lines: crate::line_memo::LineMemo,
+    /// The layout JSON's memo (the output's and the stored layout's): node
+    /// lines, precision checks, extras.
+    documents: crate::layout_json::DocumentMemo,
     /// The SVG's cell elements (the picture's and the page's picture's).
     cells: crate::line_memo::LineMemo,
     /// Renders started ([`Parts::next_render`]).
@@ -177,10 +178,14 @@ impl Parts {
         g.previous = std::mem::take(&mut g.current);
         g.reused = 0;
         g.fitted = 0;
-        self.lines.next_build();
+        self.documents.next_build();
         self.cells.next_build();
-        self.renders
+        let renders = self
+            .renders
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        if renders >= 1 {
+            self.documents.keep_lines();
+        }
         #[cfg(feature = "png")]
         {
             let mut p = self.pictures();
@@ -211,16 +216,17 @@ impl Parts {
         Ok(bytes)
     }
 
-    /// The layout JSON's node lines of this render and the last, from the
-    /// second render on: the first render of a process (every one-shot
-    /// build) has none to find, and keeping its lines would cost it a
-    /// third of the documents' time for nothing.
-    pub fn node_lines(&self) -> Option<&crate::line_memo::LineMemo> {
-        (self.renders.load(std::sync::atomic::Ordering::Relaxed) > 1).then_some(&self.lines)
+    /// The layout JSON's memo: its node lines of this render and the last
+    /// from the second render on (the first render of a process, every
+    /// one-shot build, has none to find, and keeping its lines would cost
+    /// it a third of the documents' time for nothing), its precision checks
+    /// and this render's extras always.
+    pub fn documents(&self) -> &crate::layout_json::DocumentMemo {
+        &self.documents
     }
 
     /// The SVG's cell elements of this render and the last, from the second
-    /// render on (as [`Parts::node_lines`]).
+    /// render on (as the node lines of [`Parts::documents`]).
     pub fn cell_lines(&self) -> Option<&crate::line_memo::LineMemo> {
         (self.renders.load(std::sync::atomic::Ordering::Relaxed) > 1).then_some(&self.cells)
     }
@@ -232,7 +238,7 @@ impl Parts {
 
     /// How many node lines the layout JSON of this render wrote and found.
     pub fn line_counts(&self) -> crate::line_memo::LineCounts {
-        self.lines.counts()
+        self.documents.lines.counts()
     }
 
     /// The band counts of the PNGs of the render under way.
@@ -369,9 +375,9 @@ mod tests {
     fn node_lines_are_kept_from_the_second_render() {
         let parts = Parts::new();
         parts.next_render();
-        assert!(parts.node_lines().is_none());
+        assert!(parts.documents().lines().is_none());
         parts.next_render();
-        assert!(parts.node_lines().is_some());
+        assert!(parts.documents().lines().is_some());
     }
 
     #[test]

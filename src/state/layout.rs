@@ -67,8 +67,8 @@ const SETTINGS_FIELD: &str = "\"nptreemap_settings\": \"";
 
 /// The stored layout's text for a computation: layout JSON in full
 /// precision, with the fingerprint of its layout settings as the first field.
-pub fn text(computed: &Computed, lines: Option<&crate::line_memo::LineMemo>) -> String {
-    let doc = layout_json::state_with(computed, lines);
+pub fn text(computed: &Arc<Computed>, memo: Option<&layout_json::DocumentMemo>) -> String {
+    let doc = layout_json::state_with(computed, memo);
     let key = manifest::settings_key(&computed.settings);
     match doc.strip_prefix("{\n") {
         Some(rest) => format!("{{\n  {SETTINGS_FIELD}{key}\",\n{rest}"),
@@ -105,7 +105,7 @@ mod tests {
         for (id, w) in [("a", 1.0), ("b", 2.0)] {
             b.add(NodeSpec::new(id).parent("r").weight(w));
         }
-        let computed = compute(&b.build().expect("valid"), &Request::default()).expect("layout");
+        let computed = Arc::new(compute(&b.build().expect("valid"), &Request::default()).expect("layout"));
         let text = text(&computed, None);
         assert_eq!(
             settings_of(&text),
