@@ -318,12 +318,20 @@ impl Remembered {
         let realized = (build.constraints > 0).then_some((build.realized, build.constraints));
         // How far the cells moved from the layout the warm start began with
         // (cheap next to the layout: one pass over the leaves and the
-        // realised pairs).
-        let stability = match (&build.started_from, &build.computed) {
-            (Some(before), Some(after)) => Some(stability(before, after)),
-            _ => None,
-        };
-        let written = self.graph.commit(&graph_job, &mut build);
+        // realised pairs), figured on a thread of its own while the outputs
+        // are written (the commit keeps to this one: it takes the write
+        // lock).
+        let moved = (build.started_from.clone(), build.computed.clone());
+        let (stability, written) = std::thread::scope(|scope| {
+            let figures = scope.spawn(|| match &moved {
+                (Some(before), Some(after)) => Some(stability(before, after)),
+                _ => None,
+            });
+            let written = self.graph.commit(&graph_job, &mut build);
+            // A panic in the figures is a bug of ours: no figures, not a
+            // lost build.
+            (figures.join().ok().flatten(), written)
+        });
         // Kept for the retry only when some output could not be written.
         self.unwritten = (!written.failed.is_empty()).then(|| {
             build

@@ -10,7 +10,7 @@ use std::time::Instant;
 use nptreemap_formats::Dataset;
 
 use super::memo::{ms_since, Cx};
-use super::stages::{output_key, Laid, LayoutKey};
+use super::stages::{output_key, Drawn, Laid, LayoutKey, Target};
 use super::{DatasetGraph, Job, OnDisk, OutputBuild, Stage};
 use crate::config::{DatasetConfig, OutputConfig};
 use crate::fingerprint::Fingerprint;
@@ -21,37 +21,46 @@ use crate::state::manifest::{self, LayoutRecord, Manifest, OutputRecord};
 
 impl DatasetGraph {
     /// Render: each output whose file does not hold its bytes already, all
-    /// of them at once ([`render_in_parallel`]).
-    #[allow(clippy::too_many_arguments)]
+    /// of them at once ([`render_in_parallel`]). Without the layout's
+    /// `state` (its stored text not made yet) no file is taken as current
+    /// and the records' render keys are placeholders the caller replaces.
     pub(super) fn render(
         &self,
-        job: &Job<'_>,
+        target: &Target<'_>,
         style: &Style,
-        key: LayoutKey,
-        laid: &Laid,
-        manifest: &Manifest,
-        disk: &[Option<OnDisk>],
+        computed: &Arc<Computed>,
+        state: Option<Fingerprint>,
+        past: &[(Fingerprint, Arc<Computed>)],
         cx: &mut Cx<'_>,
-    ) -> Result<Vec<(OutputRecord, OutputBuild)>, BuildError> {
+    ) -> Result<Drawn, BuildError> {
+        let Target {
+            job,
+            key,
+            manifest,
+            disk,
+        } = *target;
         let d = job.dataset;
         // The past layouts are one more input of the HTML page's render,
         // keyed by their stored layouts' fingerprints (as the current one
         // is): a page is rendered again when its history changed, and the
         // other outputs, which do not show it, are not.
-        let past: Vec<Arc<Computed>> = self.past.iter().map(|(_, c)| Arc::clone(c)).collect();
-        let past_states: Vec<Fingerprint> = self.past.iter().map(|(s, _)| *s).collect();
+        let past_states: Vec<Fingerprint> = past.iter().map(|(s, _)| *s).collect();
+        let past: Vec<Arc<Computed>> = past.iter().map(|(_, c)| Arc::clone(c)).collect();
         let t = Instant::now();
+        // Without the state, a placeholder the caller replaces.
         let keys: Vec<Fingerprint> = d
             .outputs
             .iter()
-            .map(|out| output_key(key, laid.state, style, out, &past_states))
+            .map(|out| output_key(key, state.unwrap_or(key.inputs), style, out, &past_states))
             .collect();
         let known: Vec<Option<OutputBuild>> = d
             .outputs
             .iter()
             .zip(disk)
             .zip(&keys)
-            .map(|((out, disk), &render_key)| self.known(d, manifest, out, render_key, *disk))
+            .map(|((out, disk), &render_key)| {
+                state.and_then(|_| self.known(d, manifest, out, render_key, *disk))
+            })
             .collect();
         let needed: Vec<&OutputConfig> = d
             .outputs
@@ -61,7 +70,7 @@ impl DatasetGraph {
             .map(|(out, _)| out)
             .collect();
         let mut drawn =
-            render_in_parallel(&laid.computed, style, &needed, &past, &self.parts)?.into_iter();
+            render_in_parallel(computed, style, &needed, &past, &self.parts)?.into_iter();
         let labels = self.parts.counts();
         let mut noted = false;
         #[cfg(feature = "png")]

@@ -16,7 +16,7 @@ use nptreemap_formats::{Dataset, Features};
 
 use super::memo::{ms_since, Cx, Made, Memo};
 use super::start::{self, Chosen, Decision};
-use super::{DatasetBuild, DatasetGraph, Job, LayoutStep, OnDisk, Pending};
+use super::{DatasetBuild, DatasetGraph, Job, LayoutStep, OnDisk, OutputBuild, Pending};
 use super::{Stage, StageReport};
 use crate::config::{DatasetConfig, OutputConfig};
 use crate::fingerprint::{Fingerprint, Fingerprinter};
@@ -26,7 +26,7 @@ use crate::layout::{Computed, LayoutError, Start, ZeroWeights};
 use crate::neighborhood::{build_constraints, prepare, reweigh, Constraint, SimilarityKind};
 use crate::pipeline::{self, BuildError, InputFile};
 use crate::render::{self, Style};
-use crate::state::manifest;
+use crate::state::manifest::{self, Manifest, OutputRecord};
 use crate::state;
 
 /// The memo slots of the stages.
@@ -78,6 +78,28 @@ struct LayoutOut {
     ms: f64,
     started_from: Option<Arc<crate::layout::Previous>>,
 }
+
+/// A layout run before its stored text is made.
+struct Ran {
+    computed: Arc<Computed>,
+    step: LayoutStep,
+    ms: f64,
+    started_from: Option<Arc<crate::layout::Previous>>,
+    /// The state of the stored layout the build found.
+    stored: Option<Fingerprint>,
+}
+
+/// What a build draws for: its job, its layout key, the manifest it found
+/// and the output files on disk.
+pub(super) struct Target<'a> {
+    pub(super) job: &'a Job<'a>,
+    pub(super) key: LayoutKey,
+    pub(super) manifest: &'a Manifest,
+    pub(super) disk: &'a [Option<OnDisk>],
+}
+
+/// Each output's manifest record and build, in config order.
+pub(super) type Drawn = Vec<(OutputRecord, OutputBuild)>;
 
 impl DatasetGraph {
     /// [`DatasetGraph::build`] from files already read: the chain of stages.
@@ -143,21 +165,29 @@ impl DatasetGraph {
             input,
         } = readied;
         let mut notes = Vec::new();
-        let out = match (decision, input) {
+        let target = Target {
+            job,
+            key,
+            manifest: &manifest,
+            disk: &disk,
+        };
+        let (out, outputs) = match (decision, input) {
             (Decision::LayOut(chosen), Some(input)) => {
                 if let Some(warning) = &chosen.warning {
                     // First: it is about the whole run.
                     warnings.insert(0, warning.clone());
                 }
-                self.lay_out_from(job, key, chosen, input, &mut cx, &mut pending, &mut notes)?
+                let ran = self.lay_out_from(job, chosen, input, &mut cx, &mut notes)?;
+                self.draw_ran(&target, &mut style, ran, &mut cx, &mut pending)?
             }
-            _ => self.same(d, &mut cx, &mut pending),
+            _ => {
+                let out = self.same(d, &mut cx, &mut pending);
+                let past = self.past.iter().cloned().collect::<Vec<_>>();
+                let drawn = self.draw(&target, &mut style, (&out.laid.computed, Some(out.laid.state)), &past, &mut cx)?;
+                (out, drawn)
+            }
         };
-        // The colours this build draws with, every group's fixed: recorded,
-        // so the next build keeps them and finds its render keys unchanged.
-        let colors = render::group_colors(&out.laid.computed, &style);
-        style.cells.kept = colors.clone();
-        let outputs = self.render(job, &style, key, &out.laid, &manifest, &disk, &mut cx)?;
+        let colors = style.cells.kept;
         let records = outputs.iter().map(|(r, _)| r.clone()).collect();
         let next = Self::next_manifest(key, &out.laid, &dataset, records, &colors);
         let realized = next.layout.as_ref().map_or(0, |r| r.realized);
@@ -376,17 +406,14 @@ impl DatasetGraph {
     }
 
     /// Layout: a run from the previous layout [`start::decide`] chose.
-    #[allow(clippy::too_many_arguments)]
     fn lay_out_from(
         &mut self,
         job: &Job<'_>,
-        key: LayoutKey,
         chosen: Chosen,
         (input, planned, zero): (Prepared, Plan, Arc<ZeroItems>),
         cx: &mut Cx<'_>,
-        pending: &mut Pending,
         notes: &mut Vec<String>,
-    ) -> Result<LayoutOut, BuildError> {
+    ) -> Result<Ran, BuildError> {
         let mut request = job.request.clone();
         request.previous = chosen.previous;
         let started_from = request.previous.clone();
@@ -413,26 +440,101 @@ impl DatasetGraph {
             LayoutStep::UpToDate => String::new(),
         };
         cx.record(Stage::Layout, step != LayoutStep::Reused, t, note);
-        // The stored layout's text (one thread) beside the labels the
-        // pictures will draw (every core): neither waits for the other.
-        let pictured = job.dataset.outputs.iter().any(|o| o.kind().styled());
-        // Shared from here on: the stored layout's text keeps its extras
-        // for the `.json` output of this computation.
-        let computed = Arc::new(computed);
-        let (text, ()) = rayon::join(
-            || state::layout::text(&computed, Some(self.parts.documents())),
-            || {
-                if pictured {
-                    render::fit_labels(&computed, &job.style, &self.parts);
-                }
-            },
+        Ok(Ran {
+            // Shared from here on: the stored layout's text keeps its
+            // extras for the `.json` output of this computation.
+            computed: Arc::new(computed),
+            step,
+            ms,
+            started_from,
+            stored: chosen.stored,
+        })
+    }
+
+    /// The outputs of a run and its stored layout's text, whose fingerprint
+    /// (the layout's state) names the layout in every render key and in
+    /// the page's history. A run whose cells moved has a new text, so its
+    /// outputs are drawn beside the text (on the other cores) and keyed
+    /// once it is known; should the text be the last layout's after all,
+    /// the page's history is not the one drawn, and they are drawn again.
+    fn draw_ran(
+        &mut self,
+        target: &Target<'_>,
+        style: &mut Style,
+        ran: Ran,
+        cx: &mut Cx<'_>,
+        pending: &mut Pending,
+    ) -> Result<(LayoutOut, Drawn), BuildError> {
+        let computed = Arc::clone(&ran.computed);
+        if ran.step == LayoutStep::Reused {
+            // The labels the pictures will draw (every core) beside the
+            // text (one thread), which decides whether anything is drawn.
+            let pictured = target.job.dataset.outputs.iter().any(|o| o.kind().styled());
+            let (text, ()) = rayon::join(
+                || state::layout::text(&computed, Some(self.parts.documents())),
+                || {
+                    if pictured {
+                        render::fit_labels(&computed, &target.job.style, &self.parts);
+                    }
+                },
+            );
+            let out = self.settle(target.key, ran, text, pending);
+            let past = self.past.iter().cloned().collect::<Vec<_>>();
+            let drawn = self.draw(target, style, (&out.laid.computed, Some(out.laid.state)), &past, cx)?;
+            return Ok((out, drawn));
+        }
+        let last = self.slots.layout.last().map(|(_, l)| l.state);
+        let past = self.past_beside_new();
+        let mut colored = style.clone();
+        let this = &*self;
+        let (text, drawn) = rayon::join(
+            || state::layout::text(&computed, Some(this.parts.documents())),
+            || this.draw(target, &mut colored, (&computed, None), &past, cx),
         );
+        let out = self.settle(target.key, ran, text, pending);
+        if last == Some(out.laid.state) {
+            let past = self.past.iter().cloned().collect::<Vec<_>>();
+            let drawn = self.draw(target, style, (&out.laid.computed, Some(out.laid.state)), &past, cx)?;
+            return Ok((out, drawn));
+        }
+        let mut drawn = drawn?;
+        *style = colored;
+        let past_states: Vec<Fingerprint> = past.iter().map(|(s, _)| *s).collect();
+        for ((record, _), config) in drawn.iter_mut().zip(&target.job.dataset.outputs) {
+            record.render = output_key(target.key, out.laid.state, style, config, &past_states);
+        }
+        Ok((out, drawn))
+    }
+
+    /// The colours a build draws with, every group's fixed (recorded, so
+    /// the next build keeps them and finds its render keys unchanged), and
+    /// its outputs, each drawn or found. A layout without its `state` is
+    /// one whose text is not known yet: every output is drawn, and the
+    /// caller sets the render keys.
+    fn draw(
+        &self,
+        target: &Target<'_>,
+        style: &mut Style,
+        (computed, state): (&Arc<Computed>, Option<Fingerprint>),
+        past: &[(Fingerprint, Arc<Computed>)],
+        cx: &mut Cx<'_>,
+    ) -> Result<Drawn, BuildError> {
+        style.cells.kept = render::group_colors(computed, style);
+        self.render(target, style, computed, state, past, cx)
+    }
+
+    /// What the stored layout's text settles: the layout's state, the text
+    /// to store unless it is stored already, the last layout become history
+    /// when it differs, and the layout slot.
+    fn settle(&mut self, key: LayoutKey, ran: Ran, text: String, pending: &mut Pending) -> LayoutOut {
         let state = Fingerprint::of_bytes(text.as_bytes());
-        if chosen.stored != Some(state) {
+        if ran.stored != Some(state) {
             pending.layout = Some((text, state));
         }
-        let laid = Laid { state, computed };
-        // The layout it replaces becomes history when it differs.
+        let laid = Laid {
+            state,
+            computed: ran.computed,
+        };
         if let Some((_, last)) = self.slots.layout.take().filter(|(_, l)| l.state != state) {
             self.past.push_back((last.state, last.computed));
         }
@@ -440,14 +542,25 @@ impl DatasetGraph {
             self.past.pop_front();
         }
         self.slots.layout.set(key, laid.clone());
-        Ok(LayoutOut {
+        LayoutOut {
             laid,
-            step,
-            ms,
-            started_from,
-        })
+            step: ran.step,
+            ms: ran.ms,
+            started_from: ran.started_from,
+        }
     }
 
+    /// The past layouts as [`DatasetGraph::settle`] leaves them for a
+    /// layout unlike the last one.
+    fn past_beside_new(&self) -> Vec<(Fingerprint, Arc<Computed>)> {
+        let mut past: Vec<_> = self.past.iter().cloned().collect();
+        if let Some((_, last)) = self.slots.layout.last() {
+            past.push((last.state, Arc::clone(&last.computed)));
+        }
+        let over = past.len().saturating_sub(self.history);
+        past.drain(..over);
+        past
+    }
 }
 
 /// A warning per `render.colors` entry that names no top-level group: a
