@@ -558,6 +558,13 @@ pub fn outline(p: &Placed) -> [Point; 4] {
     })
 }
 
+/// The bounding box of a quadrilateral (lowest and highest corner).
+fn quad_box(q: &[Point; 4]) -> (Point, Point) {
+    let lo = q.iter().fold(q[0], |m, p| m.min(*p));
+    let hi = q.iter().fold(q[0], |m, p| m.max(*p));
+    (lo, hi)
+}
+
 /// Whether two convex quadrilaterals overlap (separating axes).
 pub fn quads_overlap(a: &[Point; 4], b: &[Point; 4]) -> bool {
     for poly in [a, b] {
@@ -618,10 +625,14 @@ pub fn place_groups(
             return;
         }
         let block = Block::new(vec![(text.clone(), 1.0)]);
-        let avoid: Vec<[Point; 4]> = leaf_quads
+        // Each with its box: a quad clear of the box is clear of the quad
+        // (the separating axes find the gap the boxes show), and the boxes
+        // reject most of a map's labels in four comparisons.
+        let avoid: Vec<([Point; 4], (Point, Point))> = leaf_quads
             .iter()
             .copied()
             .chain(out.iter().map(outline))
+            .map(|q| (q, quad_box(&q)))
             .collect();
         // A margin around the name (a share of its line height), so a name
         // just above a label does not read as that label's first line.
@@ -635,7 +646,11 @@ pub fn place_groups(
                 y1: p.rect.y1 + pad,
             };
             let quad = outline(&padded);
-            !avoid.iter().any(|a| quads_overlap(a, &quad))
+            let (lo, hi) = quad_box(&quad);
+            !avoid.iter().any(|(a, (alo, ahi))| {
+                let apart = ahi.x < lo.x || hi.x < alo.x || ahi.y < lo.y || hi.y < alo.y;
+                !apart && quads_overlap(a, &quad)
+            })
         };
         let mut placed = lay_out(i, &block, at, size);
         placed.angle = angle;
