@@ -141,13 +141,29 @@ pub(super) fn paint(
         None => (0..count).collect(),
     };
     let pixmap = match last {
-        // A few runs: each painted on a pixmap of the picture's size.
+        // A few bands: in two groups at once (the upper and the lower
+        // half of them), each painted in one pass on a pixmap of the
+        // picture's size, an item meeting several of its bands drawn once.
         Some(p) if 2 * dirty.len() <= count => {
             let mut pixmap = p.pixmap;
-            let mut scratch = tiny_skia::Pixmap::new(w, h)?;
-            for run in runs(&dirty) {
-                frame.run(&mut scratch, run.clone());
-                copy_rows(&scratch, &mut pixmap, rows_of(run, h));
+            let groups: Vec<&[usize]> = match dirty.len() {
+                0 => Vec::new(),
+                1 => vec![&dirty[..]],
+                n => vec![&dirty[..n / 2], &dirty[n / 2..]],
+            };
+            let painted: Vec<Option<tiny_skia::Pixmap>> = groups
+                .par_iter()
+                .map(|group| {
+                    let mut scratch = tiny_skia::Pixmap::new(w, h)?;
+                    frame.run(&mut scratch, group);
+                    Some(scratch)
+                })
+                .collect();
+            for (group, scratch) in groups.iter().zip(painted) {
+                let scratch = scratch?;
+                for run in runs(group) {
+                    copy_rows(&scratch, &mut pixmap, rows_of(run, h));
+                }
             }
             pixmap
         }
@@ -157,7 +173,7 @@ pub(super) fn paint(
                 .par_iter()
                 .map(|half| {
                     let mut pixmap = tiny_skia::Pixmap::new(w, h)?;
-                    frame.run(&mut pixmap, half.clone());
+                    frame.run(&mut pixmap, &half.clone().collect::<Vec<_>>());
                     Some(pixmap)
                 })
                 .collect();
@@ -172,7 +188,7 @@ pub(super) fn paint(
         }
         _ => {
             let mut pixmap = tiny_skia::Pixmap::new(w, h)?;
-            frame.run(&mut pixmap, 0..count);
+            frame.run(&mut pixmap, &(0..count).collect::<Vec<_>>());
             pixmap
         }
     };
@@ -206,20 +222,32 @@ struct Frame<'a> {
 }
 
 impl Frame<'_> {
-    /// Paints onto `pixmap` (the picture's size) the rows of the bands
-    /// `run`: they are cleared, then every document and every item meeting
-    /// them is drawn whole, in paint order.
-    fn run(&self, pixmap: &mut tiny_skia::Pixmap, run: std::ops::Range<usize>) {
+    /// Paints onto `pixmap` (the picture's size) the rows of `bands`
+    /// (ascending): they are cleared, then every document and every item
+    /// meeting any of them is drawn whole, once, in paint order.
+    fn run(&self, pixmap: &mut tiny_skia::Pixmap, bands: &[usize]) {
         debug_assert_eq!((pixmap.width(), pixmap.height()), self.size);
-        let rows = rows_of(run.clone(), self.size.1);
         let stride = self.size.0 as usize * 4;
-        pixmap.data_mut()[rows.start * stride..rows.end * stride].fill(0);
+        for run in runs(bands) {
+            let rows = rows_of(run, self.size.1);
+            pixmap.data_mut()[rows.start * stride..rows.end * stride].fill(0);
+        }
+        // How many of `bands` lie below each band: an item meets one of
+        // them when the count grows across its reach.
+        let count = self.size.1.div_ceil(BAND) as usize;
+        let mut below = vec![0usize; count + 1];
+        for &b in bands {
+            below[b + 1] += 1;
+        }
+        for b in 0..count {
+            below[b + 1] += below[b];
+        }
         for (drawn, reach) in self.layers.iter().zip(self.reach) {
             match drawn {
                 Drawn::Tree(tree, _) => resvg::render(tree, self.scale, &mut pixmap.as_mut()),
                 Drawn::Items(items) => {
                     for (item, r) in items.iter().zip(reach) {
-                        if r.is_some_and(|(first, last)| first < run.end && last >= run.start) {
+                        if r.is_some_and(|(first, last)| below[last + 1] > below[first]) {
                             item.draw(&mut pixmap.as_mut(), self.items);
                         }
                     }
