@@ -63,7 +63,6 @@ pub(super) struct Laid {
     pub(super) computed: Arc<Computed>,
 }
 
-/// What the layout stage hands on.
 /// What [`DatasetGraph::ready`] gives a build: the parsed inputs with their
 /// warnings, and what a layout is made from when the build lays out.
 struct Readied {
@@ -72,6 +71,7 @@ struct Readied {
     input: Option<(Prepared, Plan, Arc<ZeroItems>)>,
 }
 
+/// What the layout stage hands on.
 struct LayoutOut {
     laid: Laid,
     step: LayoutStep,
