@@ -486,6 +486,7 @@ impl DatasetGraph {
         let last = self.slots.layout.last().map(|(_, l)| l.state);
         let past = self.past_beside_new();
         let mut colored = style.clone();
+        let recorded = cx.stages.runs.len();
         let this = &*self;
         let (text, drawn) = rayon::join(
             || state::layout::text(&computed, Some(this.parts.documents())),
@@ -493,6 +494,8 @@ impl DatasetGraph {
         );
         let out = self.settle(target.key, ran, text, pending);
         if last == Some(out.laid.state) {
+            // The report keeps the drawing that counts.
+            cx.stages.runs.truncate(recorded);
             let past = self.past.iter().cloned().collect::<Vec<_>>();
             let drawn = self.draw(target, style, (&out.laid.computed, Some(out.laid.state)), &past, cx)?;
             return Ok((out, drawn));
