@@ -68,6 +68,20 @@ pub struct LayoutCell {
     pub polygon: ConvexPolygon,
 }
 
+#[cfg(test)]
+impl LayoutCell {
+    /// The cell of an axis-aligned rectangle, its site the centroid (test
+    /// fixtures of hand-made layouts).
+    pub(crate) fn rectangle(x: f64, y: f64, w: f64, h: f64) -> LayoutCell {
+        let polygon = ConvexPolygon::rectangle(x, y, w, h).expect("positive rectangle");
+        LayoutCell {
+            site: polygon.centroid(),
+            power_weight: 0.0,
+            polygon,
+        }
+    }
+}
+
 /// A finished layout: one cell per dataset node, indexed like [`Dataset::nodes`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Layout {

@@ -491,12 +491,7 @@ mod tests {
             .iter()
             .map(|node| {
                 let (x, y, w, h) = rect(&node.id);
-                let polygon = ConvexPolygon::rectangle(x, y, w, h).expect("rectangle");
-                LayoutCell {
-                    site: polygon.centroid(),
-                    power_weight: 0.0,
-                    polygon,
-                }
+                LayoutCell::rectangle(x, y, w, h)
             })
             .collect();
         let canvas = Canvas {

@@ -607,21 +607,13 @@ pub fn marks_svg(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom::ConvexPolygon;
     use crate::layout::{Canvas, LayoutCell};
     use crate::render::labels::Line;
 
     /// Three columns a | b | c of a 900 × 300 canvas, and d, a thin strip
     /// under c whose edge with b is 1 unit long.
     fn sample() -> Layout {
-        let rect = |x: f64, y: f64, w: f64, h: f64| {
-            let polygon = ConvexPolygon::rectangle(x, y, w, h).expect("rectangle");
-            LayoutCell {
-                site: polygon.centroid(),
-                power_weight: 0.0,
-                polygon,
-            }
-        };
+        let rect = LayoutCell::rectangle;
         Layout {
             canvas: Canvas {
                 width: 900.0,

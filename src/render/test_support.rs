@@ -6,7 +6,6 @@
 
 use nptreemap_formats::{Dataset, DatasetBuilder, NodeSpec, Rgb};
 
-use crate::geom::ConvexPolygon;
 use crate::layout::{Canvas, Layout, LayoutCell};
 
 /// A 400 × 200 canvas: `A` (left 240 wide, three stacked children, the last only 2
@@ -51,12 +50,7 @@ pub(crate) fn sample() -> (Dataset, Layout) {
         .iter()
         .map(|node| {
             let (x, y, w, h) = rect(&node.id);
-            let polygon = ConvexPolygon::rectangle(x, y, w, h).expect("positive rectangle");
-            LayoutCell {
-                site: polygon.centroid(),
-                power_weight: 0.0,
-                polygon,
-            }
+            LayoutCell::rectangle(x, y, w, h)
         })
         .collect();
     let layout = Layout {
