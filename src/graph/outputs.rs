@@ -10,7 +10,7 @@ use std::time::Instant;
 use nptreemap_formats::Dataset;
 
 use super::memo::{ms_since, Cx};
-use super::stages::{output_key, Drawn, Laid, LayoutKey, Target};
+use super::stages::{output_key, Laid, LayoutKey, Target};
 use super::{DatasetGraph, Job, OnDisk, OutputBuild, Stage};
 use crate::config::{DatasetConfig, OutputConfig};
 use crate::fingerprint::Fingerprint;
@@ -21,45 +21,33 @@ use crate::state::manifest::{self, LayoutRecord, Manifest, OutputRecord};
 
 impl DatasetGraph {
     /// Render: each output whose file does not hold its bytes already, all
-    /// of them at once ([`render_in_parallel`]). Without the layout's
-    /// `state` (its stored text not made yet) no file is taken as current
-    /// and the records' render keys are placeholders the caller replaces.
+    /// of them at once ([`render_in_parallel`]). Without the render `keys`
+    /// (the layout's stored text not made yet) none is taken as current.
     pub(super) fn render(
         &self,
         target: &Target<'_>,
         style: &Style,
         computed: &Arc<Computed>,
-        state: Option<Fingerprint>,
+        keys: Option<&[Fingerprint]>,
         past: &[(Fingerprint, Arc<Computed>)],
         cx: &mut Cx<'_>,
-    ) -> Result<Drawn, BuildError> {
+    ) -> Result<Vec<OutputBuild>, BuildError> {
         let Target {
             job,
-            key,
             manifest,
             disk,
+            ..
         } = *target;
         let d = job.dataset;
-        // The past layouts are one more input of the HTML page's render,
-        // keyed by their stored layouts' fingerprints (as the current one
-        // is): a page is rendered again when its history changed, and the
-        // other outputs, which do not show it, are not.
-        let past_states: Vec<Fingerprint> = past.iter().map(|(s, _)| *s).collect();
         let past: Vec<Arc<Computed>> = past.iter().map(|(_, c)| Arc::clone(c)).collect();
         let t = Instant::now();
-        // Without the state, a placeholder the caller replaces.
-        let keys: Vec<Fingerprint> = d
-            .outputs
-            .iter()
-            .map(|out| output_key(key, state.unwrap_or(key.inputs), style, out, &past_states))
-            .collect();
         let known: Vec<Option<OutputBuild>> = d
             .outputs
             .iter()
             .zip(disk)
-            .zip(&keys)
-            .map(|((out, disk), &render_key)| {
-                state.and_then(|_| self.known(d, manifest, out, render_key, *disk))
+            .enumerate()
+            .map(|(k, (out, disk))| {
+                keys.and_then(|keys| self.known(d, manifest, out, keys[k], *disk))
             })
             .collect();
         let needed: Vec<&OutputConfig> = d
@@ -76,7 +64,7 @@ impl DatasetGraph {
         #[cfg(feature = "png")]
         let mut bands_noted = false;
         let mut outputs = Vec::with_capacity(d.outputs.len());
-        for (((out, disk), render_key), known) in d.outputs.iter().zip(disk).zip(keys).zip(known) {
+        for ((out, disk), known) in d.outputs.iter().zip(disk).zip(known) {
             let shown = super::shown(d, &out.path);
             let built = match known {
                 Some(built) => {
@@ -119,12 +107,7 @@ impl DatasetGraph {
                     OutputBuild::made(out.path.clone(), bytes, *disk)
                 }
             };
-            let record = OutputRecord {
-                path: manifest::relative(d, &out.path),
-                render: render_key,
-                bytes: built.fingerprint,
-            };
-            outputs.push((record, built));
+            outputs.push(built);
         }
         Ok(outputs)
     }

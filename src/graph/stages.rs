@@ -183,7 +183,7 @@ impl DatasetGraph {
             _ => {
                 let out = self.same(d, &mut cx, &mut pending);
                 let past = self.past.iter().cloned().collect::<Vec<_>>();
-                let drawn = self.draw(&target, &mut style, (&out.laid.computed, Some(out.laid.state)), &past, &mut cx)?;
+                let drawn = self.draw(&target, &mut style, &out.laid, &past, &mut cx)?;
                 (out, drawn)
             }
         };
@@ -480,7 +480,7 @@ impl DatasetGraph {
             );
             let out = self.settle(target.key, ran, text, pending);
             let past = self.past.iter().cloned().collect::<Vec<_>>();
-            let drawn = self.draw(target, style, (&out.laid.computed, Some(out.laid.state)), &past, cx)?;
+            let drawn = self.draw(target, style, &out.laid, &past, cx)?;
             return Ok((out, drawn));
         }
         let last = self.slots.layout.last().map(|(_, l)| l.state);
@@ -490,40 +490,40 @@ impl DatasetGraph {
         let this = &*self;
         let (text, drawn) = rayon::join(
             || state::layout::text(&computed, Some(this.parts.documents())),
-            || this.draw(target, &mut colored, (&computed, None), &past, cx),
+            || {
+                colored.cells.kept = render::group_colors(&computed, &colored);
+                this.render(target, &colored, &computed, None, &past, cx)
+            },
         );
         let out = self.settle(target.key, ran, text, pending);
         if last == Some(out.laid.state) {
             // The report keeps the drawing that counts.
             cx.stages.runs.truncate(recorded);
             let past = self.past.iter().cloned().collect::<Vec<_>>();
-            let drawn = self.draw(target, style, (&out.laid.computed, Some(out.laid.state)), &past, cx)?;
+            let drawn = self.draw(target, style, &out.laid, &past, cx)?;
             return Ok((out, drawn));
         }
-        let mut drawn = drawn?;
+        let builds = drawn?;
         *style = colored;
-        let past_states: Vec<Fingerprint> = past.iter().map(|(s, _)| *s).collect();
-        for ((record, _), config) in drawn.iter_mut().zip(&target.job.dataset.outputs) {
-            record.render = output_key(target.key, out.laid.state, style, config, &past_states);
-        }
-        Ok((out, drawn))
+        let keys = render_keys(target, style, out.laid.state, &past);
+        Ok((out, records(target, keys, builds)))
     }
 
     /// The colours a build draws with, every group's fixed (recorded, so
     /// the next build keeps them and finds its render keys unchanged), and
-    /// its outputs, each drawn or found. A layout without its `state` is
-    /// one whose text is not known yet: every output is drawn, and the
-    /// caller sets the render keys.
+    /// its outputs, each drawn or found by its render key.
     fn draw(
         &self,
         target: &Target<'_>,
         style: &mut Style,
-        (computed, state): (&Arc<Computed>, Option<Fingerprint>),
+        laid: &Laid,
         past: &[(Fingerprint, Arc<Computed>)],
         cx: &mut Cx<'_>,
     ) -> Result<Drawn, BuildError> {
-        style.cells.kept = render::group_colors(computed, style);
-        self.render(target, style, computed, state, past, cx)
+        style.cells.kept = render::group_colors(&laid.computed, style);
+        let keys = render_keys(target, style, laid.state, past);
+        let builds = self.render(target, style, &laid.computed, Some(&keys), past, cx)?;
+        Ok(records(target, keys, builds))
     }
 
     /// What the stored layout's text settles: the layout's state, the text
@@ -564,6 +564,46 @@ impl DatasetGraph {
         past.drain(..over);
         past
     }
+}
+
+/// Each output's render key for the layout of `state` drawn with `style`.
+/// The past layouts are one more input of the HTML page's render, keyed by
+/// their stored layouts' fingerprints (as the current one is): a page is
+/// rendered again when its history changed, and the other outputs, which do
+/// not show it, are not.
+fn render_keys(
+    target: &Target<'_>,
+    style: &Style,
+    state: Fingerprint,
+    past: &[(Fingerprint, Arc<Computed>)],
+) -> Vec<Fingerprint> {
+    let past_states: Vec<Fingerprint> = past.iter().map(|(s, _)| *s).collect();
+    target
+        .job
+        .dataset
+        .outputs
+        .iter()
+        .map(|out| output_key(target.key, state, style, out, &past_states))
+        .collect()
+}
+
+/// The manifest's record of each output (its render key and bytes) beside
+/// its build, in config order.
+fn records(target: &Target<'_>, keys: Vec<Fingerprint>, builds: Vec<OutputBuild>) -> Drawn {
+    let d = target.job.dataset;
+    d.outputs
+        .iter()
+        .zip(keys)
+        .zip(builds)
+        .map(|((out, render), built)| {
+            let record = OutputRecord {
+                path: manifest::relative(d, &out.path),
+                render,
+                bytes: built.fingerprint,
+            };
+            (record, built)
+        })
+        .collect()
 }
 
 /// A warning per `render.colors` entry that names no top-level group: a
