@@ -413,11 +413,11 @@ pub fn render_outputs(
     style: &Style,
     outputs: &[OutputConfig],
 ) -> Result<Vec<Rendered>, BuildError> {
-    let (mut svg_text, parts) = (None, Parts::new());
+    let (mut picture, parts) = (None, Parts::new());
     outputs
         .iter()
         .map(|out| {
-            let bytes = render_output(computed, style, out, &[], &mut svg_text, &parts)?;
+            let bytes = render_output(computed, style, out, &[], &mut picture, &parts)?;
             Ok(Rendered {
                 path: out.path.clone(),
                 bytes,
@@ -428,18 +428,18 @@ pub fn render_outputs(
 
 /// One output of [`render_outputs`] (its kind's renderer,
 /// [`OutputKind::render`]), with the `past` layouts an HTML page shows;
-/// `svg_text` keeps the picture's SVG text between the outputs of one layout.
+/// `picture` keeps the picture between the outputs of one layout.
 pub fn render_output(
     computed: &Computed,
     style: &Style,
     out: &OutputConfig,
     past: &[std::sync::Arc<Computed>],
-    svg_text: &mut Option<String>,
+    picture: &mut Option<std::sync::Arc<crate::render::Picture>>,
     parts: &Parts,
 ) -> Result<Vec<u8>, BuildError> {
     let path = out.path.clone();
     out.kind()
-        .render(computed, style, out.scale, past, svg_text, parts)
+        .render(computed, style, out.scale, past, picture, parts)
         .map_err(|e| match e {
             #[cfg(feature = "png")]
             OutputError::Png(source) => BuildError::Png { path, source },

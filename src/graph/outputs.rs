@@ -212,10 +212,10 @@ fn render_in_parallel(
     }
     // The labels' time counts towards the first output that draws them.
     let labels_ms = ms_since(t);
-    let timed = |out: &OutputConfig, text: Option<String>| {
+    let timed = |out: &OutputConfig, picture: Option<Arc<render::Picture>>| {
         let t = Instant::now();
-        let mut text = text;
-        pipeline::render_output(computed, style, out, past, &mut text, parts)
+        let mut picture = picture;
+        pipeline::render_output(computed, style, out, past, &mut picture, parts)
             .map(|b| (b, ms_since(t)))
     };
     let first = outputs.iter().position(|o| pictured(o));
@@ -225,14 +225,14 @@ fn render_in_parallel(
                 return Ok(Vec::new());
             };
             let t = Instant::now();
-            let text = render::picture_with(computed, style, parts);
+            let picture = Arc::new(render::picture_with(computed, style, parts));
             let picture_ms = ms_since(t);
             outputs
                 .par_iter()
                 .enumerate()
                 .filter(|(_, out)| pictured(out))
                 .map(|(k, out)| {
-                    let (bytes, ms) = timed(out, Some(text.clone()))?;
+                    let (bytes, ms) = timed(out, Some(Arc::clone(&picture)))?;
                     Ok((k, (bytes, ms + if k == first { picture_ms } else { 0.0 })))
                 })
                 .collect()

@@ -475,7 +475,7 @@ pub fn html_page_with_parts(
     page_style.legend = false;
     let links = view.links(computed);
     let adjacent = view.top_pairs(computed);
-    let svg_text = compose_noted(dataset, layout, &links, &adjacent, &page_style, None, parts);
+    let svg_text = compose_noted(dataset, layout, &links, &adjacent, &page_style, None, parts).text;
     let svg_text = lighten(&svg_text);
 
     let nodes = page_nodes(computed, &view, &links, style);

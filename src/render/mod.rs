@@ -9,6 +9,8 @@
 pub mod color_by;
 /// CIELAB and the CIEDE2000 colour difference.
 pub mod color_difference;
+/// The picture as data beside its SVG text: the cells as shapes.
+pub mod display;
 /// The Tableau palette past twenty groups: colours picked farthest apart.
 pub mod distinct;
 /// Interactive HTML page: the SVG with inline hover script, style and node data.
@@ -59,6 +61,7 @@ pub mod metrics {
 }
 
 pub use color_by::{ColorBy, ColorScale};
+pub use display::Picture;
 pub use html::{
     html, html_page, html_page_with_history, html_page_with_parts, page_patch, HtmlData, HtmlEmpty,
     HtmlFrame, HtmlLayout, HtmlNode,

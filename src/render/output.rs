@@ -4,10 +4,11 @@
 //! stage graph, the pipeline and the server all ask an [`OutputKind`].
 
 use std::path::Path;
+use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use super::{html_page_with_parts, picture_with, Parts, Style};
+use super::{html_page_with_parts, picture_with, Parts, Picture, Style};
 use crate::layout::Computed;
 
 /// Kinds of output.
@@ -95,8 +96,8 @@ impl OutputKind {
 
     /// Its bytes for a finished layout. `past` are the layouts before it,
     /// oldest first (used when it [shows history](OutputKind::shows_history));
-    /// `svg_text` keeps the picture's SVG text between the outputs of one
-    /// layout (the SVG and the PNG draw the same picture); `parts` the
+    /// `picture` keeps the picture between the outputs of one layout (the
+    /// SVG and the PNG draw the same picture); `parts` the
     /// labels of this render's other outputs and of the render before.
     pub fn render(
         self,
@@ -104,22 +105,21 @@ impl OutputKind {
         style: &Style,
         scale: f64,
         past: &[std::sync::Arc<Computed>],
-        svg_text: &mut Option<String>,
+        picture: &mut Option<Arc<Picture>>,
         parts: &Parts,
     ) -> Result<Vec<u8>, OutputError> {
+        let mut drawn = || {
+            Arc::clone(
+                picture.get_or_insert_with(|| Arc::new(picture_with(computed, style, parts))),
+            )
+        };
         Ok(match self {
-            OutputKind::Svg => svg_text
-                .get_or_insert_with(|| picture_with(computed, style, parts))
-                .clone()
-                .into_bytes(),
+            OutputKind::Svg => drawn().text.clone().into_bytes(),
             #[cfg(feature = "png")]
-            OutputKind::Png => {
-                let text = svg_text.get_or_insert_with(|| picture_with(computed, style, parts));
-                parts.png(text, scale)?
-            }
+            OutputKind::Png => parts.png(&drawn(), scale)?,
             #[cfg(not(feature = "png"))]
             OutputKind::Png => {
-                let _ = (svg_text, scale);
+                let _ = (&mut drawn, scale);
                 return Err(OutputError::Unsupported {
                     what: "PNG output",
                     feature: "png",

@@ -195,11 +195,12 @@ impl Parts {
         counts
     }
 
-    /// [`super::png()`] of `svg` at `scale`, repainting over the last
+    /// [`super::png()`] of the `picture` at `scale` (its cells from their
+    /// shapes), repainting over the last
     /// picture of that scale (this render's or the last one's) only the
     /// bands that changed; the bytes are those of a whole paint.
     #[cfg(feature = "png")]
-    pub fn png(&self, svg: &str, scale: f64) -> Result<Vec<u8>, super::PngError> {
+    pub fn png(&self, picture: &super::Picture, scale: f64) -> Result<Vec<u8>, super::PngError> {
         let last = {
             let mut p = self.pictures();
             let Pictures { current, last, .. } = &mut *p;
@@ -209,7 +210,8 @@ impl Parts {
             };
             take(current).or_else(|| take(last))
         };
-        let (bytes, keep, counts) = super::png::png_with(svg, scale, last)?;
+        let (bytes, keep, counts) =
+            super::png::png_with(&picture.text, picture.cells.as_ref(), scale, last)?;
         let mut p = self.pictures();
         p.counts += counts;
         p.current.extend(keep);

@@ -10,6 +10,7 @@
 use nptreemap_formats::Dataset;
 
 use super::color_by::{self, Applied, ColorBy};
+use super::display::{Cells, Picture};
 use super::label_text::display_name;
 use super::labels::{format_value, place_groups, Placed};
 use super::legend::{legend, LegendItem};
@@ -17,8 +18,8 @@ use super::overlay::{marks_svg, place_markers, place_tabs, tabs_svg, Link, Overl
 use super::palette::{luminance, Rgb, WHITE};
 use super::parts::Parts;
 use super::svg::{
-    cell_colors, escape, leaf_labels, main_child, num, push_cells, push_labels, push_text,
-    stroke_width, Kept, SvgStyle,
+    cell_colors, cell_shapes, escape, leaf_labels, main_child, num, push_cells, push_labels,
+    push_text, stroke_width, Kept, SvgStyle,
 };
 use super::text::width_em;
 use crate::geom::Point;
@@ -286,7 +287,7 @@ pub fn group_colors(computed: &Computed, style: &Style) -> Kept {
 /// constraints, the interlocking tabs and unrealised-link markers of its
 /// deepest level, framed as `style` says. Identical input gives identical bytes.
 pub fn picture(computed: &Computed, style: &Style) -> String {
-    picture_with(computed, style, &Parts::new())
+    picture_with(computed, style, &Parts::new()).text
 }
 
 /// Fits the leaf labels of `computed`'s picture into `parts` ahead of the
@@ -302,8 +303,9 @@ pub fn fit_labels(computed: &Computed, style: &Style, parts: &Parts) {
 }
 
 /// [`picture`] with the labels `parts` has from this render's other outputs
-/// and the render before: the same bytes, fewer labels fitted.
-pub fn picture_with(computed: &Computed, style: &Style, parts: &Parts) -> String {
+/// and the render before (the same bytes, fewer labels fitted), and its
+/// cells as shapes for the PNG.
+pub fn picture_with(computed: &Computed, style: &Style, parts: &Parts) -> Picture {
     let pairs = computed.adjacency().get(1).map_or(&[][..], |a| a.pairs());
     compose_noted(
         &computed.dataset,
@@ -314,6 +316,7 @@ pub fn picture_with(computed: &Computed, style: &Style, parts: &Parts) -> String
         computed.zero.summary().as_deref(),
         parts,
     )
+    .with_shapes(&computed.dataset, &computed.layout, style)
 }
 
 /// Draws the picture of `layout` (cells indexed like `dataset`) with the
@@ -328,7 +331,32 @@ pub fn compose(
     adjacent: &[(usize, usize)],
     style: &Style,
 ) -> String {
-    compose_noted(dataset, layout, links, adjacent, style, None, &Parts::new())
+    compose_noted(dataset, layout, links, adjacent, style, None, &Parts::new()).text
+}
+
+/// A picture's text, with what its shapes need: the cells' group's bytes
+/// and the fills.
+pub(crate) struct Composed {
+    pub text: String,
+    cells: std::ops::Range<usize>,
+    colors: Vec<Option<Rgb>>,
+}
+
+impl Composed {
+    /// The picture, with its cells as shapes for the PNG (only a build with
+    /// PNG output paints them).
+    pub(crate) fn with_shapes(self, dataset: &Dataset, layout: &Layout, style: &Style) -> Picture {
+        let shapes = cfg!(feature = "png")
+            .then(|| cell_shapes(dataset, layout, &style.cells, &self.colors))
+            .flatten();
+        Picture {
+            cells: shapes.map(|shapes| Cells {
+                range: self.cells,
+                shapes,
+            }),
+            text: self.text,
+        }
+    }
 }
 
 /// [`compose`] with a `note` first in the legend: what the picture leaves
@@ -342,7 +370,7 @@ pub(crate) fn compose_noted(
     style: &Style,
     note: Option<&str>,
     parts: &Parts,
-) -> String {
+) -> Composed {
     let (cw, ch) = (layout.canvas.width, layout.canvas.height);
     let u = unit(layout);
     let (colors, applied) = fills(dataset, adjacent, style);
@@ -413,7 +441,9 @@ pub(crate) fn compose_noted(
         push_title(&mut out, lines, title_size, u, style);
     }
     let memo = parts.cell_lines();
+    let start = out.len();
     push_cells(&mut out, dataset, layout, &style.cells, &colors, memo);
+    let cells = start..out.len();
     // Tabs on the edges, group names across the groups, then the leaf labels
     // over both, the markers last (they never overlap a label).
     if !tabs.is_empty() {
@@ -429,7 +459,11 @@ pub(crate) fn compose_noted(
     push_border(&mut out, dataset, layout, style);
     out.push_str(&legend_text);
     out.push_str("</svg>\n");
-    out
+    Composed {
+        text: out,
+        cells,
+        colors,
+    }
 }
 
 /// The outline width between cells `a` and `b`: that of their lowest common

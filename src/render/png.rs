@@ -13,9 +13,10 @@ use rayon::prelude::*;
 use resvg::tiny_skia::{self, Transform};
 use resvg::usvg;
 
+use super::display::{Cells, Picture};
 use super::png_bands::{paint, Drawn};
 pub use super::png_bands::{BandCounts, Painted};
-use super::png_plan::{plan, Layer, Plan, View};
+use super::png_plan::{plan, plan_drawn, Layer, Plan, View};
 use super::text::{FAMILY, FONT};
 
 /// Rendering an SVG to PNG failed; with SVG from [`super::svg()`] this means a
@@ -66,14 +67,24 @@ fn options() -> &'static usvg::Options<'static> {
 /// else, runs of elements usvg parses (up to a few documents, in parallel).
 /// The pixels are painted in bands in parallel (`png_bands`).
 pub fn png(svg: &str, scale: f64) -> Result<Vec<u8>, PngError> {
-    Ok(png_with(svg, scale, None)?.0)
+    Ok(png_with(svg, None, scale, None)?.0)
 }
 
-/// [`png()`] repainting, over `last` (the picture painted before at the same
-/// scale), only the bands whose items changed; returns the bytes, the
-/// picture to keep for the next repaint, and how many bands were painted.
-pub fn png_with(
+/// The PNG of a picture from the picture writer: its cells painted from
+/// their shapes, the rest of its text read back (`super::display`); the
+/// bytes of [`png()`] of its text.
+pub fn picture_png(picture: &Picture, scale: f64) -> Result<Vec<u8>, PngError> {
+    Ok(png_with(&picture.text, picture.cells.as_ref(), scale, None)?.0)
+}
+
+/// [`png()`] of `svg` (whose cells' group, when `cells` is given, is drawn
+/// from its shapes) repainting, over `last` (the picture painted before at
+/// the same scale), only the bands whose items changed; returns the bytes,
+/// the picture to keep for the next repaint, and how many bands were
+/// painted.
+pub(crate) fn png_with(
     svg: &str,
+    cells: Option<&Cells>,
     scale: f64,
     last: Option<Painted>,
 ) -> Result<(Vec<u8>, Option<Painted>, BandCounts), PngError> {
@@ -85,7 +96,11 @@ pub fn png_with(
         let (bytes, counts) = (p.bytes.clone(), p.unchanged());
         return Ok((bytes, last, counts));
     }
-    let plan = plan(svg).unwrap_or_else(|| Plan {
+    let planned = match cells {
+        Some(cells) => plan_drawn(svg, cells),
+        None => plan(svg),
+    };
+    let plan = planned.unwrap_or_else(|| Plan {
         layers: vec![Layer::Svg(svg.to_owned())],
         view: None,
     });
@@ -374,11 +389,11 @@ mod tests {
         let first = compose(&before, &old, &[], &[], &style);
         let second = compose(&after, &new, &[], &[], &style);
         assert_ne!(first, second);
-        let (bytes, painted, counts) = png_with(&first, 1.5, None).expect("whole");
+        let (bytes, painted, counts) = png_with(&first, None, 1.5, None).expect("whole");
         assert_eq!(counts.documents, 0, "painted without usvg");
         assert_eq!(counts.kept, 0);
         assert_eq!(bytes, png(&first, 1.5).expect("png"));
-        let (again, painted, counts) = png_with(&second, 1.5, painted).expect("repaint");
+        let (again, painted, counts) = png_with(&second, None, 1.5, painted).expect("repaint");
         assert_eq!(
             again,
             png(&second, 1.5).expect("whole"),
@@ -391,9 +406,105 @@ mod tests {
              the repaint's two halves at once)"
         );
         // Nothing changed: nothing painted, the same bytes.
-        let (same, _, counts) = png_with(&second, 1.5, painted).expect("no change");
+        let (same, _, counts) = png_with(&second, None, 1.5, painted).expect("no change");
         assert_eq!((counts.painted, counts.kept), (0, bands));
         assert_eq!(same, again);
+    }
+
+    /// Issue 32, item 1: the cells painted from the picture writer's shapes
+    /// are the items its text reads back to, item for item, and the PNG is
+    /// that of the text, byte for byte: on a map of three levels with
+    /// labels, group names, tabs, a title and a legend (so elements on both
+    /// sides of the cells' group), unit and odd scales.
+    #[test]
+    fn the_cells_from_the_writers_shapes_are_the_cells_its_text_reads_back_to() {
+        use crate::layout::{layout, Params};
+        use crate::render::display::Picture;
+        use crate::render::overlay::Link;
+        use crate::render::picture::{compose_noted, Style};
+        use crate::render::Parts;
+        use nptreemap_formats::{DatasetBuilder, NodeSpec};
+        let mut builder = DatasetBuilder::new();
+        builder.add(NodeSpec::new("root"));
+        for g in 0..5 {
+            builder.add(NodeSpec::new(format!("g{g}")).parent("root"));
+            for s in 0..4 {
+                builder.add(NodeSpec::new(format!("g{g}/{s}")).parent(format!("g{g}")));
+                for k in 0..6 {
+                    let weight = 1.0 + ((g * 24 + s * 6 + k) * 7919 % 89) as f64;
+                    builder.add(
+                        NodeSpec::new(format!("g{g}/{s}/{k}"))
+                            .parent(format!("g{g}/{s}"))
+                            .weight(weight),
+                    );
+                }
+            }
+        }
+        let ds = builder.build().expect("valid");
+        let (laid, _) = layout(&ds, &Params::default()).expect("laid out");
+        // Links between neighbouring leaves, for tabs and markers.
+        let leaves: Vec<usize> = (0..ds.len()).filter(|&i| ds.is_leaf(i)).collect();
+        let links: Vec<Link> = leaves
+            .windows(2)
+            .map(|w| Link {
+                a: w[0],
+                b: w[1],
+                similarity: 0.8,
+                realized: w[0] % 3 != 0,
+            })
+            .collect();
+        let style = Style {
+            title: Some("Shapes and text".to_string()),
+            ..Style::default()
+        };
+        let picture = compose_noted(&ds, &laid, &links, &[], &style, None, &Parts::new())
+            .with_shapes(&ds, &laid, &style);
+        let cells = picture.cells.as_ref().expect("shapes kept");
+        assert_eq!(
+            cells.shapes.len(),
+            ds.len() - 1,
+            "every cell but the root's"
+        );
+        let text = &picture.text;
+        assert!(text[cells.range.clone()].starts_with("<g class=\"np-cells\""));
+        assert!(cells.range.start > text.find("np-background").expect("background"));
+        assert!(cells.range.end < text.find("np-labels").expect("labels"));
+        let digests = |plan: &Plan| -> Vec<Vec<u128>> {
+            plan.layers
+                .iter()
+                .map(|layer| match layer {
+                    Layer::Items(items) => items
+                        .iter()
+                        .map(|item| {
+                            let mut h = xxhash_rust::xxh3::Xxh3::new();
+                            item.digest(&mut h);
+                            h.digest128()
+                        })
+                        .collect(),
+                    Layer::Svg(t) => vec![xxhash_rust::xxh3::xxh3_128(t.as_bytes())],
+                })
+                .collect()
+        };
+        let read = plan(text).expect("parses");
+        let drawn = plan_drawn(text, cells).expect("parses");
+        assert!(
+            read.layers.len() >= 5,
+            "background, title, cells, tabs, labels..."
+        );
+        assert_eq!(digests(&drawn), digests(&read));
+        for scale in [1.0, 1.7] {
+            assert_eq!(
+                picture_png(&picture, scale).expect("from shapes"),
+                png(text, scale).expect("from text"),
+                "scale {scale}"
+            );
+        }
+        // A picture known only by its text is read whole, to the same bytes.
+        let plain = Picture::from_text(text.clone());
+        assert_eq!(
+            picture_png(&plain, 1.0).expect("text"),
+            png(text, 1.0).expect("text")
+        );
     }
 
     /// Issue 11, item 7: a line break inside a title or a label once cut the

@@ -13,6 +13,9 @@
 use resvg::tiny_skia::{self, LineCap, LineJoin, Path, PathBuilder, Rect, Transform};
 use resvg::usvg::roxmltree;
 
+use rayon::prelude::*;
+
+use super::display::{Cells, Shape};
 use super::paint::{Item, Line};
 use super::text;
 
@@ -62,16 +65,68 @@ impl View {
 /// does not parse; it is then parsed whole, and usvg reports the error.
 pub(super) fn plan(svg: &str) -> Option<Plan> {
     let doc = roxmltree::Document::parse(svg).ok()?;
-    let root = doc.root_element();
+    layered(svg, doc.root_element(), None)
+}
+
+/// [`plan`] of a picture writer's text whose cells' group the writer also
+/// gave as shapes (`super::display`): the group is cut out of the text
+/// before it is parsed (nine tenths of a map's text), and its items are
+/// made from the shapes, the layer the group's text would have made.
+/// `None` as for [`plan`], or when the rest has no view to place them in.
+pub(super) fn plan_drawn(svg: &str, cells: &Cells) -> Option<Plan> {
+    let at = cells.range.start;
+    let rest = format!("{}{}", svg.get(..at)?, svg.get(cells.range.end..)?);
+    let doc = roxmltree::Document::parse(&rest).ok()?;
+    view_of(doc.root_element())?;
+    let items = cells.shapes.par_iter().filter_map(shape_item).collect();
+    layered(&rest, doc.root_element(), Some((at, items)))
+}
+
+/// A cell's shape as the item its `<path>` in the cells' group reads back
+/// to (`shape` under the group's `stroke` and `stroke-linejoin="round"` and
+/// its level's `stroke-width`); `None` for a shape of no corners, which
+/// draws nothing.
+fn shape_item(shape: &Shape) -> Option<Item> {
+    let mut builder = PathBuilder::new();
+    for (k, [x, y]) in shape.points.iter().enumerate() {
+        if k == 0 {
+            builder.move_to(*x as f32, *y as f32);
+        } else {
+            builder.line_to(*x as f32, *y as f32);
+        }
+    }
+    builder.close();
+    let color = |c: super::palette::Rgb| tiny_skia::Color::from_rgba8(c.r, c.g, c.b, 255);
+    let style = Inherited {
+        fill: shape.fill.map(|c| (color(c), 1.0)),
+        stroke: Some(color(shape.stroke)),
+        stroke_width: shape.width,
+        join: LineJoin::Round,
+        ..Inherited::default()
+    };
+    Some(painted(builder.finish()?, &style))
+}
+
+/// The layers of the document `src` whose root element is `root`, with
+/// `inserted` items (at a byte offset of `src`) as a layer of their own
+/// before the first element at or after that offset.
+fn layered(src: &str, root: roxmltree::Node, inserted: Option<(usize, Vec<Item>)>) -> Option<Plan> {
     let elements: Vec<roxmltree::Node> = root.children().filter(|n| n.is_element()).collect();
     let first = elements.first()?.range().start;
     let last = elements.last()?.range().end;
-    let header = &svg[..first];
-    let footer = &svg[last..];
+    let header = &src[..first];
+    let footer = &src[last..];
     let view = view_of(root);
+    let mut inserted = inserted;
     // Runs of elements: Err(a layer we paint) or Ok(source range).
     let mut runs: Vec<Result<std::ops::Range<usize>, Layer>> = Vec::new();
     for (k, el) in elements.iter().enumerate() {
+        if inserted
+            .as_ref()
+            .is_some_and(|(at, _)| el.range().start >= *at)
+        {
+            runs.extend(inserted.take().map(|(_, items)| Err(Layer::Items(items))));
+        }
         let end = elements.get(k + 1).map_or(last, |n| n.range().start);
         let painted = view.as_ref().and_then(|_| items(*el).map(Layer::Items));
         match (painted, runs.last_mut()) {
@@ -80,6 +135,7 @@ pub(super) fn plan(svg: &str) -> Option<Plan> {
             (None, _) => runs.push(Ok(el.range().start..end)),
         }
     }
+    runs.extend(inserted.map(|(_, items)| Err(Layer::Items(items))));
     // Merge the shortest gaps between shape runs while there are too many:
     // a text layer between two merged runs moves into the document instead.
     let svg_runs =
@@ -110,7 +166,7 @@ pub(super) fn plan(svg: &str) -> Option<Plan> {
     let layers = runs
         .into_iter()
         .map(|r| match r {
-            Ok(range) => Layer::Svg(format!("{header}{}{footer}", &svg[range])),
+            Ok(range) => Layer::Svg(format!("{header}{}{footer}", &src[range])),
             Err(layer) => layer,
         })
         .collect();

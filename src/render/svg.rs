@@ -13,6 +13,7 @@ use std::fmt::Write as _;
 use super::label_text::display_name;
 use rayon::prelude::*;
 
+use super::display::Shape;
 use super::labels::{format_value, LabelStyle, Placed};
 use super::palette::{self, PaletteKind, Rgb, WHITE};
 use super::parts::{LabelKey, Parts};
@@ -153,17 +154,7 @@ pub(crate) fn push_cells(
     colors: &[Option<Rgb>],
     memo: Option<&LineMemo>,
 ) {
-    let count = dataset.len().min(layout.cells.len());
-    // Node indices per depth, each list in dataset order.
-    let mut by_depth: Vec<Vec<usize>> = vec![Vec::new(); dataset.max_depth() + 1];
-    for i in (0..count).filter(|&i| is_drawn(dataset, i)) {
-        let d = dataset.node(i).depth;
-        if d >= by_depth.len() {
-            by_depth.resize_with(d + 1, Vec::new);
-        }
-        by_depth[d].push(i);
-    }
-
+    let by_depth = drawn_by_depth(dataset, layout);
     out.push_str(&format!(
         "<g class=\"np-cells\" stroke=\"{}\" stroke-linejoin=\"round\">\n",
         style.stroke
@@ -187,6 +178,59 @@ pub(crate) fn push_cells(
         out.push_str("</g>\n");
     }
     out.push_str("</g>\n");
+}
+
+/// The drawn cells' node indices per depth, each list in dataset order:
+/// the writer draws the lists deepest first.
+fn drawn_by_depth(dataset: &Dataset, layout: &Layout) -> Vec<Vec<usize>> {
+    let count = dataset.len().min(layout.cells.len());
+    let mut by_depth: Vec<Vec<usize>> = vec![Vec::new(); dataset.max_depth() + 1];
+    for i in (0..count).filter(|&i| is_drawn(dataset, i)) {
+        let d = dataset.node(i).depth;
+        if d >= by_depth.len() {
+            by_depth.resize_with(d + 1, Vec::new);
+        }
+        by_depth[d].push(i);
+    }
+    by_depth
+}
+
+/// The cells [`push_cells`] draws, as shapes in its order with the numbers
+/// its text spells (`display`); `None` when one has no such spelling.
+pub(crate) fn cell_shapes(
+    dataset: &Dataset,
+    layout: &Layout,
+    style: &SvgStyle,
+    colors: &[Option<Rgb>],
+) -> Option<Vec<Shape>> {
+    use rayon::prelude::*;
+    let by_depth = drawn_by_depth(dataset, layout);
+    let order: Vec<(usize, f64)> = by_depth
+        .iter()
+        .enumerate()
+        .rev()
+        .flat_map(|(depth, nodes)| {
+            let width = stroke_width(style.stroke_width, depth);
+            nodes.iter().map(move |&i| (i, width))
+        })
+        .collect();
+    order
+        .par_iter()
+        .map(|&(i, width)| {
+            let points = layout.cells[i]
+                .polygon
+                .points()
+                .iter()
+                .map(|p| Some([spelled(p.x)?, spelled(p.y)?]))
+                .collect::<Option<Vec<_>>>()?;
+            Some(Shape {
+                points,
+                fill: cell_fill(dataset, colors, i),
+                stroke: style.stroke,
+                width: spelled(width)?,
+            })
+        })
+        .collect()
 }
 
 /// The fill of cell `i`: its colour for a leaf, none for a group.
@@ -438,6 +482,29 @@ pub(crate) fn push_num(out: &mut String, v: f64) {
     out.push(char::from(b'0' + (cents % 10) as u8));
 }
 
+/// The value a reader of [`num`]`(v)` gets back: `v` rounded to two
+/// decimals as the text spells it (`svg::push_num`'s rule), as the nearest
+/// double, the way an SVG reader parses it. `None` when `v` has no such
+/// spelling (not finite).
+pub(crate) fn spelled(v: f64) -> Option<f64> {
+    if !v.is_finite() {
+        return None;
+    }
+    let scaled = v.abs() * 100.0;
+    let near_half = (scaled - scaled.floor() - 0.5).abs() <= 1e-6;
+    if scaled >= 1e9 || near_half {
+        return num(v).parse().ok();
+    }
+    // The decimal `whole.cents` is n / 100 exactly, and both the division of
+    // two exact integers and a reader's parse round it to the nearest double.
+    let n = scaled.round();
+    Some(if n > 0.0 && v < 0.0 {
+        -n / 100.0
+    } else {
+        n / 100.0
+    })
+}
+
 /// The leaf labels that fit, in dataset order (none when labels are off),
 /// from `parts` where an earlier render fitted them to the same drawn cell.
 pub(crate) fn leaf_labels(
@@ -606,6 +673,26 @@ mod tests {
         ] {
             assert_eq!(unescape(&escape(text)), text);
         }
+    }
+
+    /// What a reader of the text gets is what `spelled` gives, bit for bit,
+    /// over values near halves, negatives that round to zero and large ones.
+    #[test]
+    fn spelled_is_the_text_read_back() {
+        let mut values = vec![
+            0.0, -0.0, -0.004, 0.005, 0.015, 1.005, -2.675, 1e9, 123456.785,
+        ];
+        let mut x = 0.123_456_789_f64;
+        for _ in 0..20_000 {
+            x = (x * 7919.123 + 0.377).fract();
+            values.push((x - 0.5) * 4000.0);
+            values.push((x * 1e4).round() / 1e4);
+        }
+        for v in values {
+            let read: f64 = num(v).parse().expect("a number");
+            assert_eq!(spelled(v).map(f64::to_bits), Some(read.to_bits()), "{v}");
+        }
+        assert_eq!(spelled(f64::NAN), None);
     }
 
     #[test]
