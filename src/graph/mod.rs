@@ -444,8 +444,19 @@ impl DatasetGraph {
             .filter(|o| o.stale())
             .filter_map(|o| o.bytes.as_deref().map(|bytes| (o.path.as_path(), bytes)))
             .collect();
-        let (mut written, stored) =
-            pipeline::write_files_beside(&stale, || store_warm_start(d, &pending));
+        #[cfg(feature = "png")]
+        let pictures = cache
+            .then(|| self.picture_records(d, &build.outputs))
+            .flatten();
+        let (mut written, stored) = pipeline::write_files_beside(&stale, || {
+            #[cfg(feature = "png")]
+            if let Some(records) = &pictures {
+                if let Err(e) = state::pictures::write(d, records) {
+                    tracing::warn!(dataset = %d.name, error = %e, "cannot keep the PNG's bands");
+                }
+            }
+            store_warm_start(d, &pending)
+        });
         for o in build.outputs.iter().filter(|o| !o.stale()) {
             written.unchanged.push(o.path.clone());
         }

@@ -57,6 +57,8 @@ impl DatasetGraph {
             .filter(|(_, k)| k.is_none())
             .map(|(out, _)| out)
             .collect();
+        #[cfg(feature = "png")]
+        self.seed_pictures(d, &needed);
         let mut drawn =
             render_in_parallel(computed, style, &needed, &past, &self.parts)?.into_iter();
         let labels = self.parts.counts();
@@ -110,6 +112,80 @@ impl DatasetGraph {
             outputs.push(built);
         }
         Ok(outputs)
+    }
+
+    /// Gives the render, for each PNG output of `needed` it has no picture
+    /// of (a one-shot build, a daemon's first render), the picture its
+    /// file holds when the state folder says what it was painted from and
+    /// the file still holds those bytes (`state::pictures`): the render then
+    /// repaints only the bands that changed. Anything missing, changed or
+    /// not exactly readable costs only the reuse (a whole paint).
+    #[cfg(feature = "png")]
+    fn seed_pictures(&self, d: &DatasetConfig, needed: &[&OutputConfig]) {
+        let wanted: Vec<&&OutputConfig> = needed
+            .iter()
+            .filter(|o| o.kind() == render::OutputKind::Png && !self.parts.has_png(o.scale))
+            .collect();
+        if wanted.is_empty() || !self.options.cache {
+            return;
+        }
+        let records = crate::state::pictures::read(d);
+        for out in wanted {
+            let name = manifest::relative(d, &out.path);
+            let Some(r) = records
+                .iter()
+                .find(|r| r.path == name && r.scale == out.scale)
+            else {
+                continue;
+            };
+            let Ok(bytes) = crate::workspace::read_input(&out.path, &d.fields.limits) else {
+                continue;
+            };
+            if xxhash_rust::xxh3::xxh3_128(&bytes) != r.png {
+                continue;
+            }
+            match render::png::read_back(bytes, out.scale, r.svg, r.bands.clone()) {
+                Some(painted) => self.parts.seed_png(painted),
+                None => tracing::debug!(output = %name, "the PNG cannot be read back exactly"),
+            }
+        }
+    }
+
+    /// What the state folder keeps of this build's PNG outputs: for each
+    /// rendered now, what it was painted from (`state::pictures`); `None`
+    /// when no PNG was rendered (the records on disk still hold).
+    #[cfg(feature = "png")]
+    pub(super) fn picture_records(
+        &self,
+        d: &DatasetConfig,
+        outputs: &[OutputBuild],
+    ) -> Option<Vec<crate::state::pictures::Record>> {
+        let pngs: Vec<(&OutputConfig, &[u8])> = d
+            .outputs
+            .iter()
+            .filter(|o| o.kind() == render::OutputKind::Png)
+            .filter_map(|o| {
+                let built = outputs.iter().find(|b| b.path == o.path)?;
+                Some((o, built.bytes.as_deref()?))
+            })
+            .collect();
+        if pngs.is_empty() {
+            return None;
+        }
+        Some(
+            pngs.into_iter()
+                .filter_map(|(o, bytes)| {
+                    let (bands, svg) = self.parts.painted(o.scale, bytes)?;
+                    Some(crate::state::pictures::Record {
+                        path: manifest::relative(d, &o.path),
+                        scale: o.scale,
+                        png: xxhash_rust::xxh3::xxh3_128(bytes),
+                        svg,
+                        bands,
+                    })
+                })
+                .collect(),
+        )
     }
 
     /// The output as its file holds it, when the manifest vouches that the

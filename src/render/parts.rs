@@ -243,6 +243,34 @@ impl Parts {
         self.documents.lines.counts()
     }
 
+    /// Whether a picture at `scale` is there to repaint over (this
+    /// render's or the last one's).
+    #[cfg(feature = "png")]
+    pub fn has_png(&self, scale: f64) -> bool {
+        let p = self.pictures();
+        p.current.iter().chain(&p.last).any(|x| x.scale() == scale)
+    }
+
+    /// Takes a picture read back from an earlier process
+    /// ([`super::png::read_back`]) as the last render's.
+    #[cfg(feature = "png")]
+    pub fn seed_png(&self, painted: super::png::Painted) {
+        self.pictures().last.push(painted);
+    }
+
+    /// What this render's PNG at `scale` was painted from, when its bytes
+    /// are `bytes`: its bands' digests and its SVG text's digest (for the
+    /// state folder, so that a later process repaints over it).
+    #[cfg(feature = "png")]
+    pub fn painted(&self, scale: f64, bytes: &[u8]) -> Option<(Vec<u128>, u128)> {
+        let p = self.pictures();
+        let x = p
+            .current
+            .iter()
+            .find(|x| x.scale() == scale && x.bytes() == bytes)?;
+        Some((x.bands().to_vec(), x.svg_digest()))
+    }
+
     /// The band counts of the PNGs of the render under way.
     #[cfg(feature = "png")]
     pub fn band_counts(&self) -> super::png::BandCounts {

@@ -141,6 +141,24 @@ pub(crate) fn png_with(
     Ok((bytes, painted.worth_keeping(), counts))
 }
 
+/// A straight channel `c` of a pixel of alpha `a` < 255: the one
+/// premultiplied value in `0..=a` that [`straight`] turns into it, if any.
+fn premultiplied(c: u8, a: u8) -> Option<u8> {
+    if a == 0 {
+        return (c == 0).then_some(0);
+    }
+    let guess = (u16::from(c) * u16::from(a) + 127) / 255;
+    (guess.saturating_sub(1)..=(guess + 1).min(u16::from(a)))
+        .map(|p| p as u8)
+        .find(|&p| straight(p, a) == c)
+}
+
+/// A premultiplied channel `c` of a pixel of alpha `a` (0 < a < 255) as
+/// the PNG holds it: demultiplied, rounded to the nearest.
+fn straight(c: u8, a: u8) -> u8 {
+    ((u16::from(c) * 255 + u16::from(a) / 2) / u16::from(a)).min(255) as u8
+}
+
 /// PNG bytes of a pixmap: straight (not premultiplied) RGBA, compressed with
 /// the png crate's `Fastest` level (fdeflate). tiny-skia's own `encode_png`
 /// uses the default level, which took half of a 2,000 × 2,000 render (issue
@@ -153,7 +171,7 @@ fn encode(pixmap: &tiny_skia::Pixmap) -> Result<Vec<u8>, PngError> {
         let a = px[3];
         if a != 255 && a != 0 {
             for c in &mut px[..3] {
-                *c = ((u16::from(*c) * 255 + u16::from(a) / 2) / u16::from(a)).min(255) as u8;
+                *c = straight(*c, a);
             }
         }
     }
@@ -174,9 +192,68 @@ fn encode(pixmap: &tiny_skia::Pixmap) -> Result<Vec<u8>, PngError> {
     Ok(out)
 }
 
+/// The picture a PNG of ours holds, to repaint over in a later process
+/// (a one-shot `build` after an edit, issue 32 item 2): `bytes` decoded,
+/// with the scale, SVG digest and band digests it was painted with (kept
+/// beside it by the caller). Exact: the encoder writes straight RGBA, and
+/// its rounding maps the premultiplied channels `0..=a` of a pixel of
+/// alpha `a` to distinct straight values (each step of a premultiplied
+/// channel moves the straight one by 255 / a ≥ 1), so each painted pixel
+/// is the one premultiplied value that encodes to what the file holds.
+/// `None` for a pixel no painted value encodes to (not a PNG of ours),
+/// anything but 8-bit RGBA, or a picture too large to keep.
+pub fn read_back(bytes: Vec<u8>, scale: f64, svg: u128, bands: Vec<u128>) -> Option<Painted> {
+    let limits = ::png::Limits {
+        bytes: (4 * super::png_bands::KEEP_PIXELS) as usize,
+    };
+    let decoder = ::png::Decoder::new_with_limits(std::io::Cursor::new(&bytes), limits);
+    let mut reader = decoder.read_info().ok()?;
+    let info = reader.info();
+    if info.color_type != ::png::ColorType::Rgba || info.bit_depth != ::png::BitDepth::Eight {
+        return None;
+    }
+    let size = tiny_skia::IntSize::from_wh(info.width, info.height)?;
+    let mut data = vec![0; reader.output_buffer_size()?];
+    let frame = reader.next_frame(&mut data).ok()?;
+    data.truncate(frame.buffer_size());
+    for px in data.chunks_exact_mut(4) {
+        let a = px[3];
+        if a == 255 {
+            continue;
+        }
+        for c in &mut px[..3] {
+            *c = premultiplied(*c, a)?;
+        }
+    }
+    let pixmap = tiny_skia::Pixmap::from_vec(data, size)?;
+    Painted::from_parts(pixmap, scale, svg, bands, bytes)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every premultiplied channel of every alpha is read back from its
+    /// straight value exactly, and a straight value that no channel encodes
+    /// to is refused.
+    #[test]
+    fn every_painted_channel_is_read_back_from_its_straight_value() {
+        let mut refused = 0;
+        for a in 1..=254u8 {
+            let mut seen = [false; 256];
+            for c in 0..=a {
+                let s = straight(c, a);
+                assert_eq!(premultiplied(s, a), Some(c), "c {c} a {a}");
+                seen[usize::from(s)] = true;
+            }
+            for s in (0..=255u8).filter(|s| !seen[usize::from(*s)]) {
+                assert_eq!(premultiplied(s, a), None);
+                refused += 1;
+            }
+        }
+        assert!(refused > 0);
+        assert_eq!((premultiplied(0, 0), premultiplied(9, 0)), (Some(0), None));
+    }
 
     /// One pass of resvg over the whole document, for comparison.
     fn one_pass(svg: &str, scale: f32) -> tiny_skia::Pixmap {

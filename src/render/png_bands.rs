@@ -29,7 +29,7 @@ pub(super) const BAND: u32 = 32;
 
 /// Largest picture whose pixels a repaint keeps, and that a whole paint
 /// paints in two halves with a pixmap per half (64 MB of RGBA each).
-const KEEP_PIXELS: u64 = 16 << 20;
+pub(super) const KEEP_PIXELS: u64 = 16 << 20;
 
 /// A layer ready to paint.
 pub(super) enum Drawn<'a> {
@@ -70,6 +70,41 @@ impl Painted {
     /// Its pixels.
     pub(super) fn pixmap(&self) -> &tiny_skia::Pixmap {
         &self.pixmap
+    }
+
+    /// Its bands' digests, top to bottom.
+    pub fn bands(&self) -> &[u128] {
+        &self.bands
+    }
+
+    /// The digest of the SVG text it was painted from.
+    pub fn svg_digest(&self) -> u128 {
+        self.svg
+    }
+
+    /// Its encoded PNG bytes.
+    pub fn bytes(&self) -> &[u8] {
+        &self.bytes
+    }
+
+    /// A picture from its pixels and what was kept of it: `None` when the
+    /// band count is not that of its height or it is too large to keep.
+    pub(super) fn from_parts(
+        pixmap: tiny_skia::Pixmap,
+        scale: f64,
+        svg: u128,
+        bands: Vec<u128>,
+        bytes: Vec<u8>,
+    ) -> Option<Painted> {
+        let (w, h) = (pixmap.width(), pixmap.height());
+        (bands.len() == h.div_ceil(BAND) as usize && u64::from(w) * u64::from(h) <= KEEP_PIXELS)
+            .then_some(Painted {
+                scale: scale.to_bits(),
+                bands,
+                pixmap,
+                svg,
+                bytes,
+            })
     }
 
     /// Itself when small enough for a repaint to keep ([`KEEP_PIXELS`]).

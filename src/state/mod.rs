@@ -28,6 +28,10 @@
 //!   the last similarity inputs, so that an edit that leaves them alone (a
 //!   weight) recomputes none. Local only: a `.gitignore` in `cache/` says so,
 //!   and deleting it costs one computation.
+//! - `cache/<name>.pictures.bin` ([`pictures`]): for each PNG output, what
+//!   its pixels were painted from (band digests), so that a later process
+//!   repaints only the bands an edit changed over the file it reads back.
+//!   Local only, like the constraints.
 //!
 //! Every read goes through [`crate::workspace`], every write through
 //! [`crate::store`]. A file that cannot be read or is not ours is never an
@@ -40,6 +44,8 @@ pub mod constraints;
 pub mod layout;
 /// The manifest: what the stored layout and the outputs were made from.
 pub mod manifest;
+/// What each PNG output was painted from, to repaint over it.
+pub mod pictures;
 
 use std::path::{Path, PathBuf};
 
@@ -77,6 +83,8 @@ pub enum StateKind {
     Manifest,
     /// The constraint cache ([`constraints`]), in [`CACHE`].
     Constraints,
+    /// What the PNG outputs were painted from ([`pictures`]), in [`CACHE`].
+    Pictures,
 }
 
 impl StateKind {
@@ -86,6 +94,7 @@ impl StateKind {
             StateKind::Layout => "layout.json",
             StateKind::Manifest => "manifest.json",
             StateKind::Constraints => "constraints.bin",
+            StateKind::Pictures => "pictures.bin",
         }
     }
 
@@ -93,7 +102,7 @@ impl StateKind {
     fn in_dir(self, dir: &Path, key: &str) -> PathBuf {
         let name = format!("{key}.{}", self.suffix());
         match self {
-            StateKind::Constraints => dir.join(CACHE).join(name),
+            StateKind::Constraints | StateKind::Pictures => dir.join(CACHE).join(name),
             _ => dir.join(name),
         }
     }
@@ -117,6 +126,11 @@ pub fn manifest_path(d: &DatasetConfig) -> Option<PathBuf> {
 /// The constraint cache's path (see [`constraints`]).
 pub fn constraints_path(d: &DatasetConfig) -> Option<PathBuf> {
     path(d, StateKind::Constraints)
+}
+
+/// The PNG outputs' picture records' path (see [`pictures`]).
+pub fn pictures_path(d: &DatasetConfig) -> Option<PathBuf> {
+    path(d, StateKind::Pictures)
 }
 
 /// Where an older version may have left a state file of `d`, most likely

@@ -244,3 +244,65 @@ fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>, std::time::SystemTime)> {
     out.sort();
     out
 }
+
+/// The PNG render's band counts from a build's stage report: (painted, kept).
+fn png_bands(build: &DatasetBuild) -> (usize, usize) {
+    let run = build
+        .stages
+        .runs
+        .iter()
+        .find(|r| r.stage == Stage::Render && r.output.as_deref() == Some("out/countries.png"))
+        .expect("the PNG rendered");
+    let counts = run.note.split("bands: ").nth(1).expect("band counts");
+    let numbers: Vec<usize> = counts
+        .split(|c: char| !c.is_ascii_digit())
+        .filter(|s| !s.is_empty())
+        .take(2)
+        .map(|s| s.parse().expect("a count"))
+        .collect();
+    (numbers[0], numbers[1])
+}
+
+/// Issue 32, item 2: a one-shot build after a weight edit repaints only the
+/// PNG's bands that the edit changed, over the picture its file holds (the
+/// state folder keeps what the file was painted from), and the bytes are a
+/// whole paint's: the PNG of the SVG written beside it. Records that do not
+/// match cost only the reuse.
+#[test]
+fn a_build_after_an_edit_repaints_the_png_over_the_file_it_finds() {
+    let config = countries("png_bands");
+    let first = build(&config);
+    assert_eq!(png_bands(&first[0]).1, 0, "nothing to repaint over");
+    edit_weight(&config, 1.1);
+    let second = build(&config);
+    let (painted, kept) = png_bands(&second[0]);
+    assert!(painted > 0 && kept > 0, "{painted} painted, {kept} kept");
+    let svg = String::from_utf8(out(&config, "countries.svg")).expect("utf-8");
+    let whole = nptreemap::render::png(&svg, 1.0).expect("a whole paint");
+    assert_eq!(
+        out(&config, "countries.png"),
+        whole,
+        "a whole paint's bytes"
+    );
+    // Records that are not this version's (or are cut short): a whole paint.
+    let records = config
+        .with_file_name("out")
+        .join(".nptreemap/cache/countries.pictures.bin");
+    let bytes = std::fs::read(&records).expect("the records");
+    std::fs::write(&records, &bytes[..bytes.len() - 1]).expect("cut");
+    edit_weight(&config, 1.1);
+    let third = build(&config);
+    assert_eq!(png_bands(&third[0]).1, 0, "nothing kept from cut records");
+    let svg = String::from_utf8(out(&config, "countries.svg")).expect("utf-8");
+    let whole = nptreemap::render::png(&svg, 1.0).expect("a whole paint");
+    assert_eq!(out(&config, "countries.png"), whole);
+    // A PNG file that is not the one recorded: a whole paint.
+    edit_weight(&config, 1.1);
+    let png = config.with_file_name("out").join("countries.png");
+    let mut changed = std::fs::read(&png).expect("png");
+    let last = changed.len() - 1;
+    changed[last] ^= 0xff;
+    std::fs::write(&png, changed).expect("write");
+    let fourth = build(&config);
+    assert_eq!(png_bands(&fourth[0]).1, 0, "nothing kept from another file");
+}
