@@ -448,7 +448,13 @@ impl DatasetGraph {
         let pictures = cache
             .then(|| self.picture_records(d, &build.outputs))
             .flatten();
+        let labels = cache.then(|| self.parts.kept_labels()).flatten();
         let (mut written, stored) = pipeline::write_files_beside(&stale, || {
+            if let Some(entries) = &labels {
+                if let Err(e) = state::labels::write(d, entries) {
+                    tracing::warn!(dataset = %d.name, error = %e, "cannot keep the labels");
+                }
+            }
             #[cfg(feature = "png")]
             if let Some(records) = &pictures {
                 if let Err(e) = state::pictures::write(d, records) {

@@ -57,6 +57,7 @@ impl DatasetGraph {
             .filter(|(_, k)| k.is_none())
             .map(|(out, _)| out)
             .collect();
+        self.seed_labels(d);
         #[cfg(feature = "png")]
         self.seed_pictures(d, &needed);
         let mut drawn =
@@ -112,6 +113,19 @@ impl DatasetGraph {
             outputs.push(built);
         }
         Ok(outputs)
+    }
+
+    /// Gives the label memo, when it holds none (a one-shot build, a
+    /// daemon's first render) and an output draws labels, the labels the
+    /// state folder kept (`state::labels`): the render then fits only
+    /// those of the cells that moved.
+    pub(super) fn seed_labels(&self, d: &DatasetConfig) {
+        if self.options.cache
+            && self.parts.no_labels()
+            && d.outputs.iter().any(|o| o.kind().styled())
+        {
+            self.parts.seed_labels(crate::state::labels::read(d));
+        }
     }
 
     /// Gives the render, for each PNG output of `needed` it has no picture

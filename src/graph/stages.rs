@@ -466,6 +466,7 @@ impl DatasetGraph {
         pending: &mut Pending,
     ) -> Result<(LayoutOut, Drawn), BuildError> {
         let computed = Arc::clone(&ran.computed);
+        self.seed_labels(target.job.dataset);
         if ran.step == LayoutStep::Reused {
             // The labels the pictures will draw (every core) beside the
             // text (one thread), which decides whether anything is drawn.

@@ -292,6 +292,41 @@ impl Parts {
         }
     }
 
+    /// Whether the memo holds no label (a process's first render).
+    pub fn no_labels(&self) -> bool {
+        let g = self.lock();
+        g.current.is_empty() && g.previous.is_empty()
+    }
+
+    /// Takes labels kept by an earlier process (by digest, as
+    /// [`Parts::kept_labels`] gave them) as the last render's, when the memo
+    /// holds none.
+    pub fn seed_labels(&self, labels: Vec<(u128, Option<Placed>)>) {
+        let mut g = self.lock();
+        if g.current.is_empty() && g.previous.is_empty() {
+            g.previous = labels
+                .into_iter()
+                .map(|(d, p)| (d, p.map(Box::new)))
+                .collect();
+        }
+    }
+
+    /// The labels of the render under way by digest, in digest order (for
+    /// the state folder), when it fitted any (else the kept ones hold).
+    pub fn kept_labels(&self) -> Option<Vec<(u128, Option<Placed>)>> {
+        let g = self.lock();
+        if g.fitted == 0 {
+            return None;
+        }
+        let mut all: Vec<(u128, Option<Placed>)> = g
+            .current
+            .iter()
+            .map(|(d, p)| (*d, p.as_deref().cloned()))
+            .collect();
+        all.sort_unstable_by_key(|(d, _)| *d);
+        Some(all)
+    }
+
     /// The labels of `(node, key)` pairs, in their order (`None` for a leaf
     /// whose label does not fit): from the memo where it has them, the rest
     /// fitted in parallel and kept.

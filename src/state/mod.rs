@@ -32,14 +32,21 @@
 //!   its pixels were painted from (band digests), so that a later process
 //!   repaints only the bands an edit changed over the file it reads back.
 //!   Local only, like the constraints.
+//! - `cache/<name>.labels.bin` ([`labels`]): the leaf labels the last
+//!   render fitted, by the digest of what decides each, so that a later
+//!   process fits only the labels of the cells that moved. Local only.
 //!
 //! Every read goes through [`crate::workspace`], every write through
 //! [`crate::store`]. A file that cannot be read or is not ours is never an
 //! error: the build recomputes what it would have given (and says so for the
 //! stored layout, whose loss makes the picture move).
 
+/// What the cache's binary files share: a bounded reader, a version stamp.
+mod binary;
 /// The constraint cache.
 pub mod constraints;
+/// The leaf labels fitted last, by what decides each.
+pub mod labels;
 /// The stored layout: the warm start of the next build.
 pub mod layout;
 /// The manifest: what the stored layout and the outputs were made from.
@@ -85,6 +92,8 @@ pub enum StateKind {
     Constraints,
     /// What the PNG outputs were painted from ([`pictures`]), in [`CACHE`].
     Pictures,
+    /// The leaf labels fitted last ([`labels`]), in [`CACHE`].
+    Labels,
 }
 
 impl StateKind {
@@ -95,6 +104,7 @@ impl StateKind {
             StateKind::Manifest => "manifest.json",
             StateKind::Constraints => "constraints.bin",
             StateKind::Pictures => "pictures.bin",
+            StateKind::Labels => "labels.bin",
         }
     }
 
@@ -102,7 +112,9 @@ impl StateKind {
     fn in_dir(self, dir: &Path, key: &str) -> PathBuf {
         let name = format!("{key}.{}", self.suffix());
         match self {
-            StateKind::Constraints | StateKind::Pictures => dir.join(CACHE).join(name),
+            StateKind::Constraints | StateKind::Pictures | StateKind::Labels => {
+                dir.join(CACHE).join(name)
+            }
             _ => dir.join(name),
         }
     }
@@ -131,6 +143,11 @@ pub fn constraints_path(d: &DatasetConfig) -> Option<PathBuf> {
 /// The PNG outputs' picture records' path (see [`pictures`]).
 pub fn pictures_path(d: &DatasetConfig) -> Option<PathBuf> {
     path(d, StateKind::Pictures)
+}
+
+/// The leaf labels' path (see [`labels`]).
+pub fn labels_path(d: &DatasetConfig) -> Option<PathBuf> {
+    path(d, StateKind::Labels)
 }
 
 /// Where an older version may have left a state file of `d`, most likely

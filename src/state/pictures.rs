@@ -15,10 +15,8 @@
 //! only, like the constraint cache. A file that does not match (another
 //! version, truncated, counts past its end) is ignored.
 
-use std::path::Path;
-
 use crate::config::DatasetConfig;
-use crate::{store, workspace};
+use super::binary::{self, renderers, Bytes};
 
 const MAGIC: &[u8; 4] = b"NPTP";
 const VERSION: u32 = 1;
@@ -39,35 +37,15 @@ pub struct Record {
     pub bands: Vec<u128>,
 }
 
-/// The renderers' version: the digest of their sources (made at compile
-/// time, as the render keys' `NPTREEMAP_RENDER_SOURCE`).
-fn renderers() -> u128 {
-    xxhash_rust::xxh3::xxh3_128(env!("NPTREEMAP_RENDER_SOURCE").as_bytes())
-}
-
 /// The records of `d`'s PNG outputs (none when there is no file or it is
 /// not one of this version's).
 pub fn read(d: &DatasetConfig) -> Vec<Record> {
-    let Some(path) = super::pictures_path(d) else {
-        return Vec::new();
-    };
-    match workspace::read_input(&path, &d.fields.limits) {
-        Ok(bytes) => decode(&bytes).unwrap_or_default(),
-        Err(e) => {
-            tracing::debug!(error = %e, "no picture records");
-            Vec::new()
-        }
-    }
+    binary::read(d, super::pictures_path(d), decode)
 }
 
 /// Writes `records` (and the cache folder's `.gitignore`).
 pub fn write(d: &DatasetConfig, records: &[Record]) -> std::io::Result<()> {
-    let Some(path) = super::pictures_path(d) else {
-        return Ok(());
-    };
-    let dir = path.parent().unwrap_or(Path::new("."));
-    store::write_if_changed(&dir.join(".gitignore"), super::CACHE_GITIGNORE.as_bytes())?;
-    store::write_if_changed(&path, &encode(records)).map(|_| ())
+    binary::write(super::pictures_path(d), &encode(records))
 }
 
 fn encode(records: &[Record]) -> Vec<u8> {
@@ -88,32 +66,6 @@ fn encode(records: &[Record]) -> Vec<u8> {
         }
     }
     out
-}
-
-/// A reader over the file's bytes that never reads past their end: every
-/// count is checked against what is left before anything is allocated.
-struct Bytes<'a>(&'a [u8]);
-
-impl<'a> Bytes<'a> {
-    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
-        let (head, rest) = self.0.split_at_checked(n)?;
-        self.0 = rest;
-        Some(head)
-    }
-
-    fn u64(&mut self) -> Option<u64> {
-        Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
-    }
-
-    fn u128(&mut self) -> Option<u128> {
-        Some(u128::from_le_bytes(self.take(16)?.try_into().ok()?))
-    }
-
-    /// A count of items of `size` bytes each that the rest can hold.
-    fn count(&mut self, size: usize) -> Option<usize> {
-        let n = usize::try_from(self.u64()?).ok()?;
-        (n.checked_mul(size)? <= self.0.len()).then_some(n)
-    }
 }
 
 fn decode(bytes: &[u8]) -> Option<Vec<Record>> {
@@ -139,7 +91,7 @@ fn decode(bytes: &[u8]) -> Option<Vec<Record>> {
             bands,
         });
     }
-    r.0.is_empty().then_some(records)
+    r.is_done().then_some(records)
 }
 
 #[cfg(test)]

@@ -245,15 +245,16 @@ fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>, std::time::SystemTime)> {
     out
 }
 
-/// The PNG render's band counts from a build's stage report: (painted, kept).
-fn png_bands(build: &DatasetBuild) -> (usize, usize) {
+/// Two counts from the render note of `output` in a build's stage report:
+/// the two numbers after `marker` (`bands: 3 painted, 30 kept`).
+fn note_counts(build: &DatasetBuild, output: &str, marker: &str) -> (usize, usize) {
     let run = build
         .stages
         .runs
         .iter()
-        .find(|r| r.stage == Stage::Render && r.output.as_deref() == Some("out/countries.png"))
-        .expect("the PNG rendered");
-    let counts = run.note.split("bands: ").nth(1).expect("band counts");
+        .find(|r| r.stage == Stage::Render && r.output.as_deref() == Some(output))
+        .expect("the output rendered");
+    let counts = run.note.split(marker).nth(1).expect("counts");
     let numbers: Vec<usize> = counts
         .split(|c: char| !c.is_ascii_digit())
         .filter(|s| !s.is_empty())
@@ -263,16 +264,54 @@ fn png_bands(build: &DatasetBuild) -> (usize, usize) {
     (numbers[0], numbers[1])
 }
 
-/// Issue 32, item 2: a one-shot build after a weight edit repaints only the
-/// PNG's bands that the edit changed, over the picture its file holds (the
-/// state folder keeps what the file was painted from), and the bytes are a
-/// whole paint's: the PNG of the SVG written beside it. Records that do not
-/// match cost only the reuse.
+/// The PNG's bands: (painted, kept).
+fn png_bands(build: &DatasetBuild) -> (usize, usize) {
+    note_counts(build, "out/countries.png", "bands: ")
+}
+
+/// The labels: (fitted, reused).
+fn label_counts(build: &DatasetBuild) -> (usize, usize) {
+    note_counts(build, "out/countries.svg", "labels: ")
+}
+
+/// Issue 32, item 2: a one-shot build after a weight edit fits only the
+/// labels of the cells that moved and repaints only the PNG's bands that
+/// the edit changed, over the picture its file holds (the state folder
+/// keeps the labels and what the file was painted from), and its outputs
+/// are those of a build without any of it: the PNG is the whole paint of
+/// the SVG written beside it, and a build of the same layout with the
+/// caches deleted writes the same bytes. Records that do not match cost
+/// only the reuse.
 #[test]
-fn a_build_after_an_edit_repaints_the_png_over_the_file_it_finds() {
+fn a_build_after_an_edit_reuses_the_labels_and_the_png_it_finds() {
     let config = countries("png_bands");
     let first = build(&config);
     assert_eq!(png_bands(&first[0]).1, 0, "nothing to repaint over");
+    let (fitted_first, _) = label_counts(&first[0]);
+    // A name edit moves no cell: one label is fitted anew, the rest come
+    // from the state folder, and only the bands around it are painted.
+    let csv = config.with_file_name("countries.csv");
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    let name = text
+        .lines()
+        .nth(1)
+        .expect("a row")
+        .split(',')
+        .nth(1)
+        .expect("a name");
+    std::fs::write(&csv, text.replacen(name, "Renamed", 1)).expect("write csv");
+    let second = build(&config);
+    let (painted, kept) = png_bands(&second[0]);
+    assert!(
+        painted > 0 && kept > 2 * painted,
+        "{painted} painted, {kept} kept"
+    );
+    let (fitted, reused) = label_counts(&second[0]);
+    assert!(
+        fitted == 1 && reused > 0 && fitted_first > 10,
+        "{fitted} fitted, {reused} reused (the first build fitted {fitted_first})"
+    );
+    // A weight edit moves the cells: the PNG still keeps what it can.
     edit_weight(&config, 1.1);
     let second = build(&config);
     let (painted, kept) = png_bands(&second[0]);
@@ -284,6 +323,25 @@ fn a_build_after_an_edit_repaints_the_png_over_the_file_it_finds() {
         whole,
         "a whole paint's bytes"
     );
+    // The same layout drawn without the caches: the same bytes.
+    let folder = config.with_file_name("out");
+    let names = ["countries.svg", "countries.png", "countries.json"];
+    let made: Vec<Vec<u8>> = names.iter().map(|n| out(&config, n)).collect();
+    for cache in ["labels", "pictures"] {
+        let file = folder.join(format!(".nptreemap/cache/countries.{cache}.bin"));
+        std::fs::remove_file(file).expect("no cache");
+    }
+    for n in names {
+        std::fs::remove_file(folder.join(n)).expect("no output");
+    }
+    let again = build(&config);
+    assert_eq!(png_bands(&again[0]).1, 0, "{:?}", again[0].stages);
+    for (n, bytes) in names.iter().zip(&made) {
+        assert!(
+            out(&config, n) == *bytes,
+            "{n} differs drawn without the caches"
+        );
+    }
     // Records that are not this version's (or are cut short): a whole paint.
     let records = config
         .with_file_name("out")
