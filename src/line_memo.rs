@@ -91,7 +91,13 @@ impl LineMemo {
     /// dropped. Returns the last build's counts.
     pub fn next_build(&self) -> LineCounts {
         let mut g = self.lock();
-        g.previous = std::mem::take(&mut g.current);
+        // Sized for what the last build held: the lines found move over one
+        // by one, and growing the map on the way rehashed it a dozen times.
+        let capacity = g.current.len();
+        g.previous = std::mem::replace(
+            &mut g.current,
+            ByDigest::with_capacity_and_hasher(capacity, Default::default()),
+        );
         g.held = 0;
         std::mem::take(&mut g.counts)
     }

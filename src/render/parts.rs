@@ -175,7 +175,9 @@ impl Parts {
             reused: g.reused,
             fitted: g.fitted,
         };
-        g.previous = std::mem::take(&mut g.current);
+        // Sized for the last render's labels, which move over one by one.
+        let capacity = g.current.len();
+        g.previous = std::mem::replace(&mut g.current, HashMap::with_capacity(capacity));
         g.reused = 0;
         g.fitted = 0;
         self.documents.next_build();
