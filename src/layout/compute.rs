@@ -15,7 +15,7 @@ use super::similar::{layout_similar_with, projection_of, NeighborParams};
 use super::warm::layout_warm_with;
 use super::zero::{self, ZeroItems, ZeroWeights};
 use super::{treemap, Layout, LayoutError, Params, Report};
-use crate::geom::LevelAdjacency;
+use crate::geom::{ConvexPolygon, LevelAdjacency};
 use crate::neighborhood::similarity::similarity;
 use crate::neighborhood::{build_constraints, prepare, Constraint, SimilarityKind};
 use nptreemap_formats::Dataset;
@@ -77,7 +77,9 @@ impl Computed {
             .filter(|(_, r)| **r)
             .map(|(c, _)| (ds.node(c.a).id.clone(), ds.node(c.b).id.clone()))
             .collect();
-        Previous::from_layout(ds, &self.layout).with_realized(realized)
+        Previous::from_layout(ds, &self.layout)
+            .with_realized(realized)
+            .with_levels(Arc::new(self.adjacency().to_vec()))
     }
 
     /// Every node's weight as the picture promises it, when that is not its
@@ -286,7 +288,10 @@ pub(crate) fn lay_out_planned(
             &monitor,
         )?
     };
-    let adjacency = levels_adjacency(&prepared, &layout);
+    let adjacency = match warm_from.and_then(|p| p.levels_of(&prepared)) {
+        Some((before, cells)) => levels_adjacency_after(&prepared, &layout, before, &cells),
+        None => levels_adjacency(&prepared, &layout),
+    };
     let realized = constraints
         .iter()
         .map(|c| adjacency[prepared.node(c.a).depth].are_adjacent(c.a, c.b))
@@ -355,17 +360,137 @@ fn warm_start_for(dataset: &Dataset, request: &Request) -> Start {
     }
 }
 
-/// Each depth level's adjacency in `layout` (index = depth), the levels on
-/// every core (they share nothing; at 6,000 C headers, ten levels, this
-/// was 40 ms of one core after every edit).
-fn levels_adjacency(dataset: &Dataset, layout: &Layout) -> Vec<LevelAdjacency> {
-    use rayon::prelude::*;
+/// Each depth level's node indices, in order (index = depth).
+fn by_depth(dataset: &Dataset) -> Vec<Vec<usize>> {
     let mut by_depth: Vec<Vec<usize>> = vec![Vec::new(); dataset.max_depth() + 1];
     for (i, node) in dataset.nodes().iter().enumerate() {
         by_depth[node.depth].push(i);
     }
     by_depth
+}
+
+/// Each depth level's adjacency in `layout` (index = depth), the levels on
+/// every core (they share nothing; at 6,000 C headers, ten levels, this
+/// was 40 ms of one core after every edit).
+fn levels_adjacency(dataset: &Dataset, layout: &Layout) -> Vec<LevelAdjacency> {
+    use rayon::prelude::*;
+    by_depth(dataset)
         .par_iter()
         .map(|nodes| layout.level_adjacency(nodes))
         .collect()
+}
+
+/// [`levels_adjacency`] of a layout made warm from one of the same nodes
+/// whose cells were `cells` and adjacency `before`: a pair of two cells
+/// that did not move (bit for bit) is taken over, since whether two cells
+/// share an edge depends on the two polygons and the layout's diagonal
+/// only, and only pairs with a moved cell are compared. A weight edit moves
+/// the cells of one branch, so this compares a few hundred cells' pairs
+/// instead of every level's. When the diagonal changed (the outline moved),
+/// every pair is compared. The same adjacency as comparing every pair
+/// (tested).
+fn levels_adjacency_after(
+    dataset: &Dataset,
+    layout: &Layout,
+    before: &[LevelAdjacency],
+    cells: &[&ConvexPolygon],
+) -> Vec<LevelAdjacency> {
+    use rayon::prelude::*;
+    let diagonal = layout.diagonal();
+    let same_scale = crate::geom::shared_edge::extent_diagonal(cells.iter().copied())
+        .is_some_and(|d| d.to_bits() == diagonal.to_bits());
+    if !same_scale || before.len() != dataset.max_depth() + 1 || cells.len() != layout.cells.len() {
+        return levels_adjacency(dataset, layout);
+    }
+    let moved: Vec<bool> = layout
+        .cells
+        .par_iter()
+        .zip(cells)
+        .map(|(now, then)| now.polygon.points() != then.points())
+        .collect();
+    by_depth(dataset)
+        .par_iter()
+        .zip(before)
+        .map(|(nodes, before)| {
+            let mut pairs: Vec<(usize, usize)> = before
+                .pairs()
+                .iter()
+                .filter(|&&(a, b)| !moved[a] && !moved[b])
+                .copied()
+                .collect();
+            pairs.extend(crate::geom::adjacency::adjacent_pairs(
+                |i| layout.cells.get(i).map(|c| &c.polygon),
+                nodes,
+                diagonal,
+                |a, b| moved[a] || moved[b],
+            ));
+            LevelAdjacency::from_pairs(nodes.clone(), pairs)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nptreemap_formats::{DatasetBuilder, NodeSpec};
+
+    /// Three levels (4 groups of 5 subgroups of 8 leaves) with 3-d vectors;
+    /// leaf `edited` weighs `factor` times its base weight.
+    fn tree(edited: usize, factor: f64) -> Dataset {
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("root"));
+        let mut leaf = 0;
+        for g in 0..4 {
+            b.add(NodeSpec::new(format!("g{g}")).parent("root"));
+            for s in 0..5 {
+                b.add(NodeSpec::new(format!("g{g}s{s}")).parent(format!("g{g}")));
+                for k in 0..8 {
+                    let x = ((leaf * 7919) % 101) as f64 / 101.0;
+                    let weight = (1.0 + ((leaf * 31) % 17) as f64)
+                        * if leaf == edited { factor } else { 1.0 };
+                    b.add(
+                        NodeSpec::new(format!("g{g}s{s}l{k}"))
+                            .parent(format!("g{g}s{s}"))
+                            .weight(weight)
+                            .features(vec![x, 1.0 - x, (g as f64) / 4.0]),
+                    );
+                    leaf += 1;
+                }
+            }
+        }
+        b.build().expect("valid")
+    }
+
+    /// A warm layout's adjacency, taken over for the cells that did not
+    /// move and compared for the rest, is the adjacency of comparing every
+    /// pair, edit after edit; and the edits leave cells unmoved, so the
+    /// pairs taken over are not none.
+    #[test]
+    fn the_adjacency_after_a_warm_edit_is_that_of_comparing_every_pair() {
+        let mut request = Request {
+            similarity: Some(crate::neighborhood::SimilarityKind::Cosine),
+            ..Request::default()
+        };
+        let mut last = compute(&tree(usize::MAX, 1.0), &request).expect("cold");
+        assert_eq!(last.method, Method::Neighbor);
+        for (edited, factor) in [(3, 1.4), (77, 0.6), (150, 2.0), (3, 1.0)] {
+            request.previous = Some(last.previous());
+            let next = compute(&tree(edited, factor), &request).expect("warm");
+            assert!(matches!(next.start, Start::Warm { .. }), "{:?}", next.start);
+            let unmoved = next
+                .layout
+                .cells
+                .iter()
+                .zip(&last.layout.cells)
+                .filter(|(a, b)| a.polygon.points() == b.polygon.points())
+                .count();
+            assert!(
+                unmoved > 0 && unmoved < next.layout.cells.len(),
+                "{unmoved} cells did not move"
+            );
+            let every_pair = levels_adjacency(&next.dataset, &next.layout);
+            assert_eq!(next.adjacency(), &every_pair[..], "edit of leaf {edited}");
+            last = next;
+        }
+    }
 }

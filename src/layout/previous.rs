@@ -12,8 +12,9 @@
 use std::collections::HashMap;
 
 use super::{Canvas, Layout, Params};
-use crate::geom::{ConvexPolygon, Point};
+use crate::geom::{ConvexPolygon, LevelAdjacency, Point};
 use nptreemap_formats::Dataset;
+use std::sync::Arc;
 
 /// One node of a previous layout.
 #[derive(Clone, Debug, PartialEq)]
@@ -117,6 +118,21 @@ pub struct Previous {
     child_counts: HashMap<String, usize>,
     root: Option<usize>,
     realized: Vec<(String, String)>,
+    /// The previous layout's adjacency per level, when it came from a
+    /// computation in memory (not a file): a warm layout of the same nodes
+    /// then compares only the cells that moved (`compute`).
+    levels: KeptLevels,
+}
+
+/// The adjacency a [`Previous`] carries: what its layout already gives, so
+/// not part of what makes two previous layouts equal.
+#[derive(Clone, Debug, Default)]
+struct KeptLevels(Option<Arc<Vec<LevelAdjacency>>>);
+
+impl PartialEq for KeptLevels {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// Why a previous layout was not used; the layout then starts cold. None of
@@ -195,6 +211,7 @@ impl Previous {
             child_counts,
             root,
             realized,
+            levels: KeptLevels::default(),
         }
     }
 
@@ -221,6 +238,29 @@ impl Previous {
     pub fn with_realized(mut self, realized: Vec<(String, String)>) -> Self {
         self.realized = realized;
         self
+    }
+
+    /// The same layout with its adjacency per level (index = depth).
+    pub fn with_levels(mut self, levels: Arc<Vec<LevelAdjacency>>) -> Self {
+        self.levels = KeptLevels(Some(levels));
+        self
+    }
+
+    /// Its adjacency per level and each node's cell, when it carries them
+    /// and its nodes are `dataset`'s, one for one in the same order (so its
+    /// node indices are `dataset`'s).
+    pub(crate) fn levels_of(
+        &self,
+        dataset: &Dataset,
+    ) -> Option<(&[LevelAdjacency], Vec<&ConvexPolygon>)> {
+        let levels = self.levels.0.as_deref()?;
+        let same = self.nodes.len() == dataset.len()
+            && self
+                .nodes
+                .iter()
+                .zip(dataset.nodes())
+                .all(|(p, n)| p.id == n.id);
+        same.then(|| (&levels[..], self.nodes.iter().map(|n| &n.polygon).collect()))
     }
 
     /// The canvas the previous layout was made for.
