@@ -320,11 +320,21 @@ fn lay_out_plain(
     zero: Arc<ZeroItems>,
 ) -> Result<Computed, LayoutError> {
     let start = warm_start_for(&dataset, request);
-    let (layout, report) = match &request.previous {
-        Some(previous) if matches!(start, Start::Warm { .. }) => {
-            layout_warm_with(&dataset, &request.params, previous, None, monitor)?
+    let warm_from = request
+        .previous
+        .as_deref()
+        .filter(|_| matches!(start, Start::Warm { .. }));
+    let (layout, report) = match warm_from {
+        Some(previous) => layout_warm_with(&dataset, &request.params, previous, None, monitor)?,
+        None => treemap::layout_with(&dataset, &request.params, monitor)?,
+    };
+    // Made now only when the previous layout's adjacency makes it cheap;
+    // else on first use, as nothing here needs it.
+    let adjacency = match warm_from.and_then(|p| p.levels_of(&dataset)) {
+        Some((before, cells)) => {
+            OnceLock::from(levels_adjacency_after(&dataset, &layout, before, &cells))
         }
-        _ => treemap::layout_with(&dataset, &request.params, monitor)?,
+        None => OnceLock::new(),
     };
     Ok(Computed {
         dataset,
@@ -336,7 +346,7 @@ fn lay_out_plain(
         start,
         settings: request.settings(),
         zero,
-        adjacency: OnceLock::new(),
+        adjacency,
     })
 }
 
@@ -467,12 +477,27 @@ mod tests {
     /// pairs taken over are not none.
     #[test]
     fn the_adjacency_after_a_warm_edit_is_that_of_comparing_every_pair() {
-        let mut request = Request {
-            similarity: Some(crate::neighborhood::SimilarityKind::Cosine),
-            ..Request::default()
-        };
+        // The neighbour method, and the plain treemap without a similarity
+        // (`lay_out_plain`).
+        for (method, similarity) in [
+            (
+                Method::Neighbor,
+                Some(crate::neighborhood::SimilarityKind::Cosine),
+            ),
+            (Method::Plain, None),
+        ] {
+            warm_edits_keep_the_adjacency(Request {
+                similarity,
+                method: Some(method),
+                ..Request::default()
+            });
+        }
+    }
+
+    fn warm_edits_keep_the_adjacency(request: Request) {
+        let mut request = request;
         let mut last = compute(&tree(usize::MAX, 1.0), &request).expect("cold");
-        assert_eq!(last.method, Method::Neighbor);
+        assert_eq!(Some(last.method), request.method);
         for (edited, factor) in [(3, 1.4), (77, 0.6), (150, 2.0), (3, 1.0)] {
             request.previous = Some(last.previous());
             let next = compute(&tree(edited, factor), &request).expect("warm");
