@@ -49,7 +49,8 @@ pub struct Computed {
     /// Each depth level's adjacency in `layout` (index = depth), computed at
     /// most once: by [`compute`] when there are constraints to flag, else on
     /// first use ([`Computed::adjacency`]).
-    adjacency: OnceLock<Vec<LevelAdjacency>>,
+    /// Shared with the next warm start's previous layout (no copy).
+    adjacency: OnceLock<Arc<Vec<LevelAdjacency>>>,
 }
 
 impl Computed {
@@ -57,8 +58,12 @@ impl Computed {
     /// checker's definition (`geom::shared_edge`). Renderers, measurements and
     /// the constraints' `realized` flags all read this one computation.
     pub fn adjacency(&self) -> &[LevelAdjacency] {
+        self.shared_adjacency()
+    }
+
+    fn shared_adjacency(&self) -> &Arc<Vec<LevelAdjacency>> {
         self.adjacency
-            .get_or_init(|| levels_adjacency(&self.dataset, &self.layout))
+            .get_or_init(|| Arc::new(levels_adjacency(&self.dataset, &self.layout)))
     }
 
     /// The previous layout this computation becomes for the next warm start:
@@ -79,7 +84,7 @@ impl Computed {
             .collect();
         Previous::from_layout(ds, &self.layout)
             .with_realized(realized)
-            .with_levels(Arc::new(self.adjacency().to_vec()))
+            .with_levels(Arc::clone(self.shared_adjacency()))
     }
 
     /// Every node's weight as the picture promises it, when that is not its
@@ -306,7 +311,7 @@ pub(crate) fn lay_out_planned(
         start,
         settings: request.settings(),
         zero,
-        adjacency: OnceLock::from(adjacency),
+        adjacency: OnceLock::from(Arc::new(adjacency)),
     })
 }
 
@@ -331,9 +336,9 @@ fn lay_out_plain(
     // Made now only when the previous layout's adjacency makes it cheap;
     // else on first use, as nothing here needs it.
     let adjacency = match warm_from.and_then(|p| p.levels_of(&dataset)) {
-        Some((before, cells)) => {
-            OnceLock::from(levels_adjacency_after(&dataset, &layout, before, &cells))
-        }
+        Some((before, cells)) => OnceLock::from(Arc::new(levels_adjacency_after(
+            &dataset, &layout, before, &cells,
+        ))),
         None => OnceLock::new(),
     };
     Ok(Computed {
