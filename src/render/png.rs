@@ -96,10 +96,11 @@ pub(crate) fn png_with(
         let (bytes, counts) = (p.bytes.clone(), p.unchanged());
         return Ok((bytes, last, counts));
     }
-    let planned = match cells {
-        Some(cells) => plan_drawn(svg, cells),
-        None => plan(svg),
-    };
+    // Should the rest of the text not read (it always does for the picture
+    // writer's), the whole text is read as for any SVG.
+    let planned = cells
+        .and_then(|cells| plan_drawn(svg, cells))
+        .or_else(|| plan(svg));
     let plan = planned.unwrap_or_else(|| Plan {
         layers: vec![Layer::Svg(svg.to_owned())],
         view: None,
