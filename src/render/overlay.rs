@@ -9,7 +9,7 @@
 //! constraints and the placed labels in, shapes and SVG text out.
 
 use super::labels::{Placed, Rect};
-use super::svg::{escape, num};
+use super::svg::{escape, num, push_num};
 use crate::geom::shared_edge::{shared_segments, PERPENDICULAR_TOL};
 use crate::geom::{ConvexPolygon, Point};
 use crate::layout::Layout;
@@ -561,13 +561,17 @@ pub fn marks_svg(
             layout.cells[link.a].polygon.centroid(),
             layout.cells[link.b].polygon.centroid(),
         );
-        out.push_str(&format!(
-            "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"/>\n",
-            num(a.x),
-            num(a.y),
-            num(b.x),
-            num(b.y)
-        ));
+        // One line per unrealised constraint (16,000 on 6,000 C headers):
+        // spelled in place, as `num` would.
+        out.push_str("<line x1=\"");
+        push_num(&mut out, a.x);
+        out.push_str("\" y1=\"");
+        push_num(&mut out, a.y);
+        out.push_str("\" x2=\"");
+        push_num(&mut out, b.x);
+        out.push_str("\" y2=\"");
+        push_num(&mut out, b.y);
+        out.push_str("\"/>\n");
     }
     out.push_str("</g>\n");
     if markers.is_empty() {
