@@ -65,11 +65,18 @@ pub(super) fn write_document(
     let spelled = if exact {
         Arc::new(spelled::exact(layout))
     } else {
-        let pairs: Vec<(usize, usize, bool)> = extra
-            .constraints
-            .iter()
-            .filter_map(|c| Some((dataset.find(&c.a)?, dataset.find(&c.b)?, c.realized)))
-            .collect();
+        let entries = extra.constraints.entries();
+        let pairs: Vec<(usize, usize, bool)> = match extra.constraints.nodes() {
+            Some(nodes) => nodes
+                .iter()
+                .zip(entries)
+                .map(|(&(a, b), c)| (a, b, c.realized))
+                .collect(),
+            None => entries
+                .iter()
+                .filter_map(|c| Some((dataset.find(&c.a)?, dataset.find(&c.b)?, c.realized)))
+                .collect(),
+        };
         precision::choose(dataset, layout, &pairs, memo.map(|m| &m.checks))
     };
     let lines = memo.and_then(DocumentMemo::lines);
@@ -124,15 +131,20 @@ pub(super) fn write_document(
     out.push(',');
     out.push('\n');
 
-    let constraints = extra.constraints.iter().map(|c| ConstraintRow {
-        a: &c.a,
-        b: &c.b,
-        similarity: Num(spelled::round(c.similarity, Some(SIMILARITY_DECIMALS))),
-        strength: c.strength,
-        realized: c.realized,
-        also_above: (c.also_above > 0).then_some(c.also_above),
-    });
-    push_array(&mut out, "constraints", constraints);
+    // Spelled alike in both precisions: written once per list.
+    out.push_str(extra.constraints.text(|| {
+        let rows = extra.constraints.entries().iter().map(|c| ConstraintRow {
+            a: &c.a,
+            b: &c.b,
+            similarity: Num(spelled::round(c.similarity, Some(SIMILARITY_DECIMALS))),
+            strength: c.strength,
+            realized: c.realized,
+            also_above: (c.also_above > 0).then_some(c.also_above),
+        });
+        let mut text = String::with_capacity(110 * extra.constraints.len());
+        push_array(&mut text, "constraints", rows);
+        text
+    }));
 
     push_zero_weights(&mut out, &extra.zero);
     push_metrics(&mut out, &extra.metrics);
@@ -390,7 +402,7 @@ fn finite(v: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::super::extras::ConstraintOut;
+    use super::super::extras::{ConstraintList, ConstraintOut};
     use super::*;
     use crate::line_memo::LineCounts;
     use crate::render::test_support::sample;
@@ -501,14 +513,14 @@ mod tests {
     fn constraints_and_metrics_in_order() {
         let (dataset, layout) = sample();
         let extra = JsonExtras {
-            constraints: vec![ConstraintOut {
+            constraints: Arc::new(ConstraintList::from(vec![ConstraintOut {
                 a: "A".into(),
                 b: "B".into(),
                 similarity: 0.83,
                 strength: 3,
                 realized: true,
                 also_above: 0,
-            }],
+            }])),
             metrics: vec![("zeta".into(), 1.5), ("alpha".into(), f64::from(2u8))],
             ..JsonExtras::default()
         };
