@@ -177,6 +177,10 @@ pub fn shutdown() {
         // workers started: adapters' processes), then the writes.
         crate::exec::terminate_all();
         std::mem::forget(crate::store::writing());
+        // What the last rebuilds wrote, durable before the process ends.
+        if let Err(e) = crate::store::sync_pending() {
+            tracing::warn!(error = %e, "cannot sync the files written");
+        }
     });
 }
 
@@ -201,6 +205,9 @@ pub fn run(
     let (reads, writes) = pipeline::files_of(&config_path, &config.datasets);
     pipeline::check_outputs(&reads, &writes)?;
     pipeline::remove_stale_temps(&writes);
+    // A rebuild's files are in place when it is reported; their fsyncs
+    // follow (each worker's, after its report).
+    crate::store::sync_later();
     let mut watcher = DirWatcher::new(tx.clone())?;
     let stop = options.stop.clone().unwrap_or_default();
     let (done_tx, done) = std::sync::mpsc::channel();

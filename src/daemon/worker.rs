@@ -201,7 +201,12 @@ fn serve(name: &str, jobs: &Receiver<Task>, shared: &Shared, run: &mut Run<'_>) 
         if shared.done.send(done).is_err() || shared.wake.send(Message::Wake).is_err() {
             return;
         }
-        // Reported: now, before the next batch, what its warm start needs.
+        // Reported: now, before the next batch, the files it wrote made
+        // durable (their fsyncs wait for this: `store::sync_later`) and
+        // what its warm start needs.
+        if let Err(e) = crate::store::sync_pending() {
+            tracing::warn!(dataset = name, error = %e, "cannot sync the files written");
+        }
         let _ = catch_unwind(AssertUnwindSafe(|| state.graph.ready_next()));
     }
 }
