@@ -201,9 +201,11 @@ fn serve(name: &str, jobs: &Receiver<Task>, shared: &Shared, run: &mut Run<'_>) 
         if shared.done.send(done).is_err() || shared.wake.send(Message::Wake).is_err() {
             return;
         }
-        // Reported: now, before the next batch, the files it wrote made
-        // durable (their fsyncs wait for this: `store::sync_later`) and
-        // what its warm start needs.
+        // Reported: now, before the next batch, the state folder (a
+        // failure is logged there and retried with the next rebuild), the
+        // files written made durable (their fsyncs wait for this:
+        // `store::sync_later`) and what its warm start needs.
+        let _ = catch_unwind(AssertUnwindSafe(|| state.graph.finish_commit()));
         if let Err(e) = crate::store::sync_pending() {
             tracing::warn!(dataset = name, error = %e, "cannot sync the files written");
         }
@@ -332,7 +334,8 @@ impl Remembered {
                 (Some(before), Some(after)) => Some(stability(before, after)),
                 _ => None,
             });
-            let written = self.graph.commit(&graph_job, &mut build);
+            // The state folder follows the report (`serve`).
+            let written = self.graph.commit_outputs(&graph_job, &mut build);
             // A panic in the figures is a bug of ours: no figures, not a
             // lost build.
             (figures.join().ok().flatten(), written)

@@ -37,6 +37,8 @@
 //! manifest, no constraint cache, no stored layout: a cold start), which is
 //! how the tests show that each of their assertions depends on a cache.
 
+/// The commit: outputs, then the state folder and the manifest.
+mod commit;
 /// One stage's memo slot.
 pub mod memo;
 /// The outputs of a build: render keys, the files on disk, the render stage.
@@ -60,10 +62,9 @@ use crate::fingerprint::Fingerprint;
 use crate::layout::compute::{lay_out_planned, plan, Plan, Prepared};
 use crate::layout::{zero, Computed, Previous, Request, Start, ZeroItems};
 use crate::neighborhood::Constraint;
-use crate::pipeline::{self, BuildError, Written};
+use crate::pipeline::{self, BuildError};
 use crate::render::Style;
 use crate::state::manifest::{self, Manifest};
-use crate::state::{self};
 use crate::workspace;
 pub use report::{Stage, StageReport};
 
@@ -226,6 +227,9 @@ pub struct DatasetGraph {
     /// State a commit could not write (a full disk, a read-only folder),
     /// kept for [`DatasetGraph::store_again`].
     unstored: Option<Pending>,
+    /// What [`DatasetGraph::commit_outputs`] left for
+    /// [`DatasetGraph::finish_commit`].
+    later: Option<commit::Later>,
     /// Where the last commit stored the layout: a rebuild that takes the
     /// layout over from memory writes it again when the state folder has
     /// moved since (a `state_dir:` edit, another set of outputs), so that the
@@ -421,139 +425,6 @@ impl DatasetGraph {
         let input = self.similar(None, source, &dataset, &planned, &mut cx, &mut Pending::default());
         Ok((input, planned, zero))
     }
-
-    /// Writes a build's stale outputs (atomically, all or none of a set
-    /// being under way at a forced exit) and, beside them, its stored layout
-    /// and constraint cache (a warm start and a cache: neither vouches for
-    /// an output, so neither waits for them); then the manifest, which
-    /// vouches for the outputs and may only follow them. A state file that
-    /// cannot be written only costs the next build its reuse (logged, and
-    /// kept for [`DatasetGraph::store_again`]).
-    pub fn commit(&mut self, job: &Job<'_>, build: &mut DatasetBuild) -> Written {
-        let d = job.dataset;
-        let t = Instant::now();
-        let cache = self.options.cache;
-        let mut pending = if cache {
-            std::mem::take(&mut build.pending)
-        } else {
-            Pending::default()
-        };
-        let stale: Vec<(&Path, &[u8])> = build
-            .outputs
-            .iter()
-            .filter(|o| o.stale())
-            .filter_map(|o| o.bytes.as_deref().map(|bytes| (o.path.as_path(), bytes)))
-            .collect();
-        #[cfg(feature = "png")]
-        let pictures = cache
-            .then(|| self.picture_records(d, &build.outputs))
-            .flatten();
-        let labels = cache.then(|| self.parts.kept_labels()).flatten();
-        let (mut written, stored) = pipeline::write_files_beside(&stale, || {
-            if let Some(entries) = &labels {
-                if let Err(e) = state::labels::write(d, entries) {
-                    tracing::warn!(dataset = %d.name, error = %e, "cannot keep the labels");
-                }
-            }
-            #[cfg(feature = "png")]
-            if let Some(records) = &pictures {
-                if let Err(e) = state::pictures::write(d, records) {
-                    tracing::warn!(dataset = %d.name, error = %e, "cannot keep the PNG's bands");
-                }
-            }
-            store_warm_start(d, &pending)
-        });
-        for o in build.outputs.iter().filter(|o| !o.stale()) {
-            written.unchanged.push(o.path.clone());
-        }
-        // One pass writes the set (under one lock): each output gets its
-        // share of the time.
-        let ms = memo::ms_since(t) / build.outputs.len().max(1) as f64;
-        for o in &build.outputs {
-            let wrote = written.written.contains(&o.path);
-            let note = if wrote { "written" } else { "file unchanged" };
-            let output = shown(d, &o.path);
-            build
-                .stages
-                .record_output(&d.name, Stage::Write, output, wrote, ms, note);
-        }
-        if !cache {
-            return written;
-        }
-        // Written now: a retry need not write the cache again.
-        pending.constraints = None;
-        match stored {
-            Err(e) => {
-                // The manifest may not vouch for a stored layout that is not
-                // there: both wait for the retry.
-                tracing::warn!(dataset = %d.name, error = %e, "cannot write the state folder");
-                self.unstored = Some(pending);
-            }
-            Ok(()) if written.failed.is_empty() => {
-                self.unstored = None;
-                pending.layout = None;
-                self.store_manifest(d, pending);
-            }
-            // The outputs come first: the manifest may not vouch for files
-            // that were not written. Kept for the retry that writes them.
-            Ok(()) => self.unstored = Some(pending),
-        }
-        written
-    }
-
-    /// Writes the state a commit could not write (after its outputs could
-    /// not be written, or the state itself could not be): `Ok` when there
-    /// is none left to write.
-    pub fn store_again(&mut self, d: &DatasetConfig) -> std::io::Result<()> {
-        match self.unstored.take() {
-            Some(pending) => self.store(d, pending),
-            None => Ok(()),
-        }
-    }
-
-    /// Whether state is waiting for [`DatasetGraph::store_again`].
-    pub fn unstored(&self) -> bool {
-        self.unstored.is_some()
-    }
-
-    /// Writes a build's state: the stored layout, the constraint cache and
-    /// the manifest (the manifest only once the stored layout is written).
-    fn store(&mut self, d: &DatasetConfig, mut pending: Pending) -> std::io::Result<()> {
-        if let Err(e) = store_warm_start(d, &pending) {
-            pending.constraints = None;
-            self.unstored = Some(pending);
-            return Err(e);
-        }
-        self.store_manifest(d, pending);
-        Ok(())
-    }
-
-    /// Writes the manifest of `pending`, if any (a manifest that cannot be
-    /// written only costs the next build its reuse: logged).
-    fn store_manifest(&mut self, d: &DatasetConfig, pending: Pending) {
-        if let Some(m) = pending.manifest {
-            if let Err(e) = manifest::write(d, &m) {
-                tracing::warn!(dataset = %d.name, error = %e, "cannot write the state manifest");
-            }
-            self.manifest = Some(m);
-        }
-        self.stored_at = state::layout_path(d);
-    }
-}
-
-/// Writes the state a next build starts from: the constraint cache (a
-/// failure only costs the next process its reuse: logged) and the stored
-/// layout (a failure is returned: the manifest must wait for it).
-fn store_warm_start(d: &DatasetConfig, pending: &Pending) -> std::io::Result<()> {
-    if let Some((key, prepared, constraints)) = &pending.constraints {
-        if let Err(e) = state::constraints::write(d, *key, prepared, constraints) {
-            tracing::warn!(dataset = %d.name, error = %e, "cannot cache the constraints");
-        }
-    }
-    if let Some((text, _)) = &pending.layout {
-        state::layout::write(d, text)?;
-    }
-    Ok(())
 }
 
 /// An output's path as `-v` names it: relative to the config's folder, as

@@ -364,3 +364,35 @@ fn a_build_after_an_edit_reuses_the_labels_and_the_png_it_finds() {
     let fourth = build(&config);
     assert_eq!(png_bands(&fourth[0]).1, 0, "nothing kept from another file");
 }
+
+/// Issue 32: the watch daemon's commit writes the outputs first and the
+/// state folder only when asked after the report: until then a build
+/// finds the last state (here none: the next build lays out again and
+/// writes the same outputs), after it the manifest vouches for the outputs
+/// (the next build does nothing) and the stored layout is there.
+#[test]
+fn the_daemons_commit_writes_the_state_folder_after_the_outputs() {
+    let config = countries("later");
+    let c = Config::from_path(&config).expect("config");
+    let job = support::first_job(&c, false);
+    let state = config.with_file_name("out").join(".nptreemap");
+    let manifest = state.join("countries.manifest.json");
+    let stored = state.join("countries.layout.json");
+    let mut graph = DatasetGraph::new(GraphOptions::from_env());
+    let mut built = graph.build(&job).expect("build");
+    let written = graph.commit_outputs(&job, &mut built);
+    assert!(written.failed.is_empty(), "{:?}", written.failed);
+    let svg = out(&config, "countries.svg");
+    assert!(!manifest.exists() && !stored.exists(), "the state waits");
+    // Another process now: it finds no state, builds again, the same bytes.
+    let again = build(&config);
+    assert_ne!(again[0].layout, LayoutStep::UpToDate);
+    assert_eq!(out(&config, "countries.svg"), svg);
+    std::fs::remove_dir_all(&state).expect("rm state");
+
+    graph.finish_commit().expect("state written");
+    assert!(manifest.is_file() && stored.is_file());
+    assert!(graph.finish_commit().is_ok(), "nothing left: a no-op");
+    let next = build(&config);
+    assert_eq!(next[0].layout, LayoutStep::UpToDate, "the manifest vouches");
+}

@@ -3,7 +3,7 @@
 //! for (`eval`, `bench --realized`), which still counts what plain realises.
 
 use nptreemap::config::Config;
-use nptreemap::graph::{DatasetGraph, GraphOptions, Job, Stage};
+use nptreemap::graph::{DatasetGraph, GraphOptions, Stage};
 
 use crate::support;
 
@@ -20,13 +20,7 @@ fn plain_countries(tag: &str) -> std::path::PathBuf {
 fn a_plain_build_computes_no_constraint() {
     let config = plain_countries("build");
     let c = Config::from_path(&config).expect("config");
-    let d = &c.datasets[0];
-    let job = Job {
-        dataset: d,
-        request: c.request(d),
-        style: c.style(d),
-        cold: true,
-    };
+    let job = support::first_job(&c, true);
     let mut graph = DatasetGraph::new(GraphOptions::from_env());
     let mut built = graph.build(&job).expect("build");
     let s = &built.stages;

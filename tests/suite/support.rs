@@ -238,3 +238,17 @@ pub(crate) fn mkfifo(path: &Path) {
         .expect("run python3");
     assert!(status.success(), "mkfifo {}", path.display());
 }
+
+/// The build job of `config`'s first dataset, as the binary makes it.
+pub(crate) fn first_job(
+    config: &nptreemap::config::Config,
+    cold: bool,
+) -> nptreemap::graph::Job<'_> {
+    let d = &config.datasets[0];
+    nptreemap::graph::Job {
+        dataset: d,
+        request: config.request(d),
+        style: config.style(d),
+        cold,
+    }
+}
