@@ -227,6 +227,10 @@ pub struct DatasetGraph {
     /// State a commit could not write (a full disk, a read-only folder),
     /// kept for [`DatasetGraph::store_again`].
     unstored: Option<Pending>,
+    /// Layouts no longer held, freed by [`DatasetGraph::ready_next`]: in
+    /// `watch` after the rebuild is reported (a 6,000-leaf layout took 7 ms
+    /// to free, on the rebuild's way to its outputs).
+    retired: Vec<Arc<Computed>>,
     /// What [`DatasetGraph::commit_outputs`] left for
     /// [`DatasetGraph::finish_commit`].
     later: Option<commit::Later>,
@@ -274,6 +278,7 @@ impl DatasetGraph {
     /// a daemon's next rebuild does not wait for it: the daemon calls this
     /// while it waits for the next batch of events.
     pub fn ready_next(&mut self) {
+        self.retired.clear();
         let Some((_, laid)) = self.slots.layout.last() else {
             return;
         };

@@ -539,11 +539,16 @@ impl DatasetGraph {
             state,
             computed: ran.computed,
         };
-        if let Some((_, last)) = self.slots.layout.take().filter(|(_, l)| l.state != state) {
-            self.past.push_back((last.state, last.computed));
+        if let Some((_, last)) = self.slots.layout.take() {
+            match last.state != state {
+                true => self.past.push_back((last.state, last.computed)),
+                false => self.retired.push(last.computed),
+            }
         }
         while self.past.len() > self.history {
-            self.past.pop_front();
+            if let Some((_, old)) = self.past.pop_front() {
+                self.retired.push(old);
+            }
         }
         self.slots.layout.set(key, laid.clone());
         LayoutOut {
