@@ -90,7 +90,7 @@ impl Failure {
 /// inputs had not changed, or that a stop abandoned, did not).
 pub fn of(dataset: &str, reason: &Reason, outcome: &Outcome) -> Option<Rebuilt> {
     let result = match outcome {
-        Outcome::Unchanged | Outcome::Abandoned => return None,
+        Outcome::Unchanged | Outcome::Abandoned | Outcome::Unsaved(_) => return None,
         Outcome::Unreadable(e, _) | Outcome::Failed(e, _) => Err(Failure::of(e)),
         Outcome::Panicked(message) => Err(Failure {
             file: None,

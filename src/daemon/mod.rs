@@ -480,7 +480,9 @@ impl Daemon<'_> {
     /// of what they could not write.
     fn collect(&mut self) {
         while let Ok(done) = self.done.try_recv() {
-            if let Some(worker) = self.workers.get_mut(&done.name) {
+            // A late word on a reported rebuild: the worker has moved on.
+            let late = matches!(done.outcome, worker::Outcome::Unsaved(_));
+            if let Some(worker) = self.workers.get_mut(&done.name).filter(|_| !late) {
                 worker.busy = false;
             }
             // A dataset that left the config meanwhile: nothing to say.

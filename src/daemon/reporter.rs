@@ -179,6 +179,10 @@ impl<'a> Reporter<'a> {
                 self.problems(&name, vec![problem]);
             }
             Outcome::Built(built) => return self.built(&name, built),
+            Outcome::Unsaved(e) => {
+                tracing::warn!(dataset = name, error = ?e.to_string(), "cannot store the layout for warm starts; retried");
+                return Follow::Retry;
+            }
         }
         Follow::Nothing
     }

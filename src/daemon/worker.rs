@@ -106,6 +106,10 @@ pub enum Outcome {
     Built(Built),
     /// The task panicked (a bug), with the panic's message.
     Panicked(String),
+    /// After its rebuild was reported, the state folder could not be
+    /// written (the outputs were): kept, and written again by a retry.
+    /// Sent after the rebuild's own outcome, by a worker still busy.
+    Unsaved(std::io::Error),
 }
 
 /// A task's outcome, for the daemon's loop.
@@ -205,7 +209,17 @@ fn serve(name: &str, jobs: &Receiver<Task>, shared: &Shared, run: &mut Run<'_>) 
         // failure is logged there and retried with the next rebuild), the
         // files written made durable (their fsyncs wait for this:
         // `store::sync_later`) and what its warm start needs.
-        let _ = catch_unwind(AssertUnwindSafe(|| state.graph.finish_commit()));
+        let stored = catch_unwind(AssertUnwindSafe(|| state.graph.finish_commit()));
+        if let Ok(Err(e)) = stored {
+            let unsaved = Done {
+                name: name.to_string(),
+                reason: Reason::Retry,
+                outcome: Outcome::Unsaved(e),
+            };
+            if shared.done.send(unsaved).is_err() || shared.wake.send(Message::Wake).is_err() {
+                return;
+            }
+        }
         if let Err(e) = crate::store::sync_pending() {
             tracing::warn!(dataset = name, error = %e, "cannot sync the files written");
         }

@@ -1179,3 +1179,34 @@ fn the_same_warning_is_not_repeated() {
     assert_eq!(warnings.len(), 2, "{warnings:?}");
     assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
 }
+
+/// Issue 32: the state folder is written after the rebuild's report. When it
+/// cannot be (here a file where the folder goes) while the outputs can, the
+/// daemon says so and retries without another edit; once the folder can be
+/// made, the stored layout of the last rebuild is there.
+#[test]
+fn a_state_folder_that_cannot_be_written_after_the_report_is_retried() {
+    let (dir, config, out) = setup("watch_state_later");
+    let nodes = dir.join("data/nodes.csv");
+    let mut daemon = Daemon::start_logged(&config);
+    daemon.expect(&["grid: start", "wrote"]);
+    let state = out.join(".nptreemap");
+    let stored = state.join("grid.layout.json");
+    wait_for_file(&stored);
+    daemon.expect_log(&["idle"]);
+    std::fs::remove_dir_all(&state).expect("rm state");
+    std::fs::write(&state, "not a folder").expect("state as a file");
+    let mut leaves = initial_leaves();
+    leaves[0].1 = 44.0;
+    std::fs::write(&nodes, nodes_csv(&leaves)).expect("edit");
+    daemon.expect(&["grid: data: nodes.csv", "wrote"]);
+    assert_outputs_match(&out, &leaves);
+    daemon.expect_log(&["cannot store the layout for warm starts; retried"]);
+    daemon.expect_log(&["writes retried"]);
+    std::fs::remove_file(&state).expect("rm the file");
+    wait_for_file(&stored);
+    let text = std::fs::read_to_string(&stored).expect("stored layout");
+    assert!(text.contains("\"nptreemap-layout/1\""), "a layout document");
+    signal(&daemon.child, "TERM");
+    assert_eq!(daemon.child.wait().expect("wait").code(), Some(0));
+}
