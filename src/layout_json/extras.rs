@@ -18,7 +18,6 @@ use std::sync::{Arc, OnceLock};
 use nptreemap_formats::Dataset;
 use serde::Serialize;
 
-use crate::fingerprint::{Fingerprint, Fingerprinter};
 use crate::layout::{Computed, ZeroItems};
 use crate::measure;
 
@@ -168,8 +167,9 @@ impl ConstraintList {
 
     /// What [`ConstraintList::of`] reads of a computation: its constraints
     /// with their flags, and its nodes' ids and tree (what decides the
-    /// folding and the indices). Equal keys give equal lists.
-    pub fn key(computed: &Computed) -> Fingerprint {
+    /// folding and the indices), as a 128-bit digest. Equal keys give equal
+    /// lists.
+    pub fn key(computed: &Computed) -> u128 {
         // One buffer hashed at once: a hasher call per field of 113,000
         // constraints cost more than the bytes.
         let ds = &computed.dataset;
@@ -190,9 +190,7 @@ impl ConstraintList {
             put(&mut bytes, node.id.len() as u64);
             bytes.extend_from_slice(node.id.as_bytes());
         }
-        Fingerprinter::new("layout-json constraint list")
-            .bytes(&bytes)
-            .finish()
+        xxhash_rust::xxh3::xxh3_128(&bytes)
     }
 
     /// The entries, in the order written.

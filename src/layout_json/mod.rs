@@ -21,7 +21,6 @@ pub mod write;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
-use crate::fingerprint::Fingerprint;
 use crate::layout::{Computed, Previous};
 use crate::line_memo::LineMemo;
 
@@ -51,7 +50,7 @@ pub struct DocumentMemo {
     extras: Mutex<Option<(Arc<Computed>, Arc<JsonExtras>)>>,
     /// The last constraint list by its key, kept across builds: a weight
     /// edit's computation has the same.
-    list: Mutex<Option<(Fingerprint, Arc<ConstraintList>)>>,
+    list: Mutex<Option<(u128, Arc<ConstraintList>)>>,
     /// How many constraint lists this memo made (the rest it kept).
     lists_made: AtomicUsize,
 }
