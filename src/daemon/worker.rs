@@ -205,25 +205,9 @@ fn serve(name: &str, jobs: &Receiver<Task>, shared: &Shared, run: &mut Run<'_>) 
         if shared.done.send(done).is_err() || shared.wake.send(Message::Wake).is_err() {
             return;
         }
-        // Reported: now, before the next batch, the state folder (a
-        // failure is logged there and retried with the next rebuild), the
-        // files written made durable (their fsyncs wait for this:
-        // `store::sync_later`) and what its warm start needs.
-        let stored = catch_unwind(AssertUnwindSafe(|| state.graph.finish_commit()));
-        if let Ok(Err(e)) = stored {
-            let unsaved = Done {
-                name: name.to_string(),
-                reason: Reason::Retry,
-                outcome: Outcome::Unsaved(e),
-            };
-            if shared.done.send(unsaved).is_err() || shared.wake.send(Message::Wake).is_err() {
-                return;
-            }
+        if !state.after_report(name, shared) {
+            return;
         }
-        if let Err(e) = crate::store::sync_pending() {
-            tracing::warn!(dataset = name, error = %e, "cannot sync the files written");
-        }
-        let _ = catch_unwind(AssertUnwindSafe(|| state.graph.ready_next()));
     }
 }
 
@@ -271,6 +255,30 @@ pub fn kept(d: &DatasetConfig, missing_input: bool) -> &'static str {
 }
 
 impl Remembered {
+    /// What follows a task's report, before the next task: the state
+    /// folder (a failure is a late outcome of its own, `Outcome::Unsaved`,
+    /// which the daemon retries), the written files made durable (their
+    /// fsyncs wait for this: `store::sync_later`) and what the next warm
+    /// start needs. False when the daemon is gone.
+    fn after_report(&mut self, name: &str, shared: &Shared) -> bool {
+        let stored = catch_unwind(AssertUnwindSafe(|| self.graph.finish_commit()));
+        if let Ok(Err(e)) = stored {
+            let unsaved = Done {
+                name: name.to_string(),
+                reason: Reason::Retry,
+                outcome: Outcome::Unsaved(e),
+            };
+            if shared.done.send(unsaved).is_err() || shared.wake.send(Message::Wake).is_err() {
+                return false;
+            }
+        }
+        if let Err(e) = crate::store::sync_pending() {
+            tracing::warn!(dataset = name, error = %e, "cannot sync the files written");
+        }
+        let _ = catch_unwind(AssertUnwindSafe(|| self.graph.ready_next()));
+        true
+    }
+
     fn run(&mut self, name: &str, job: &Task, shared: &Shared) -> Outcome {
         if shared.stopping() {
             return Outcome::Abandoned;
@@ -581,6 +589,13 @@ mod tests {
     /// old for good); with the same config as well it is skipped, and with
     /// the outputs reordered too (the same files), while an added output is
     /// made. One decision (the graph's) covers it all.
+    /// A task run as `serve` runs it: then what follows its report.
+    fn run_reported(state: &mut Remembered, job: &Task, shared: &Shared) -> Outcome {
+        let outcome = state.run("countries", job, shared);
+        assert!(state.after_report("countries", shared));
+        outcome
+    }
+
     #[test]
     fn unchanged_bytes_under_a_changed_config_are_not_skipped() {
         let (dir, config) = countries("skip");
@@ -588,9 +603,9 @@ mod tests {
         let mut state = Remembered::default();
         let edit = || Next::Build(Reason::Data(vec!["countries.csv".to_string()]));
         let d = config.datasets[0].clone();
-        let first = state.run("countries", &job_of(&config, &d, Next::Build(Reason::Start)), &shared);
+        let first = run_reported(&mut state, &job_of(&config, &d, Next::Build(Reason::Start)), &shared);
         assert!(matches!(first, Outcome::Built(_)));
-        let same = state.run("countries", &job_of(&config, &d, edit()), &shared);
+        let same = run_reported(&mut state, &job_of(&config, &d, edit()), &shared);
         assert!(matches!(same, Outcome::Unchanged), "nothing changed: skipped");
 
         let text = std::fs::read_to_string(dir.join("nptreemap.yaml")).expect("config");
@@ -600,7 +615,7 @@ mod tests {
         )
         .expect("config");
         let d = titled.datasets[0].clone();
-        let Outcome::Built(built) = state.run("countries", &job_of(&titled, &d, edit()), &shared)
+        let Outcome::Built(built) = run_reported(&mut state, &job_of(&titled, &d, edit()), &shared)
         else {
             panic!("the title change was skipped");
         };
@@ -613,13 +628,13 @@ mod tests {
         let mut moved = titled.clone();
         moved.datasets[0].outputs.reverse();
         let d = moved.datasets[0].clone();
-        let outcome = state.run("countries", &job_of(&moved, &d, edit()), &shared);
+        let outcome = run_reported(&mut state, &job_of(&moved, &d, edit()), &shared);
         assert!(matches!(outcome, Outcome::Unchanged), "reordered outputs make the same files");
         let mut extra = moved.datasets[0].outputs.last().expect("an SVG output").clone();
         extra.path = dir.join("out/extra.svg");
         moved.datasets[0].outputs.push(extra);
         let d = moved.datasets[0].clone();
-        let Outcome::Built(built) = state.run("countries", &job_of(&moved, &d, edit()), &shared)
+        let Outcome::Built(built) = run_reported(&mut state, &job_of(&moved, &d, edit()), &shared)
         else {
             panic!("an output added was skipped");
         };
