@@ -25,9 +25,9 @@ use super::kernels::{dot_tile, KERNEL_ROWS};
 
 /// Lanes per block: two AVX registers of f32, as the filter's kernel.
 pub(super) const LANES: usize = 16;
-/// Mean members per cap. Smaller caps bound tighter but cost a query more
-/// centres: at 64 a query's centres are 1.6% of the level.
-const CAP_SIZE: usize = 64;
+/// Mean members per cap of the exact search. Smaller caps bound tighter but
+/// cost a query more centres: at 64 a query's centres are 1.6% of the level.
+pub(super) const CAP_SIZE: usize = 64;
 /// Rounds of assignment to the nearest centre.
 const ROUNDS: usize = 3;
 
@@ -57,10 +57,10 @@ pub(super) struct CapIndex {
 
 impl CapIndex {
     /// The caps of the nodes `points` (level positions, none of them exact) of
-    /// the filter's level.
-    pub(super) fn build(filter: &Filter, points: &[usize]) -> CapIndex {
+    /// the filter's level, `cap_size` members each on average.
+    pub(super) fn build(filter: &Filter, points: &[usize], cap_size: usize) -> CapIndex {
         let d = filter.dim();
-        let k = (points.len() / CAP_SIZE).max(1);
+        let k = (points.len() / cap_size.max(1)).max(1);
         // Seeds: every (n/k)-th node, in level order.
         let mut centres: Vec<Vec<f64>> = (0..k)
             .map(|t| {

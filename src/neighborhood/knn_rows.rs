@@ -22,11 +22,25 @@
 //! Whether the search pays depends on the data (clustered vectors prune, noise
 //! in 64 dimensions does not), so a sample of rows decides it by the vectors
 //! they visit, a count, not a clock: the result is the same either way.
+//!
+//! Levels of [`APPROXIMATE_FROM`] rows and more that the exact search does not
+//! serve (many dimensions, where no angle bound prunes: 384-d sentence-like
+//! vectors) take an approximate search instead of the scan (issue 34 item 4):
+//! √n caps of √n members, a row visiting the caps of its nearest centres and
+//! its farthest one, as an inverted-file index does, O(n^1.5) for the level.
+//! A row's view is then built from what it saw. It is used only where a
+//! sample of rows, scanned too, finds at least [`MIN_RECALL`] of the nodes the
+//! scan's views name; on noise it does not, and the scan runs. The difference
+//! from the scan is measured per dataset in BENCHMARKS.md. Hand-written for the
+//! same reason as the caps: the graph-based indexes of crates (HNSW) are built
+//! one insertion at a time, in parallel only nondeterministically, and compare
+//! vectors one pair at a time, where this search reuses the caps and the
+//! four-row f32 kernel.
 
 use rayon::prelude::*;
 
 use super::bins::{stage_view, Bins};
-use super::cap_index::{CapIndex, LANES};
+use super::cap_index::{CapIndex, CAP_SIZE, LANES};
 use super::filtered_rows::{Filter, Scratch};
 use super::kernels::{dot_tile, KERNEL_ROWS};
 use super::row_best::{view_from_best, RowBest};
@@ -46,6 +60,44 @@ pub(super) const MIN_LEVEL: usize = 8_000;
 const MAX_VISITED_SHARE: f64 = 0.2;
 /// One query tile in this many makes the sample.
 const SAMPLE_EVERY: usize = 64;
+/// Levels of at least this many rows whose exact search does not pay take the
+/// approximate one ([`Reach::Probes`]) instead of the all-pairs scan: from
+/// here the scan costs seconds (about 1.5 s at 64 dimensions, 7.5 s at 384,
+/// on two cores) and grows with n²; below it every level is binned exactly
+/// (BENCHMARKS.md, issue 34 item 4, approximate rows).
+pub(super) const APPROXIMATE_FROM: usize = 30_000;
+/// Caps an approximate row visits whole, nearest centre first, beside its
+/// farthest one (for its lowest score), tried in turn until a sample's recall
+/// reaches [`MIN_RECALL`]. With caps of √n members a row visits about
+/// (probes + 2)·√n vectors: O(n^1.5) for the level.
+const PROBES: [usize; 2] = [8, 32];
+/// A probe count is tried only while a row visits at most this share of the
+/// level: a visited pair costs the search about 3.5 times what the scan pays
+/// for one (384-d, 50,000 rows), so beyond about a quarter the scan is faster.
+const MAX_PROBED_SHARE: f64 = 0.15;
+/// The approximate search is used when a sample of rows finds at least this
+/// share of the nodes the scan's views name (recall). Where a level is noise a
+/// row's best entries are scattered over every cap and the probes miss most
+/// of them (64-d noise: 0.24), and the scan runs instead.
+const MIN_RECALL: f64 = 0.95;
+/// Rows of that sample, at most: the scan of them costs a share of the
+/// level's scan that falls as the level grows.
+const RECALL_ROWS: usize = 256;
+
+/// How far a level's rows search.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Reach {
+    /// Exactly, when a sample of rows visits at most this share of the level.
+    Exact { max_share: f64 },
+    /// Approximately: with the first of these probe counts (caps of about √n
+    /// members, the nearest by their centres, and the farthest) whose
+    /// sampled recall reaches [`MIN_RECALL`] and whose rows visit at most
+    /// `max_share` of the level; a row settles on what it saw.
+    Probes {
+        steps: &'static [usize],
+        max_share: f64,
+    },
+}
 
 /// The stage views of every row of `level`, or `None` where the search would
 /// not pay (then the caller scans all pairs).
@@ -58,12 +110,25 @@ pub(super) fn knn_level_bins(
     if level.len() < MIN_LEVEL {
         return None;
     }
-    let searched = search_level(kind, filter, features, level, MAX_VISITED_SHARE)?;
+    let exact = Reach::Exact {
+        max_share: MAX_VISITED_SHARE,
+    };
+    let searched = match search_level(kind, filter, features, level, exact) {
+        Some(searched) => searched,
+        None if level.len() >= APPROXIMATE_FROM => {
+            let approximate = Reach::Probes {
+                steps: &PROBES,
+                max_share: MAX_PROBED_SHARE,
+            };
+            search_level(kind, filter, features, level, approximate)?
+        }
+        None => return None,
+    };
     tracing::debug!(
         n = level.len(),
         share = searched.share,
         open = searched.open,
-        "nearest-neighbour rows: visited share of the sample, rows left to the scan"
+        "nearest-neighbour rows: visited share, rows left to the scan"
     );
     Some(searched.bins)
 }
@@ -74,24 +139,30 @@ struct Searched {
     bins: Vec<Bins>,
     /// Rows the search left to the scan.
     open: usize,
-    /// Vectors the sample's rows visited (centres and members), per row, as a
-    /// share of the level.
+    /// Vectors a row visited (centres and members) as a share of the level:
+    /// the sample's (exact search) or all rows' (approximate).
     share: f64,
 }
 
-/// [`knn_level_bins`] at any size, used when a sample of rows visits at most
-/// `max_share` of the level; also gives how many rows the search left to the
-/// scan and the share the sample visited.
+/// [`knn_level_bins`] at any size: exactly when a sample of rows visits at
+/// most `max_share` of the level ([`Reach::Exact`]), or approximately where
+/// a sample's recall allows ([`Reach::Probes`]).
 fn search_level(
     kind: SimilarityKind,
     filter: &Filter,
     features: &[NodeFeatures<'_>],
     level: &[usize],
-    max_share: f64,
+    reach: Reach,
 ) -> Option<Searched> {
     let n = level.len();
     let (points, exact): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| !filter.is_exact(i));
-    let index = CapIndex::build(filter, &points);
+    let cap_size = match reach {
+        Reach::Exact { .. } => CAP_SIZE,
+        // √n caps of √n members: a row's centres and probed caps both grow
+        // as √n.
+        Reach::Probes { .. } => CAP_SIZE.max((points.len() as f64).sqrt() as usize),
+    };
+    let index = CapIndex::build(filter, &points, cap_size);
     // Queries cap by cap, so a tile's rows share their nearest caps.
     let mut tiles: Vec<Vec<usize>> = Vec::new();
     for cap in &index.caps {
@@ -99,59 +170,52 @@ fn search_level(
         let members = &index.slots[first..first + cap.rho.len()];
         tiles.extend(members.chunks(KERNEL_ROWS).map(<[usize]>::to_vec));
     }
-    let search = Search {
+    let search = |probes: Option<usize>| Search {
         kind,
         filter,
         index: &index,
         features,
         level,
         exact: &exact,
+        probes,
     };
-    let sample: Vec<usize> = (0..tiles.len()).step_by(SAMPLE_EVERY).collect();
-    let visited: usize = sample
-        .par_iter()
-        .map(|&t| search.tile(&tiles[t]).1)
-        .sum();
-    let rows: usize = sample.iter().map(|&t| tiles[t].len()).sum();
-    let share = visited as f64 / (rows.max(1) as f64 * n as f64);
-    tracing::debug!(n, caps = index.caps.len(), share, "nearest-neighbour rows: visited share");
-    if share > max_share {
-        return None;
+    match reach {
+        Reach::Exact { max_share } => {
+            let search = search(None);
+            let sample: Vec<usize> = (0..tiles.len()).step_by(SAMPLE_EVERY).collect();
+            let visited: usize = sample
+                .par_iter()
+                .map(|&t| search.tile(&tiles[t]).1)
+                .sum();
+            let rows: usize = sample.iter().map(|&t| tiles[t].len()).sum();
+            let share = visited as f64 / (rows.max(1) as f64 * n as f64);
+            tracing::debug!(n, caps = index.caps.len(), share, "nearest-neighbour rows: visited share");
+            (share <= max_share).then(|| search.level(&tiles, share))
+        }
+        Reach::Probes { steps, max_share } => {
+            for &probes in steps {
+                let per_row = index.caps.len() + (probes + 2) * cap_size;
+                if per_row as f64 > max_share * n as f64 {
+                    break;
+                }
+                let search = search(Some(probes));
+                let recall = search.recall(&tiles);
+                tracing::debug!(n, probes, recall, "approximate rows: recall of a sample");
+                if recall >= MIN_RECALL {
+                    return Some(search.level(&tiles, f64::NAN));
+                }
+            }
+            None
+        }
     }
-    let settled: Vec<(Vec<(usize, Bins)>, usize)> =
-        tiles.par_iter().map(|tile| search.tile(tile)).collect();
-    let pairs: usize = settled.iter().map(|(_, v)| v).sum();
-    tracing::debug!(n, pairs, "nearest-neighbour rows: vectors visited by all rows");
-    let mut out: Vec<Option<Bins>> = vec![None; n];
-    for (row, bins) in settled.into_iter().flat_map(|(rows, _)| rows) {
-        out[row] = Some(bins);
-    }
-    // Rows the search left open, and the exact nodes' rows, over all pairs.
-    let open: Vec<usize> = (0..n).filter(|&i| out[i].is_none()).collect();
-    let scanned: Vec<(usize, Bins)> = open
-        .par_chunks(KERNEL_ROWS)
-        .map_init(Scratch::default, |state: &mut Scratch, group| {
-            let (filtered, exact_rows): (Vec<usize>, Vec<usize>) =
-                group.iter().partition(|&&i| !filter.is_exact(i));
-            let mut rows: Vec<(usize, Bins)> = filtered
-                .iter()
-                .copied()
-                .zip(filter.bin_rows(kind, features, level, &filtered, state))
-                .collect();
-            rows.extend(exact_rows.into_iter().map(|i| (i, exact_row(kind, features, level, i))));
-            rows
-        })
-        .flatten_iter()
-        .collect();
-    for (row, bins) in scanned {
-        out[row] = Some(stage_view(&bins));
-    }
-    let bins = out.into_iter().map(Option::unwrap_or_default).collect();
-    Some(Searched {
-        bins,
-        open: open.len(),
-        share,
-    })
+}
+
+/// The nodes a view names (its bins' heads, the entries the stages link).
+fn heads(view: &Bins) -> Vec<usize> {
+    view.bins
+        .iter()
+        .flat_map(|b| b.head.iter().map(|c| c.node))
+        .collect()
 }
 
 /// The bins of an exact node's row from its exact similarities.
@@ -242,6 +306,9 @@ struct Search<'a> {
     level: &'a [usize],
     /// Level positions of the exact nodes (not in the index).
     exact: &'a [usize],
+    /// Caps visited per tile beside the farthest ([`Reach::Probes`]); `None`
+    /// for the exact search.
+    probes: Option<usize>,
 }
 
 impl Search<'_> {
@@ -262,12 +329,22 @@ impl Search<'_> {
             farthest,
         } = self.bounds(&rows, tile.len());
         let mut order: Vec<usize> = (0..caps).collect();
-        let best_upper = |c: usize| {
-            upper[c][..tile.len()]
+        let best_of = |of: &[[f64; KERNEL_ROWS]], c: usize| {
+            of[c][..tile.len()]
                 .iter()
                 .fold(f64::NEG_INFINITY, |m, &u| m.max(u))
         };
-        order.sort_by(|&a, &b| best_upper(b).total_cmp(&best_upper(a)).then(a.cmp(&b)));
+        let best_upper = |c: usize| best_of(&upper, c);
+        // The exact search takes caps best bound first (it stops at the first
+        // that cannot matter); the approximate one nearest centre first, as an
+        // inverted-file index probes, since in many dimensions most caps'
+        // bounds are 1.
+        let rank = |c: usize| match self.probes {
+            None => best_upper(c),
+            Some(_) => best_of(&gamma, c),
+        };
+        order.sort_by(|&a, &b| rank(b).total_cmp(&rank(a)).then(a.cmp(&b)));
+        let mut probed = 0;
 
         let mut state = self.exact_rows(tile);
         // The cosine (of directions) an entry must reach to matter to a row.
@@ -280,6 +357,12 @@ impl Search<'_> {
                 continue;
             }
             let is_farthest = farthest[..tile.len()].contains(&c);
+            if !is_farthest {
+                if self.probes.is_some_and(|p| probed == p) {
+                    break;
+                }
+                probed += 1;
+            }
             if !is_farthest && state.iter().all(|row| best_upper(c) < threshold(row)) {
                 // Caps come best bound first and floors only rise: no later
                 // cap matters to any row.
@@ -315,6 +398,81 @@ impl Search<'_> {
             }
         }
         (self.settled(tile, state, lowest_bound), visited)
+    }
+
+    /// Every row of the level from its tile (`tiles`: all of the level's
+    /// rows), the rows this search leaves open, and the exact nodes' rows,
+    /// through the scan. `share` is the sample's, for the exact search; the
+    /// approximate one counts all rows'.
+    fn level(&self, tiles: &[Vec<usize>], share: f64) -> Searched {
+        let (kind, filter, features, level) = (self.kind, self.filter, self.features, self.level);
+        let n = level.len();
+        let settled: Vec<(Vec<(usize, Bins)>, usize)> =
+            tiles.par_iter().map(|tile| self.tile(tile)).collect();
+        let pairs: usize = settled.iter().map(|(_, v)| v).sum();
+        let share = match self.probes {
+            None => share,
+            Some(_) => pairs as f64 / (n as f64 * n as f64),
+        };
+        tracing::debug!(n, pairs, probes = self.probes, "nearest-neighbour rows: vectors visited by all rows");
+        let mut out: Vec<Option<Bins>> = vec![None; n];
+        for (row, bins) in settled.into_iter().flat_map(|(rows, _)| rows) {
+            out[row] = Some(bins);
+        }
+        let open: Vec<usize> = (0..n).filter(|&i| out[i].is_none()).collect();
+        let scanned: Vec<(usize, Bins)> = open
+            .par_chunks(KERNEL_ROWS)
+            .map_init(Scratch::default, |state: &mut Scratch, group| {
+                let (filtered, exact_rows): (Vec<usize>, Vec<usize>) =
+                    group.iter().partition(|&&i| !filter.is_exact(i));
+                let mut rows: Vec<(usize, Bins)> = filtered
+                    .iter()
+                    .copied()
+                    .zip(filter.bin_rows(kind, features, level, &filtered, state))
+                    .collect();
+                rows.extend(exact_rows.into_iter().map(|i| (i, exact_row(kind, features, level, i))));
+                rows
+            })
+            .flatten_iter()
+            .collect();
+        for (row, bins) in scanned {
+            out[row] = Some(stage_view(&bins));
+        }
+        Searched {
+            bins: out.into_iter().map(Option::unwrap_or_default).collect(),
+            open: open.len(),
+            share,
+        }
+    }
+
+    /// Of the nodes the scan's views name for a sample of rows (about
+    /// [`RECALL_ROWS`], whole tiles spread over the level), the share this
+    /// search's views name too.
+    fn recall(&self, tiles: &[Vec<usize>]) -> f64 {
+        let every = SAMPLE_EVERY.max(tiles.len() * KERNEL_ROWS / RECALL_ROWS);
+        let sample: Vec<&Vec<usize>> = tiles.iter().step_by(every.max(1)).collect();
+        let (found, named) = sample
+            .par_iter()
+            .map_init(Scratch::default, |scratch: &mut Scratch, tile| {
+                let scanned = self
+                    .filter
+                    .bin_rows(self.kind, self.features, self.level, tile, scratch);
+                let searched = self.tile(tile).0;
+                let mut found = (0, 0);
+                for (&i, bins) in tile.iter().zip(&scanned) {
+                    let want = heads(&stage_view(bins));
+                    let got = searched
+                        .iter()
+                        .find(|(j, _)| *j == i)
+                        .map(|(_, view)| heads(view))
+                        .unwrap_or_default();
+                    found.0 += want.iter().filter(|n| got.contains(n)).count();
+                    found.1 += want.len();
+                }
+                found
+            })
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        found as f64 / named.max(1) as f64
     }
 
     /// Per cap, the cosines of the tile's rows to its centre and its upper
@@ -404,7 +562,10 @@ impl Search<'_> {
     }
 
     /// The view of row `i` from its search, when every lowest score in range
-    /// gives the same one.
+    /// gives the same one. Where they differ, the approximate search takes
+    /// the view of the lowest entry it saw (its farthest cap, visited whole,
+    /// holds the row's lowest unless the caps mislead) and the exact one
+    /// gives up.
     fn settle(&self, i: usize, row: RowBest, below: f64) -> Option<Bins> {
         let floor = row.floor;
         let best = row.exact_best(self.filter.eps(), |j| {
@@ -412,17 +573,18 @@ impl Search<'_> {
         });
         let hi = score(best.first()?.0);
         let lowest_best = best.iter().map(|&(s, _)| score(s)).min()?;
-        let lo_from = score(below);
         let lo_to = score(row.lowest).min(lowest_best);
-        let mut view: Option<Bins> = None;
-        for lo in lo_from..=lo_to {
-            let v = view_from_best(&best, floor, lo, hi, self.level)?;
-            if view.as_ref().is_some_and(|w| *w != v) {
-                return None;
-            }
-            view = Some(v);
+        let lo_from = score(below);
+        if lo_from > lo_to && self.probes.is_none() {
+            return None;
         }
-        view
+        let seen = view_from_best(&best, floor, lo_to, hi, self.level)?;
+        for lo in lo_from.min(lo_to)..lo_to {
+            if view_from_best(&best, floor, lo, hi, self.level).as_ref() != Some(&seen) {
+                return self.probes.map(|_| seen);
+            }
+        }
+        Some(seen)
     }
 }
 
@@ -506,6 +668,20 @@ mod tests {
     /// A head entry as (similarity bits, node, score).
     type HeadBits = (u64, usize, u8);
 
+    /// The exact search on every level, however much it visits.
+    const EVERY_ROW: Reach = Reach::Exact {
+        max_share: f64::INFINITY,
+    };
+
+    /// The approximate search with these probe counts, however much it
+    /// visits.
+    fn probes(steps: &'static [usize]) -> Reach {
+        Reach::Probes {
+            steps,
+            max_share: f64::INFINITY,
+        }
+    }
+
     /// Bins with every similarity as its bits, so that the comparison is
     /// bit for bit (−0 and 0 differ).
     fn bits(bins: &Bins) -> Vec<(usize, Vec<HeadBits>)> {
@@ -547,7 +723,7 @@ mod tests {
                 level.iter().map(|&n| NodeFeatures::new(kind, p, n)).collect();
             let filter = Filter::new(kind, &features).expect("a filter for this level");
             let result =
-                search_level(kind, &filter, &features, level, f64::INFINITY).expect("the search runs");
+                search_level(kind, &filter, &features, level, EVERY_ROW).expect("the search runs");
             found.settled += level.len() - result.open;
             found.rows += level.len();
             found.share = found.share.max(result.share);
@@ -665,8 +841,9 @@ mod tests {
         compare(&sentences, SimilarityKind::Cosine);
     }
 
-    /// The search and the filter give the same views whatever the thread
-    /// count: every row is its own, the caps are built row by row.
+    /// The search (exact and approximate) and the filter give the same views
+    /// whatever the thread count: every row is its own, the caps are built
+    /// row by row.
     #[test]
     fn views_do_not_depend_on_the_thread_count() {
         let p = clustered(900, 64, 10, 0.05, 7);
@@ -681,13 +858,73 @@ mod tests {
                 .build()
                 .expect("a pool");
             pool.install(|| {
-                let searched = search_level(kind, &filter, &features, &level, f64::INFINITY)
+                let searched = search_level(kind, &filter, &features, &level, EVERY_ROW)
+                    .expect("the search runs");
+                let probed = search_level(kind, &filter, &features, &level, probes(&[8]))
                     .expect("the search runs");
                 let scanned = level_bins(&p, kind, &level, true);
-                (searched.bins.iter().map(bits).collect::<Vec<_>>(), scanned.iter().map(bits).collect::<Vec<_>>())
+                let all = [searched.bins, probed.bins, scanned];
+                all.map(|bins| bins.iter().map(bits).collect::<Vec<_>>())
             })
         };
         assert_eq!(run(1), run(2));
         assert_eq!(run(1), run(3));
+    }
+
+    /// The approximate search (issue 34 item 4) on embedding-like levels of
+    /// 3,000 rows, digits-like (64-d around 30 centres) and sentence-like
+    /// (384-d around 60), where a row's best entries lie in its own cluster:
+    /// each row visits well under half the level, and nearly every row's view
+    /// and nearly every constraint of Stages A-D are the all-pairs scan's.
+    #[test]
+    fn approximate_rows_visit_a_fraction_and_keep_nearly_every_constraint() {
+        let kind = SimilarityKind::Cosine;
+        for (d, clusters, seed) in [(64, 30, 8), (384, 60, 9)] {
+            let p = clustered(3000, d, clusters, 0.05, seed);
+            let level: Vec<usize> = (1..p.len()).collect();
+            let features: Vec<NodeFeatures<'_>> =
+                level.iter().map(|&n| NodeFeatures::new(kind, &p, n)).collect();
+            let filter = Filter::new(kind, &features).expect("a filter for this level");
+            let probed = search_level(kind, &filter, &features, &level, probes(&PROBES[..1]))
+                .expect("the recall of clustered vectors is high enough");
+            assert!(probed.share < 0.4, "{d}-d: a row visits {} of the level", probed.share);
+            let mut full = vec![Bins::default(); p.len()];
+            let mut approximate = vec![Bins::default(); p.len()];
+            let mut same = 0;
+            for (i, &node) in level.iter().enumerate() {
+                full[node] = exact_bins(kind, &features, &level, i);
+                approximate[node] = probed.bins[i].clone();
+                same += usize::from(bits(&approximate[node]) == bits(&stage_view(&full[node])));
+            }
+            assert!(same * 100 >= level.len() * 97, "{d}-d: {same} of {} views the scan's", level.len());
+            let pairs = |bins: &[Bins]| -> std::collections::BTreeSet<(usize, usize)> {
+                let (_, symmetric) = lists(&p, bins);
+                symmetric
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(a, list)| list.iter().map(move |e| (a.min(e.target), a.max(e.target))))
+                    .collect()
+            };
+            let (want, got) = (pairs(&full), pairs(&approximate));
+            let kept = want.intersection(&got).count();
+            assert!(!want.is_empty());
+            assert!(kept * 100 >= want.len() * 97, "{d}-d: {kept} of {} constraints kept", want.len());
+            assert!(got.len() * 100 <= want.len() * 103, "{d}-d: {} constraints for {}", got.len(), want.len());
+        }
+    }
+
+    /// Noise (64-d, no clusters): a row's best entries lie in any cap, the
+    /// probes find few of them, and the approximate search refuses the level
+    /// (the scan runs) rather than bin it from what it saw.
+    #[test]
+    fn the_approximate_search_refuses_noise() {
+        let kind = SimilarityKind::Cosine;
+        let p = clustered(3000, 64, 1, 1.0, 10);
+        let level: Vec<usize> = (1..p.len()).collect();
+        let features: Vec<NodeFeatures<'_>> =
+            level.iter().map(|&n| NodeFeatures::new(kind, &p, n)).collect();
+        let filter = Filter::new(kind, &features).expect("a filter for this level");
+        let searched = search_level(kind, &filter, &features, &level, probes(&PROBES));
+        assert!(searched.is_none(), "noise binned approximately");
     }
 }

@@ -21,7 +21,10 @@ use crate::neighborhood::Constraint;
 use crate::{store, workspace};
 
 const MAGIC: &[u8; 4] = b"NPTC";
-const VERSION: u32 = 1;
+/// 2: levels of 30,000 nodes and more whose exact search does not pay are
+/// binned by the approximate one (`neighborhood::knn_rows`), so a cache of
+/// version 1 may hold other constraints for them than a cold build makes.
+const VERSION: u32 = 2;
 const HEADER: usize = 4 + 4 + 16 + 8 + 8;
 const RECORD: usize = 4 + 4 + 1 + 1 + 8;
 
