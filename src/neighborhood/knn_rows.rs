@@ -202,6 +202,14 @@ fn search_level(
                 let recall = search.recall(&tiles);
                 tracing::debug!(n, probes, recall, "approximate rows: recall of a sample");
                 if recall >= MIN_RECALL {
+                    // Said at `-v`: the one place the bins may differ from
+                    // every pair's.
+                    tracing::info!(
+                        "constraints: a level of {n} nodes binned from approximate nearest \
+                         neighbours ({probes} groups probed per node; a scanned sample found \
+                         {:.1}% of its best pairs)",
+                        100.0 * recall
+                    );
                     return Some(search.level(&tiles, f64::NAN));
                 }
             }
