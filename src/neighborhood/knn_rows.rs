@@ -72,8 +72,9 @@ pub(super) const APPROXIMATE_FROM: usize = 30_000;
 /// (probes + 2)·√n vectors: O(n^1.5) for the level.
 const PROBES: [usize; 2] = [8, 32];
 /// A probe count is tried only while a row visits at most this share of the
-/// level: a visited pair costs the search about 3.5 times what the scan pays
-/// for one (384-d, 50,000 rows), so beyond about a quarter the scan is faster.
+/// level (its centres and the largest caps it may probe): a visited pair
+/// costs the search about 3.5 times what the scan pays for one (384-d,
+/// 50,000 rows), so beyond about a quarter the scan is faster.
 const MAX_PROBED_SHARE: f64 = 0.15;
 /// The approximate search is used when a sample of rows finds at least this
 /// share of the nodes the scan's views name (recall). Where a level is noise a
@@ -193,8 +194,14 @@ fn search_level(
             (share <= max_share).then(|| search.level(&tiles, share))
         }
         Reach::Probes { steps, max_share } => {
+            // The caps' sizes, largest first: a row visits at most the
+            // largest few (duplicates gather in one cap, which would make the
+            // search slower than the scan).
+            let mut sizes: Vec<usize> = index.caps.iter().map(|c| c.rho.len()).collect();
+            sizes.sort_unstable_by(|a, b| b.cmp(a));
             for &probes in steps {
-                let per_row = index.caps.len() + (probes + 2) * cap_size;
+                let largest: usize = sizes.iter().take(probes + 2).sum();
+                let per_row = index.caps.len() + largest;
                 if per_row as f64 > max_share * n as f64 {
                     break;
                 }
