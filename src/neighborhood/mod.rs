@@ -12,6 +12,8 @@ mod cap_index;
 mod copies;
 /// The constraint pipeline's results and its order (stages A to E).
 pub mod constraints;
+/// Rows of identical vectors binned once, the others derived.
+mod duplicate_rows;
 /// The dot-product kernels of the dense similarity rows (one AVX dispatch).
 mod kernels;
 /// Exact bins of dense cosine and Pearson rows through an f32 filter.

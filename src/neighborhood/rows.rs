@@ -9,6 +9,7 @@
 use rayon::prelude::*;
 
 use super::bins::{bin_row, bin_sparse, stage_view, Bins};
+use super::duplicate_rows;
 use super::filtered_rows::{Filter, Scratch};
 use super::kernels::{dot_tile, kernel, KERNEL_ROWS};
 use super::knn_rows::knn_level_bins;
@@ -78,7 +79,17 @@ pub(super) fn level_rows_bins(
             })
             .collect();
     }
-    let tiles: Vec<Vec<Bins>> = rows
+    // Rows of identical vectors once (`duplicate_rows`).
+    let firsts = duplicate_rows::firsts(kind, &level_features, rows);
+    let computed: Vec<usize>;
+    let unique: &[usize] = match &firsts {
+        Some(firsts) => {
+            computed = (0..rows.len()).filter(|&k| firsts[k] == k).map(|k| rows[k]).collect();
+            &computed
+        }
+        None => rows,
+    };
+    let tiles: Vec<Vec<Bins>> = unique
         .par_chunks(TILE_ROWS)
         .map_init(
             || (vec![Vec::new(); TILE_ROWS], Vec::new(), Scratch::default()),
@@ -108,7 +119,29 @@ pub(super) fn level_rows_bins(
             },
         )
         .collect();
-    tiles.into_iter().flatten().collect()
+    let binned: Vec<Bins> = tiles.into_iter().flatten().collect();
+    let Some(firsts) = firsts else {
+        return binned;
+    };
+    // Each first row's bins, by its index into `rows`.
+    let mut of_first: Vec<Option<Bins>> = vec![None; rows.len()];
+    for (k, bins) in (0..rows.len()).filter(|&k| firsts[k] == k).zip(binned) {
+        of_first[k] = Some(bins);
+    }
+    (0..rows.len())
+        .into_par_iter()
+        .map(|k| {
+            let first = of_first[firsts[k]]
+                .as_ref()
+                .expect("invariant: every first row was binned");
+            if firsts[k] == k {
+                first.clone()
+            } else {
+                let r = rows[firsts[k]];
+                duplicate_rows::derive(kind, &level_features, level, (r, first), rows[k])
+            }
+        })
+        .collect()
 }
 
 /// Lanes per block of the transposed layout: eight dot products advance together,
