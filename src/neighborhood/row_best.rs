@@ -74,7 +74,12 @@ impl RowBest {
     /// Every entry whose exact similarity (`exact(j)`) is at least `floor`, in
     /// head order (similarity descending, level order): all such entries were
     /// kept, since a kept value is within `eps` of the exact one and `floor`
-    /// only rose.
+    /// only rose. Of a score's entries only the first [`BIN_HEAD`] are given:
+    /// entries of one score share a bin whatever the thresholds, and a view
+    /// reads a bin's first [`BIN_HEAD`] entries and its size up to
+    /// [`BIN_HEAD`], which the first [`BIN_HEAD`] of each of its scores give.
+    /// Why: where a row's entries all but tie (near-identical vectors) every
+    /// one of them is kept, and sorting them all was most of the row's cost.
     pub(super) fn exact_best(&self, eps: f64, exact: impl Fn(usize) -> f64) -> Vec<(f64, usize)> {
         let floor = self.floor;
         let mut best: Vec<(f64, usize)> = self
@@ -85,17 +90,32 @@ impl RowBest {
             .filter(|&(s, _)| s >= floor)
             .collect();
         // `partial_cmp` treats −0 and 0 as equal, as `bins::push_head` does.
-        best.sort_by(|a, b| {
+        let before = |a: &(f64, usize), b: &(f64, usize)| {
             b.0.partial_cmp(&a.0)
                 .unwrap_or(std::cmp::Ordering::Equal)
                 .then(a.1.cmp(&b.1))
-        });
+        };
+        if best.len() > 4 * WANTED {
+            let mut by_score: Vec<Vec<(f64, usize)>> = vec![Vec::new(); usize::from(u8::MAX) + 1];
+            for entry in best.drain(..) {
+                by_score[usize::from(score(entry.0))].push(entry);
+            }
+            for mut entries in by_score.into_iter().rev() {
+                if entries.len() > BIN_HEAD {
+                    entries.select_nth_unstable_by(BIN_HEAD - 1, before);
+                    entries.truncate(BIN_HEAD);
+                }
+                best.extend(entries);
+            }
+        }
+        best.sort_by(before);
         best
     }
 }
 
 /// The stage view of a row whose lowest score is `lo` and highest `hi`, from
-/// `best`: every entry of similarity at least `floor`, in head order. `None`
+/// `best`: every entry of similarity at least `floor` (or, per score, the
+/// first [`BIN_HEAD`] of them: [`RowBest::exact_best`]), in head order. `None`
 /// when the view needs an entry or a count beyond `best`.
 pub(super) fn view_from_best(
     best: &[(f64, usize)],
