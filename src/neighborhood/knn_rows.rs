@@ -197,6 +197,9 @@ fn search_level(
             // The caps' sizes, largest first: a row visits at most the
             // largest few (duplicates gather in one cap, which would make the
             // search slower than the scan).
+            // The scan's heads of the sampled rows, made once for every
+            // probe count tried.
+            let mut sample = None;
             let mut sizes: Vec<usize> = index.caps.iter().map(|c| c.rho.len()).collect();
             sizes.sort_unstable_by(|a, b| b.cmp(a));
             for &probes in steps {
@@ -206,7 +209,8 @@ fn search_level(
                     break;
                 }
                 let search = search(Some(probes));
-                let recall = search.recall(&tiles);
+                let sample = sample.get_or_insert_with(|| scanned_sample(&search, &tiles));
+                let recall = search.recall(sample);
                 tracing::debug!(n, probes, recall, "approximate rows: recall of a sample");
                 if recall >= MIN_RECALL {
                     // Said at `-v`: the one place the bins may differ from
@@ -223,6 +227,23 @@ fn search_level(
             None
         }
     }
+}
+
+/// About [`RECALL_ROWS`] rows in whole tiles spread over the level, each
+/// with the nodes its scanned view names, per row.
+fn scanned_sample<'t>(search: &Search<'_>, tiles: &'t [Vec<usize>]) -> Vec<(&'t [usize], Vec<Vec<usize>>)> {
+    let every = SAMPLE_EVERY.max(tiles.len() * KERNEL_ROWS / RECALL_ROWS);
+    let sample: Vec<&[usize]> = tiles.iter().step_by(every).map(Vec::as_slice).collect();
+    sample
+        .into_par_iter()
+        .map_init(Scratch::default, |scratch: &mut Scratch, tile| {
+            let scanned =
+                search
+                    .filter
+                    .bin_rows(search.kind, search.features, search.level, tile, scratch);
+            (tile, scanned.iter().map(|bins| heads(&stage_view(bins))).collect())
+        })
+        .collect()
 }
 
 /// The nodes a view names (its bins' heads, the entries the stages link).
@@ -460,22 +481,16 @@ impl Search<'_> {
         }
     }
 
-    /// Of the nodes the scan's views name for a sample of rows (about
-    /// [`RECALL_ROWS`], whole tiles spread over the level), the share this
-    /// search's views name too.
-    fn recall(&self, tiles: &[Vec<usize>]) -> f64 {
-        let every = SAMPLE_EVERY.max(tiles.len() * KERNEL_ROWS / RECALL_ROWS);
-        let sample: Vec<&Vec<usize>> = tiles.iter().step_by(every.max(1)).collect();
+    /// Of the nodes the scan's views name for the rows of `sample` (whole
+    /// tiles, each with those nodes per row: [`scanned_sample`]), the share
+    /// this search's views name too.
+    fn recall(&self, sample: &[(&[usize], Vec<Vec<usize>>)]) -> f64 {
         let (found, named) = sample
             .par_iter()
-            .map_init(Scratch::default, |scratch: &mut Scratch, tile| {
-                let scanned = self
-                    .filter
-                    .bin_rows(self.kind, self.features, self.level, tile, scratch);
+            .map(|(tile, wanted)| {
                 let searched = self.tile(tile).0;
                 let mut found = (0, 0);
-                for (&i, bins) in tile.iter().zip(&scanned) {
-                    let want = heads(&stage_view(bins));
+                for (&i, want) in tile.iter().zip(wanted) {
                     let got = searched
                         .iter()
                         .find(|(j, _)| *j == i)
