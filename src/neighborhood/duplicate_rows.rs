@@ -13,6 +13,8 @@
 
 use std::collections::HashMap;
 
+use xxhash_rust::xxh3::Xxh3;
+
 use super::bins::{Bins, Candidate, BIN_HEAD};
 use super::similarity::{pair_similarity, score, NodeFeatures, SimilarityKind};
 
@@ -27,12 +29,30 @@ pub(super) fn firsts(
     if !matches!(kind, SimilarityKind::Cosine | SimilarityKind::Pearson) {
         return None;
     }
-    let mut seen: HashMap<Vec<u64>, usize> = HashMap::with_capacity(rows.len());
+    // Rows by a digest of their vector's bits (16 bytes a row, not a copy
+    // of the vector); a digest seen before is confirmed bit for bit.
+    let mut seen: HashMap<u128, Vec<usize>> = HashMap::with_capacity(rows.len());
     let mut firsts = Vec::with_capacity(rows.len());
     let mut shared = false;
     for (k, &i) in rows.iter().enumerate() {
-        let bits: Vec<u64> = features[i].values()?.iter().map(|x| x.to_bits()).collect();
-        let first = *seen.entry(bits).or_insert(k);
+        let values = features[i].values()?;
+        let mut h = Xxh3::new();
+        for x in values {
+            h.update(&x.to_bits().to_le_bytes());
+        }
+        let same = |f: &usize| {
+            let other = features[rows[*f]].values().unwrap_or_default();
+            other.len() == values.len()
+                && other.iter().zip(values).all(|(a, b)| a.to_bits() == b.to_bits())
+        };
+        let firsts_of_digest = seen.entry(h.digest128()).or_default();
+        let first = match firsts_of_digest.iter().find(|f| same(f)) {
+            Some(&f) => f,
+            None => {
+                firsts_of_digest.push(k);
+                k
+            }
+        };
         shared |= first != k;
         firsts.push(first);
     }
