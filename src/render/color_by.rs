@@ -91,14 +91,7 @@ pub fn values(dataset: &Dataset, field: &str) -> Vec<Option<f64>> {
             if !dataset.is_leaf(i) {
                 return None;
             }
-            // Bounded by the depth: each step goes one level up.
-            let mut real = i;
-            while dataset.node(real).is_virtual {
-                match dataset.node(real).parent {
-                    Some(p) => real = p,
-                    None => break,
-                }
-            }
+            let real = super::chains::original(dataset, i);
             dataset
                 .node(real)
                 .fields

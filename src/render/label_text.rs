@@ -8,6 +8,8 @@ use std::collections::BTreeMap;
 
 use nptreemap_formats::{suggest, Dataset};
 
+use super::chains::original;
+
 /// The separators of a path-like id, strongest first: an id with `::` or `/`
 /// is split there only (`src/render/labels.rs` ends in `labels.rs`), a dotted
 /// one at its dots (`sympy.stats.rv`).
@@ -270,18 +272,6 @@ pub fn display_name(dataset: &Dataset, i: usize, names: &DisplayNames, text: &La
     } else {
         shown
     }
-}
-
-/// The real node a virtual copy stands for (its nearest real ancestor: a
-/// chain of copies hangs under the leaf it continues).
-fn original(dataset: &Dataset, mut i: usize) -> usize {
-    while dataset.node(i).is_virtual {
-        match dataset.node(i).parent {
-            Some(p) => i = p,
-            None => break,
-        }
-    }
-    i
 }
 
 /// The last segment of `id` at its strongest separator, or `id`.

@@ -589,7 +589,8 @@ pub fn quads_overlap(a: &[Point; 4], b: &[Point; 4]) -> bool {
 }
 
 /// The group names drawn on the map: the top-level groups with children of
-/// their own (virtual groups aside), then the second-level groups, each
+/// their own (virtual copies and the leaves heading a chain of them aside:
+/// those are leaves, labelled as such), then the second-level groups, each
 /// whose name fits at `GROUP_MIN` or more without overlapping another name
 /// or any leaf label (`leaves`). `u` is the canvas scale (1 at
 /// 1,000 × 1,000).
@@ -604,7 +605,10 @@ pub fn place_groups(
     let mut out: Vec<Placed> = Vec::new();
     let named = |i: usize| {
         let n = dataset.node(i);
-        !n.is_virtual && !n.children.is_empty() && i < layout.cells.len()
+        !n.is_virtual
+            && !n.children.is_empty()
+            && i < layout.cells.len()
+            && super::chains::drawn_leaf(dataset, i).is_none()
     };
     let leaf_quads: Vec<[Point; 4]> = leaves.iter().map(|l| l.rect.corners()).collect();
     // A name over a leaf's label makes both hard to read (a faint "South

@@ -5,6 +5,8 @@
 //! identical bytes for identical input. Only PNG can fail, and then on a bug
 //! (its input is our own SVG) or an absurd pixel size.
 
+/// Virtual copies in the picture: a chain drawn once, as its leaf.
+pub(crate) mod chains;
 /// Colour by a numeric field: the scales and the values.
 pub mod color_by;
 /// CIELAB and the CIEDE2000 colour difference.

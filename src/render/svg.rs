@@ -10,6 +10,7 @@ use nptreemap_formats::Dataset;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
+use super::chains::drawn_leaf;
 use super::label_text::display_name;
 use rayon::prelude::*;
 
@@ -233,11 +234,10 @@ pub(crate) fn cell_shapes(
         .collect()
 }
 
-/// The fill of cell `i`: its colour for a leaf, none for a group.
+/// The fill of cell `i`: its leaf's colour ([`drawn_leaf`]), none for a
+/// group.
 fn cell_fill(dataset: &Dataset, colors: &[Option<Rgb>], i: usize) -> Option<Rgb> {
-    dataset
-        .is_leaf(i)
-        .then(|| colors[i].unwrap_or(palette::TABLEAU10[0]))
+    drawn_leaf(dataset, i).map(|leaf| colors[leaf].unwrap_or(palette::TABLEAU10[0]))
 }
 
 /// Appends cell `i`'s element: its path, fill and title.
@@ -320,9 +320,14 @@ fn push_remembered(
     }
 }
 
-/// Every non-root node is drawn; the root only when it is the whole dataset.
+/// Every non-root node of the data is drawn, the root only when it is the
+/// whole dataset, and no virtual copy: a copy has the cell of the node it
+/// continues (§2.2: a one-child diagram), so the chain a shallow leaf heads
+/// is drawn once, as that leaf ([`drawn_leaf`]), not as a stack of equal
+/// outlines under ids the data never had.
 fn is_drawn(dataset: &Dataset, i: usize) -> bool {
-    dataset.node(i).parent.is_some() || dataset.is_leaf(i)
+    let node = dataset.node(i);
+    !node.is_virtual && (node.parent.is_some() || dataset.is_leaf(i))
 }
 
 /// Outline width at `depth`: `top` for depth 0 and 1, then decaying per level.
@@ -519,7 +524,9 @@ pub(crate) fn leaf_labels(
     let count = dataset.len().min(layout.cells.len());
     let keys: Vec<(usize, LabelKey)> = (0..count)
         .into_par_iter()
-        .filter(|&i| dataset.is_leaf(i) && is_drawn(dataset, i))
+        // Every leaf, copies too: a chain's label sits in its last copy's
+        // cell (the marker and tab placements look labels up by that node).
+        .filter(|&i| dataset.is_leaf(i))
         .map(|i| {
             let text = display_name(dataset, i, &style.names, &style.text);
             let value = style
@@ -779,6 +786,78 @@ mod tests {
                 written: 1
             }
         );
+    }
+
+    /// A tree of uneven depth (a leaf beside groups of three levels, as a
+    /// folder of files beside subfolders): `prepare` continues each shallow
+    /// leaf with a chain of virtual copies, each with the leaf's cell. The
+    /// picture draws one cell per node of the data: no copy's id, a chain
+    /// drawn once, filled with its leaf's colour, and no leaf named as a
+    /// group (a regression: the chains were drawn as stacks of equal
+    /// outlines, 3,606 paths for 953 nodes at 500 C headers, and their heads
+    /// got group names).
+    #[test]
+    fn a_chain_of_virtual_copies_is_drawn_once_as_its_leaf() {
+        use crate::layout::{layout, Params};
+        use crate::neighborhood::prepare;
+        use crate::render::picture::{compose, Style};
+        let mut b = DatasetBuilder::new();
+        b.add(NodeSpec::new("root"));
+        b.add(NodeSpec::new("readme.md").parent("root").weight(400.0));
+        for g in ["src", "docs"] {
+            b.add(NodeSpec::new(g).parent("root"));
+            for s in 0..3 {
+                let sub = format!("{g}/sub{s}");
+                b.add(NodeSpec::new(sub.as_str()).parent(g));
+                for k in 0..4 {
+                    b.add(
+                        NodeSpec::new(format!("{sub}/file{k}.rs"))
+                            .parent(sub.as_str())
+                            .weight(5.0 + (s * 4 + k) as f64),
+                    );
+                }
+            }
+            b.add(NodeSpec::new(format!("{g}/top.rs")).parent(g).weight(30.0));
+        }
+        let data = b.build().expect("valid");
+        let ds = prepare(&data);
+        let copies = ds.nodes().iter().filter(|n| n.is_virtual).count();
+        assert!(
+            copies >= 4,
+            "readme.md and the two top.rs continue: {copies}"
+        );
+        let (laid, _) = layout(&ds, &Params::default()).expect("laid out");
+        let text = compose(&ds, &laid, &[], &[], &Style::default());
+        let start = text.find("class=\"np-cells\"").expect("cells");
+        let cells = &text[start..start + text[start..].find("\n<g class=").expect("next")];
+        assert_eq!(
+            count(cells, "<path"),
+            data.len() - 1,
+            "one per node of the data"
+        );
+        for node in ds.nodes().iter().filter(|n| n.is_virtual) {
+            let id = format!("data-id=\"{}\"", escape(&node.id));
+            assert!(!text.contains(&id), "no element of the copy {}", node.id);
+        }
+        let style = Style::default();
+        let (colors, _) = crate::render::picture::fills(&ds, &[], &style);
+        for head in ["readme.md", "src/top.rs", "docs/top.rs"] {
+            let i = ds.find(head).expect(head);
+            let leaf = drawn_leaf(&ds, i).expect("a chain ends in a leaf");
+            assert_ne!(leaf, i, "{head} heads a chain");
+            let fill = colors[leaf].expect("a leaf has a colour").to_string();
+            let element = format!("data-id=\"{head}\" d=\"");
+            let at = cells.find(&element).expect(head);
+            let line = &cells[at..at + cells[at..].find('\n').expect("line")];
+            assert!(line.contains(&format!("fill=\"{fill}\"")), "{line}");
+            let named = text
+                .find("class=\"np-group-labels\"")
+                .map(|g| &text[g..g + text[g..].find("</g>").expect("end")]);
+            assert!(
+                !named.unwrap_or("").contains(&format!(">{head}<")),
+                "{head} is a leaf, not a group"
+            );
+        }
     }
 
     #[test]
