@@ -237,8 +237,14 @@ fn store_warm_start(d: &DatasetConfig, pending: &Pending) -> std::io::Result<()>
             tracing::warn!(dataset = %d.name, error = %e, "cannot cache the constraints");
         }
     }
-    if let Some((text, _)) = &pending.layout {
+    if let Some((text, fingerprint, levels)) = &pending.layout {
         state::layout::write(d, text)?;
+        // Only a cache: its loss costs the next process the comparisons.
+        if let Some(levels) = levels {
+            if let Err(e) = state::levels::write(d, *fingerprint, levels) {
+                tracing::warn!(dataset = %d.name, error = %e, "cannot keep the adjacency");
+            }
+        }
     }
     Ok(())
 }

@@ -59,6 +59,7 @@ use nptreemap_formats::Dataset;
 
 use crate::config::DatasetConfig;
 use crate::fingerprint::Fingerprint;
+use crate::geom::LevelAdjacency;
 use crate::layout::compute::{lay_out_planned, plan, Plan, Prepared};
 use crate::layout::{zero, Computed, Previous, Request, Start, ZeroItems};
 use crate::neighborhood::Constraint;
@@ -199,11 +200,15 @@ impl DatasetBuild {
     }
 }
 
+/// A layout's adjacency per level, as `Computed` shares it.
+type KeptLevels = Arc<Vec<LevelAdjacency>>;
+
 /// What the state folder gets after the outputs are written.
 #[derive(Default)]
 struct Pending {
-    /// The stored layout's text when it may have changed.
-    layout: Option<(String, Fingerprint)>,
+    /// The stored layout's text when it may have changed, its fingerprint
+    /// and the layout's adjacency per level when known (`state::levels`).
+    layout: Option<(String, Fingerprint, Option<KeptLevels>)>,
     /// Constraints computed this time, for the cache.
     constraints: Option<(Fingerprint, Arc<Dataset>, Arc<Vec<Constraint>>)>,
     /// The new manifest.

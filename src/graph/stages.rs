@@ -395,7 +395,7 @@ impl DatasetGraph {
         let (_, laid) = self.slots.layout.last().expect("decided Same: a layout in memory");
         if self.stored_at != state::layout_path(d) {
             let text = state::layout::text(&laid.computed, Some(self.parts.documents()));
-            pending.layout = Some((text, laid.state));
+            pending.layout = Some((text, laid.state, laid.computed.known_adjacency()));
         }
         LayoutOut {
             laid: laid.clone(),
@@ -417,6 +417,13 @@ impl DatasetGraph {
         let mut request = job.request.clone();
         request.previous = chosen.previous;
         let started_from = request.previous.clone();
+        // Whether the previous layout's adjacency per level comes with it
+        // for these nodes (in memory, or beside the stored layout): a warm
+        // layout then compares only the pairs of the cells that moved.
+        let kept_adjacency = started_from.as_deref().is_some_and(|p| {
+            let (Prepared::Plain(d) | Prepared::Similar(d, _)) = &input;
+            p.levels_of(d).is_some()
+        });
         let t = Instant::now();
         let computed =
             lay_out_planned(input, planned, &request, zero).map_err(|e| layout_error(job.dataset, e))?;
@@ -435,6 +442,9 @@ impl DatasetGraph {
         };
         let note = match &step {
             LayoutStep::Reused => "every diagram as stored, no tick".to_string(),
+            LayoutStep::Warm if kept_adjacency => {
+                format!("warm, {} ticks, adjacency kept", report.iterations)
+            }
             LayoutStep::Warm => format!("warm, {} ticks", report.iterations),
             LayoutStep::Cold(why) => format!("cold: {why}"),
             LayoutStep::UpToDate => String::new(),
@@ -533,7 +543,7 @@ impl DatasetGraph {
     fn settle(&mut self, key: LayoutKey, ran: Ran, text: String, pending: &mut Pending) -> LayoutOut {
         let state = Fingerprint::of_bytes(text.as_bytes());
         if ran.stored != Some(state) {
-            pending.layout = Some((text, state));
+            pending.layout = Some((text, state, ran.computed.known_adjacency()));
         }
         let laid = Laid {
             state,

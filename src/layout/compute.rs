@@ -61,6 +61,13 @@ impl Computed {
         self.shared_adjacency()
     }
 
+    /// Its adjacency per level when something asked for it already (it is
+    /// not computed here): what the state folder keeps beside the stored
+    /// layout for the next process's warm start.
+    pub fn known_adjacency(&self) -> Option<Arc<Vec<LevelAdjacency>>> {
+        self.adjacency.get().cloned()
+    }
+
     fn shared_adjacency(&self) -> &Arc<Vec<LevelAdjacency>> {
         self.adjacency
             .get_or_init(|| Arc::new(levels_adjacency(&self.dataset, &self.layout)))

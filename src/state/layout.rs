@@ -51,13 +51,21 @@ pub fn read(d: &DatasetConfig) -> StoredLayout {
         Err(e) => return unusable(e.path(), e.to_string()),
     };
     match layout_json::read(&found.text) {
-        Ok(previous) => StoredLayout {
-            previous: Some(Arc::new(previous)),
-            fingerprint: Some(Fingerprint::of_bytes(found.text.as_bytes())),
-            settings: settings_of(&found.text),
-            warning: None,
-            older: found.older,
-        },
+        Ok(previous) => {
+            let fingerprint = Fingerprint::of_bytes(found.text.as_bytes());
+            // The adjacency the build that wrote this very text found.
+            let previous = match super::levels::read(d, fingerprint, previous.nodes().len()) {
+                Some(levels) => previous.with_levels(Arc::new(levels)),
+                None => previous,
+            };
+            StoredLayout {
+                previous: Some(Arc::new(previous)),
+                fingerprint: Some(fingerprint),
+                settings: settings_of(&found.text),
+                warning: None,
+                older: found.older,
+            }
+        }
         Err(e) => unusable(&found.path, e.to_string()),
     }
 }

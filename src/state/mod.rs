@@ -49,6 +49,8 @@ pub mod constraints;
 pub mod labels;
 /// The stored layout: the warm start of the next build.
 pub mod layout;
+/// The stored layout's adjacency per level, for the warm start.
+pub mod levels;
 /// The manifest: what the stored layout and the outputs were made from.
 pub mod manifest;
 /// What each PNG output was painted from, to repaint over it.
@@ -94,6 +96,8 @@ pub enum StateKind {
     Pictures,
     /// The leaf labels fitted last ([`labels`]), in [`CACHE`].
     Labels,
+    /// The stored layout's adjacency per level ([`levels`]), in [`CACHE`].
+    Levels,
 }
 
 impl StateKind {
@@ -105,6 +109,7 @@ impl StateKind {
             StateKind::Constraints => "constraints.bin",
             StateKind::Pictures => "pictures.bin",
             StateKind::Labels => "labels.bin",
+            StateKind::Levels => "levels.bin",
         }
     }
 
@@ -112,7 +117,10 @@ impl StateKind {
     fn in_dir(self, dir: &Path, key: &str) -> PathBuf {
         let name = format!("{key}.{}", self.suffix());
         match self {
-            StateKind::Constraints | StateKind::Pictures | StateKind::Labels => {
+            StateKind::Constraints
+            | StateKind::Pictures
+            | StateKind::Labels
+            | StateKind::Levels => {
                 dir.join(CACHE).join(name)
             }
             _ => dir.join(name),
@@ -148,6 +156,11 @@ pub fn pictures_path(d: &DatasetConfig) -> Option<PathBuf> {
 /// The leaf labels' path (see [`labels`]).
 pub fn labels_path(d: &DatasetConfig) -> Option<PathBuf> {
     path(d, StateKind::Labels)
+}
+
+/// The stored layout's adjacency's path (see [`levels`]).
+pub fn levels_path(d: &DatasetConfig) -> Option<PathBuf> {
+    path(d, StateKind::Levels)
 }
 
 /// Where an older version may have left a state file of `d`, most likely

@@ -365,6 +365,79 @@ fn a_build_after_an_edit_reuses_the_labels_and_the_png_it_finds() {
     assert_eq!(png_bands(&fourth[0]).1, 0, "nothing kept from another file");
 }
 
+/// The layout stage's note of a build.
+fn layout_note(build: &DatasetBuild) -> String {
+    build
+        .stages
+        .runs
+        .iter()
+        .find(|r| r.stage == Stage::Layout)
+        .map(|r| r.note.clone())
+        .expect("a layout stage")
+}
+
+/// Issue 32, item 2: the state folder keeps the stored layout's adjacency
+/// per level beside it, so a later process that starts warm from it
+/// compares only the pairs of the cells that moved (the layout's note says
+/// `adjacency kept`), and writes the bytes of a build that finds no such
+/// file; a file beside another stored layout is not used.
+#[test]
+fn a_build_after_an_edit_takes_over_the_stored_layouts_adjacency() {
+    let kept = countries("levels_kept");
+    let found = countries("levels_found");
+    let levels = |config: &Path| {
+        config
+            .with_file_name("out")
+            .join(".nptreemap/cache/countries.levels.bin")
+    };
+    for config in [&kept, &found] {
+        build(config);
+        assert!(levels(config).exists(), "kept beside the stored layout");
+    }
+    std::fs::remove_file(levels(&found)).expect("remove");
+    for config in [&kept, &found] {
+        edit_weight(config, 1.1);
+    }
+    let with = build(&kept);
+    let without = build(&found);
+    assert!(
+        layout_note(&with[0]).contains("adjacency kept"),
+        "{:?}",
+        with[0].stages
+    );
+    assert!(
+        !layout_note(&without[0]).contains("adjacency kept"),
+        "{:?}",
+        without[0].stages
+    );
+    assert_eq!(with[0].layout, LayoutStep::Warm);
+    assert_eq!(without[0].layout, LayoutStep::Warm);
+    for name in ["countries.svg", "countries.png", "countries.json"] {
+        assert!(out(&kept, name) == out(&found, name), "{name} differs");
+    }
+    let stored = |config: &Path| {
+        std::fs::read(
+            config
+                .with_file_name("out")
+                .join(".nptreemap/countries.layout.json"),
+        )
+        .expect("stored layout")
+    };
+    assert!(stored(&kept) == stored(&found), "the stored layouts differ");
+    // The file of the layout before beside a newer stored layout: not used.
+    let old = std::fs::read(levels(&kept)).expect("levels");
+    edit_weight(&kept, 1.1);
+    build(&kept);
+    std::fs::write(levels(&kept), old).expect("write");
+    edit_weight(&kept, 1.1);
+    let stale = build(&kept);
+    assert!(
+        !layout_note(&stale[0]).contains("adjacency kept"),
+        "{:?}",
+        stale[0].stages
+    );
+}
+
 /// Issue 32: the watch daemon's commit writes the outputs first and the
 /// state folder only when asked after the report: until then a build
 /// finds the last state (here none: the next build lays out again and
