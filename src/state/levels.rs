@@ -123,5 +123,14 @@ mod tests {
         let mut huge = bytes[..24].to_vec();
         huge.extend_from_slice(&u64::MAX.to_le_bytes());
         assert_eq!(decode(&huge, text, 8), None);
+        // Any byte changed: refused, or levels within the layout's nodes.
+        for at in 0..bytes.len() {
+            let mut changed = bytes.clone();
+            changed[at] ^= 0x5a;
+            for level in decode(&changed, text, 8).into_iter().flatten() {
+                assert!(level.nodes().iter().all(|&n| n < 8), "byte {at}");
+                assert!(level.pairs().iter().all(|&(a, b)| a < 8 && b < 8), "byte {at}");
+            }
+        }
     }
 }
