@@ -127,7 +127,11 @@ impl Served {
                 }
             }
         });
-        let first = lines.recv_timeout(WAIT).expect("a first line");
+        let log = config.with_extension("log");
+        let first = lines.recv_timeout(WAIT).unwrap_or_else(|e| {
+            let said = std::fs::read_to_string(&log).unwrap_or_default();
+            panic!("no first line ({e}); the daemon said:\n{said}")
+        });
         let url = first
             .split_whitespace()
             .find(|w| w.starts_with("http://"))

@@ -29,13 +29,28 @@ fn cell(browser: &mut Browser, id: &str) -> Value {
     ))
 }
 
+/// A loopback port in 20000..32000 that nothing listens on now, chosen from
+/// the process id so that parallel runs start apart.
+fn unused_port_below_ephemeral() -> u16 {
+    let start = std::process::id() as usize * 7919;
+    (0..200)
+        .map(|k| 20_000 + ((start + k) % 12_000) as u16)
+        .find(|&port| std::net::TcpListener::bind(("127.0.0.1", port)).is_ok())
+        .expect("a free loopback port in 20000..32000")
+}
+
 #[test]
 fn an_open_page_catches_up_after_the_daemon_restarts() {
     let Some(chromium) = chromium_or_skip("the restart's browser test") else {
         return;
     };
     let (dir, config) = setup("serve_restart");
-    let mut served = Served::start(&config, None);
+    // A port below the kernel's ephemeral range (32768 and up on Linux): an
+    // ephemeral port the first daemon was given could be handed to another
+    // test's client socket while the daemon is down, and the restart could
+    // not bind it again.
+    let port = unused_port_below_ephemeral();
+    let mut served = Served::start(&config, Some(&format!("127.0.0.1:{port}")));
     served.expect(&["grid", "wrote"]);
     let addr = served.addr;
     let mut browser = Browser::launch(&chromium, &dir, BUDGET);
