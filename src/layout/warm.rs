@@ -405,6 +405,9 @@ fn stalls(before: f64, after: f64) -> bool {
 mod tests {
     use super::*;
 
+    use crate::layout::layout;
+    use nptreemap_formats::{DatasetBuilder, NodeSpec};
+
     /// The steps measured on a 50,000-child diagram (BENCHMARKS.md, "the
     /// settle that stalls"): the settle went on through gains of 0.2% and
     /// less, each costing up to a dozen power diagrams; gains of 13% and
@@ -416,8 +419,6 @@ mod tests {
         assert!(!stalls(4.184_532e-5, 3.621_412e-5), "13% gained");
         assert!(!stalls(3.621_412e-5, 8.136_051e-6), "78% gained");
     }
-    use crate::layout::layout;
-    use nptreemap_formats::{DatasetBuilder, NodeSpec};
 
     /// Three levels: `groups` × `subgroups` × `leaves` with varied weights,
     /// leaf `changed` scaled by `factor`.
